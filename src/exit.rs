@@ -1,0 +1,150 @@
+//! Failures the user can meet, each with a one-line message and its own exit code.
+//!
+//! The table of exit codes is documented in README.md ("Exit codes"); keep the two in step.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Exit codes (README.md, "Exit codes").
+pub mod code {
+    /// Everything was read; rows may still include bad frames (see the summary line).
+    pub const OK: u8 = 0;
+    /// An unexpected internal error.
+    pub const INTERNAL: u8 = 1;
+    /// Wrong command-line usage (clap's convention).
+    pub const USAGE: u8 = 2;
+    /// The input file or device does not exist, or is a directory.
+    pub const NOT_FOUND: u8 = 3;
+    /// Permission denied on the input file or serial device.
+    pub const PERMISSION: u8 = 4;
+    /// The serial port is in use by another program.
+    pub const BUSY: u8 = 5;
+    /// The serial device could not be opened or configured for another reason.
+    pub const DEVICE: u8 = 6;
+    /// The adapter disappeared during a live capture.
+    pub const DISCONNECTED: u8 = 7;
+    /// Writing the output (or a recording) failed, for example a full disk.
+    pub const OUTPUT: u8 = 8;
+    /// Reading the input failed after it was opened, or its content cannot be used.
+    pub const INPUT: u8 = 9;
+    /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
+    pub const SIGINT: u8 = 130;
+    /// Standard output was closed by the reader (`busnoop … | head`): 128 + 13 (SIGPIPE).
+    pub const BROKEN_PIPE: u8 = 141;
+    /// Terminated by SIGTERM: 128 + 15.
+    pub const SIGTERM: u8 = 143;
+}
+
+/// A failure that ends the run.
+#[derive(Debug)]
+pub enum Failure {
+    /// A file or device that does not exist.
+    NotFound { path: PathBuf, hint: Option<String> },
+    /// A directory given where a file was expected.
+    IsDirectory(PathBuf),
+    /// Permission denied, with a hint.
+    Permission { path: PathBuf, hint: String },
+    /// Serial port held by another program.
+    Busy(PathBuf),
+    /// Serial device could not be opened or configured.
+    Device { path: PathBuf, message: String },
+    /// Adapter gone during capture.
+    Disconnected { path: PathBuf, frames: u64 },
+    /// Output could not be written.
+    Output(String),
+    /// Input could not be read or used.
+    Input(String),
+    /// Stopped by a signal (SIGINT or SIGTERM); not an error message.
+    Signal(i32),
+    /// Standard output closed by the reader: quiet.
+    BrokenPipe,
+    /// Anything else.
+    Internal(String),
+}
+
+impl Failure {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Failure::NotFound { .. } | Failure::IsDirectory(_) => code::NOT_FOUND,
+            Failure::Permission { .. } => code::PERMISSION,
+            Failure::Busy(_) => code::BUSY,
+            Failure::Device { .. } => code::DEVICE,
+            Failure::Disconnected { .. } => code::DISCONNECTED,
+            Failure::Output(_) => code::OUTPUT,
+            Failure::Input(_) => code::INPUT,
+            Failure::Signal(s) if *s == libc::SIGTERM => code::SIGTERM,
+            Failure::Signal(_) => code::SIGINT,
+            Failure::BrokenPipe => code::BROKEN_PIPE,
+            Failure::Internal(_) => code::INTERNAL,
+        }
+    }
+
+    /// Whether a message should be printed at all.
+    pub fn is_quiet(&self) -> bool {
+        matches!(self, Failure::BrokenPipe | Failure::Signal(_))
+    }
+
+    /// Maps an error from opening or reading an input file.
+    pub fn from_input_io(path: &Path, e: &std::io::Error) -> Failure {
+        use std::io::ErrorKind::*;
+        match e.kind() {
+            NotFound => Failure::NotFound {
+                path: path.to_owned(),
+                hint: None,
+            },
+            PermissionDenied => Failure::Permission {
+                path: path.to_owned(),
+                hint: "check the file's permissions".into(),
+            },
+            IsADirectory => Failure::IsDirectory(path.to_owned()),
+            _ => Failure::Input(format!("cannot read {}: {}", path.display(), e)),
+        }
+    }
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Failure::NotFound { path, hint } => {
+                write!(f, "{}: no such file or device", path.display())?;
+                if let Some(h) = hint {
+                    write!(f, " ({h})")?;
+                }
+                Ok(())
+            }
+            Failure::IsDirectory(p) => write!(
+                f,
+                "{} is a directory; give a capture file, a serial device or - for standard input",
+                p.display()
+            ),
+            Failure::Permission { path, hint } => {
+                write!(f, "{}: permission denied ({hint})", path.display())
+            }
+            Failure::Busy(p) => write!(
+                f,
+                "{} is in use by another program (close it, or find it with `fuser {}`)",
+                p.display(),
+                p.display()
+            ),
+            Failure::Device { path, message } => write!(f, "{}: {message}", path.display()),
+            Failure::Disconnected { path, frames } => write!(
+                f,
+                "adapter disconnected after {frames} frames ({}); use --reconnect to wait for it",
+                path.display()
+            ),
+            Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) => f.write_str(m),
+            Failure::Signal(s) => write!(f, "stopped by signal {s}"),
+            Failure::BrokenPipe => f.write_str("output closed"),
+        }
+    }
+}
+
+impl From<crate::sink::WriteError> for Failure {
+    fn from(e: crate::sink::WriteError) -> Self {
+        if e.path.is_none() && e.error.kind() == std::io::ErrorKind::BrokenPipe {
+            Failure::BrokenPipe
+        } else {
+            Failure::Output(e.to_string())
+        }
+    }
+}

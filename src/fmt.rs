@@ -1,0 +1,121 @@
+//! Small allocation-free formatting helpers used on the hot path.
+
+use std::fmt::Write as _;
+
+const HEX: &[u8; 16] = b"0123456789ABCDEF";
+
+/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`).
+pub fn push_hex(out: &mut String, bytes: &[u8]) {
+    out.reserve(bytes.len() * 3);
+    for (i, b) in bytes.iter().enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        out.push(HEX[(b >> 4) as usize] as char);
+        out.push(HEX[(b & 0x0F) as usize] as char);
+    }
+}
+
+/// Same as [`push_hex`] into a byte buffer.
+pub fn push_hex_bytes(out: &mut Vec<u8>, bytes: &[u8]) {
+    out.reserve(bytes.len() * 3);
+    for (i, b) in bytes.iter().enumerate() {
+        if i > 0 {
+            out.push(b' ');
+        }
+        out.push(HEX[(b >> 4) as usize]);
+        out.push(HEX[(b & 0x0F) as usize]);
+    }
+}
+
+/// `bytes` as spaced hex in a new string (for notes and tests, not the hot path).
+pub fn hex(bytes: &[u8]) -> String {
+    let mut s = String::new();
+    push_hex(&mut s, bytes);
+    s
+}
+
+/// Parses spaced or unspaced hex (`"7E A1 10"`, `"7ea110"`). Returns `None` on any other character
+/// or an odd number of digits.
+pub fn parse_hex(text: &str) -> Option<Vec<u8>> {
+    let digits: Vec<u8> = text
+        .bytes()
+        .filter(|b| !b.is_ascii_whitespace())
+        .map(|b| (b as char).to_digit(16).map(|d| d as u8))
+        .collect::<Option<_>>()?;
+    if !digits.len().is_multiple_of(2) {
+        return None;
+    }
+    Some(digits.chunks(2).map(|p| p[0] << 4 | p[1]).collect())
+}
+
+/// Appends an unsigned integer in decimal.
+pub fn push_u64(out: &mut String, v: u64) {
+    out.push_str(itoa::Buffer::new().format(v));
+}
+
+/// Appends a signed integer in decimal.
+pub fn push_i64(out: &mut String, v: i64) {
+    out.push_str(itoa::Buffer::new().format(v));
+}
+
+/// Appends `raw / 10^prec` as a plain decimal with exactly `prec` decimals (`6543, 2` → `65.43`,
+/// `-150, 2` → `-1.50`, `5, 3` → `0.005`).
+pub fn push_fixed(out: &mut String, raw: i64, prec: u8) {
+    if prec == 0 {
+        push_i64(out, raw);
+        return;
+    }
+    let scale = 10u64.pow(prec as u32);
+    let mag = raw.unsigned_abs();
+    if raw < 0 {
+        out.push('-');
+    }
+    push_u64(out, mag / scale);
+    out.push('.');
+    let frac = mag % scale;
+    let mut buf = itoa::Buffer::new();
+    let digits = buf.format(frac);
+    for _ in digits.len()..prec as usize {
+        out.push('0');
+    }
+    out.push_str(digits);
+}
+
+/// Appends `value` rounded to `decimals` decimals (used where the scale is not a power of ten).
+pub fn push_rounded(out: &mut String, value: f64, decimals: usize) {
+    let _ = write!(out, "{value:.decimals$}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point() {
+        let cases = [
+            (6543, 2, "65.43"),
+            (-150, 2, "-1.50"),
+            (0, 2, "0.00"),
+            (5, 3, "0.005"),
+            (-5, 1, "-0.5"),
+            (42, 0, "42"),
+            (i64::MIN, 2, "-92233720368547758.08"),
+        ];
+        for (raw, prec, want) in cases {
+            let mut s = String::new();
+            push_fixed(&mut s, raw, prec);
+            assert_eq!(s, want, "{raw} prec {prec}");
+        }
+    }
+
+    #[test]
+    fn hex_round_trip() {
+        let bytes = [0x7E, 0xA1, 0x00, 0xFF];
+        assert_eq!(hex(&bytes), "7E A1 00 FF");
+        assert_eq!(parse_hex("7E A1 00 FF").unwrap(), bytes);
+        assert_eq!(parse_hex("7ea100ff").unwrap(), bytes);
+        assert!(parse_hex("7E A").is_none());
+        assert!(parse_hex("7G").is_none());
+    }
+}

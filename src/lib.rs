@@ -1,0 +1,16 @@
+//! busnoop: a passive bus sniffer.
+//!
+//! Data flows one way: a [`source`] yields timestamped byte chunks, a protocol decoder (for
+//! example [`sport`]) reassembles frames from them with pure code and maps them onto the log
+//! table ([`row::Row`]), and a [`sink`] formats the rows as pretty text, TSV, CSV or JSON Lines.
+//! [`run`] wires the three together and deals with signals, statistics and exit codes.
+
+pub mod cli;
+pub mod decoder;
+pub mod exit;
+pub mod fmt;
+pub mod row;
+pub mod run;
+pub mod sink;
+pub mod source;
+pub mod sport;

@@ -1,0 +1,611 @@
+//! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
+
+pub mod output;
+
+use std::io::{self, Write as _};
+use std::path::Path;
+
+use chrono::{DateTime, Local, NaiveDateTime, Utc};
+use owo_colors::{OwoColorize, Style};
+
+use crate::decoder::RowOut;
+use crate::fmt::push_hex_bytes;
+use crate::row::{BASE_COLUMNS, Class, Row};
+pub use output::{Output, WriteError};
+
+/// Output format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Aligned, coloured columns for a terminal.
+    Pretty,
+    /// Tab-separated values with a header row.
+    Tsv,
+    /// Comma-separated values (RFC 4180) with a header row.
+    Csv,
+    /// One JSON object per row.
+    Jsonl,
+}
+
+impl Format {
+    /// Format implied by a file name's extension, if any.
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "csv" => Format::Csv,
+            "tsv" | "tab" => Format::Tsv,
+            "jsonl" | "ndjson" | "json" => Format::Jsonl,
+            "txt" | "log" => Format::Pretty,
+            _ => return None,
+        })
+    }
+}
+
+/// The wall-clock time at the start of the capture (for `--time abs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Anchor {
+    /// A real instant (live capture, pcap).
+    Instant(DateTime<Utc>),
+    /// A local time without zone, as logged by a radio.
+    Naive(NaiveDateTime),
+}
+
+/// How the table is written.
+#[derive(Clone, Debug)]
+pub struct TableOptions {
+    pub format: Format,
+    pub color: bool,
+    /// Add a `Raw` column with the on-wire bytes.
+    pub raw: bool,
+    /// Add a `Time` column with wall-clock times.
+    pub time_abs: bool,
+    /// Print wall-clock times in UTC instead of local time.
+    pub utc: bool,
+}
+
+/// Writes rows in the chosen format, numbering them (`Counter`).
+pub struct Table {
+    opts: TableOptions,
+    out: Output,
+    columns: Vec<&'static str>,
+    counter: u64,
+    anchor: Option<Anchor>,
+    header_written: bool,
+    csv: csv::Writer<SharedBuf>,
+    csv_buf: SharedBuf,
+    scratch: String,
+    error: Option<WriteError>,
+}
+
+/// A byte buffer shared between the csv writer and the table.
+#[derive(Clone, Default)]
+struct SharedBuf(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl io::Write for SharedBuf {
+    fn write(&mut self, data: &[u8]) -> io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(data);
+        Ok(data.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Pretty-output column widths for the base columns.
+const PRETTY_WIDTHS: [usize; 8] = [7, 8, 3, 10, 9, 8, 10, 30];
+
+impl Table {
+    pub fn new(out: Output, opts: TableOptions, extra: &[&'static str]) -> Self {
+        let mut columns: Vec<&'static str> = BASE_COLUMNS.to_vec();
+        columns.extend_from_slice(extra);
+        if opts.raw {
+            columns.push("Raw");
+        }
+        if opts.time_abs {
+            columns.push("Time");
+        }
+        let csv_buf = SharedBuf::default();
+        Table {
+            opts,
+            out,
+            columns,
+            counter: 0,
+            anchor: None,
+            header_written: false,
+            csv: csv::WriterBuilder::new()
+                .terminator(csv::Terminator::CRLF)
+                .from_writer(csv_buf.clone()),
+            csv_buf,
+            scratch: String::new(),
+            error: None,
+        }
+    }
+
+    /// All column names in order.
+    pub fn columns(&self) -> &[&'static str] {
+        &self.columns
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.counter
+    }
+
+    pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        self.anchor = anchor;
+    }
+
+    /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
+    pub fn header(&mut self) -> Result<(), WriteError> {
+        if self.header_written {
+            return Ok(());
+        }
+        self.header_written = true;
+        let cols = self.columns.clone();
+        match self.opts.format {
+            Format::Tsv => {
+                let buf = self.out.buf();
+                for (i, c) in cols.iter().enumerate() {
+                    if i > 0 {
+                        buf.push(b'\t');
+                    }
+                    buf.extend_from_slice(c.as_bytes());
+                }
+                buf.push(b'\n');
+            }
+            Format::Csv => {
+                let _ = self.csv.write_record(&cols);
+                self.move_csv();
+            }
+            Format::Pretty => {
+                let line = self.pretty_line(cols.iter().copied(), &[true; 3]);
+                let buf = self.out.buf();
+                if self.opts.color {
+                    let _ = writeln!(buf, "{}", line.bold());
+                } else {
+                    let _ = writeln!(buf, "{line}");
+                }
+            }
+            Format::Jsonl => {}
+        }
+        self.out.row_done()
+    }
+
+    /// Writes one row.
+    pub fn write(&mut self, row: &Row<'_>) -> Result<(), WriteError> {
+        if !self.header_written {
+            self.header()?;
+        }
+        self.counter += 1;
+        match self.opts.format {
+            Format::Tsv => self.tsv(row),
+            Format::Csv => self.csv_row(row),
+            Format::Pretty => self.pretty(row),
+            Format::Jsonl => self.jsonl(row),
+        }
+        self.out.row_done()
+    }
+
+    /// Writes everything buffered (live output after each chunk; end of run).
+    pub fn flush(&mut self) -> Result<(), WriteError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.out.flush()
+    }
+
+    /// Flushes and closes the output.
+    pub fn close(&mut self) -> Result<(), WriteError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.out.close()
+    }
+
+    /// The output (tests read memory outputs back).
+    pub fn output(&self) -> &Output {
+        &self.out
+    }
+
+    fn wall_time(&mut self, micros: Option<u64>) -> &str {
+        self.scratch.clear();
+        if let (Some(anchor), Some(us)) = (self.anchor, micros) {
+            let delta = chrono::Duration::microseconds(us as i64);
+            use std::fmt::Write as _;
+            match anchor {
+                Anchor::Naive(n) => {
+                    let _ = write!(
+                        self.scratch,
+                        "{}",
+                        (n + delta).format("%Y-%m-%dT%H:%M:%S%.3f")
+                    );
+                }
+                Anchor::Instant(t) => {
+                    let t = t + delta;
+                    if self.opts.utc {
+                        let _ = write!(self.scratch, "{}", t.format("%Y-%m-%dT%H:%M:%S%.3fZ"));
+                    } else {
+                        let local: DateTime<Local> = t.into();
+                        let _ =
+                            write!(self.scratch, "{}", local.format("%Y-%m-%dT%H:%M:%S%.3f%:z"));
+                    }
+                }
+            }
+        }
+        &self.scratch
+    }
+
+    fn tsv(&mut self, row: &Row<'_>) {
+        let counter = self.counter;
+        let time = if self.opts.time_abs {
+            Some(self.wall_time(row.micros).to_owned())
+        } else {
+            None
+        };
+        let raw = self.opts.raw;
+        let buf = self.out.buf();
+        let mut ib = itoa::Buffer::new();
+        buf.extend_from_slice(ib.format(counter).as_bytes());
+        buf.push(b'\t');
+        if let Some(us) = row.micros {
+            buf.extend_from_slice(ib.format(us / 1000).as_bytes());
+        }
+        buf.push(b'\t');
+        if let Some(id) = row.id {
+            buf.extend_from_slice(ib.format(id).as_bytes());
+        }
+        for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
+            buf.push(b'\t');
+            push_tsv_field(buf, field);
+        }
+        for field in row.extra {
+            buf.push(b'\t');
+            push_tsv_field(buf, field);
+        }
+        if raw {
+            buf.push(b'\t');
+            push_hex_bytes(buf, row.raw);
+        }
+        if let Some(t) = time {
+            buf.push(b'\t');
+            buf.extend_from_slice(t.as_bytes());
+        }
+        buf.push(b'\n');
+    }
+
+    fn csv_row(&mut self, row: &Row<'_>) {
+        let mut ib = itoa::Buffer::new();
+        let _ = self.csv.write_field(ib.format(self.counter));
+        let millis = row.micros.map(|us| us / 1000);
+        let _ = self
+            .csv
+            .write_field(millis.map_or(String::new(), |m| m.to_string()));
+        let _ = self
+            .csv
+            .write_field(row.id.map_or(String::new(), |i| i.to_string()));
+        for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
+            let _ = self.csv.write_field(field);
+        }
+        for field in row.extra {
+            let _ = self.csv.write_field(field);
+        }
+        if self.opts.raw {
+            let mut hex = Vec::new();
+            push_hex_bytes(&mut hex, row.raw);
+            let _ = self.csv.write_field(&hex);
+        }
+        if self.opts.time_abs {
+            let t = self.wall_time(row.micros).to_owned();
+            let _ = self.csv.write_field(&t);
+        }
+        let _ = self.csv.write_record(None::<&[u8]>);
+        self.move_csv();
+    }
+
+    fn move_csv(&mut self) {
+        if let Err(e) = self.csv.flush() {
+            // Flushing into a Vec cannot fail; keep the error if it ever does.
+            self.error.get_or_insert(WriteError {
+                path: None,
+                error: e,
+            });
+        }
+        let mut inner = self.csv_buf.0.borrow_mut();
+        self.out.buf().extend_from_slice(&inner);
+        inner.clear();
+    }
+
+    fn jsonl(&mut self, row: &Row<'_>) {
+        let time = if self.opts.time_abs {
+            Some(self.wall_time(row.micros).to_owned())
+        } else {
+            None
+        };
+        let counter = self.counter;
+        let columns = &self.columns;
+        let buf = self.out.buf();
+        let mut ib = itoa::Buffer::new();
+        buf.extend_from_slice(b"{\"counter\":");
+        buf.extend_from_slice(ib.format(counter).as_bytes());
+        buf.extend_from_slice(b",\"millis\":");
+        match row.micros {
+            Some(us) => buf.extend_from_slice(ib.format(us / 1000).as_bytes()),
+            None => buf.extend_from_slice(b"null"),
+        }
+        buf.extend_from_slice(b",\"id\":");
+        match row.id {
+            Some(id) => buf.extend_from_slice(ib.format(id).as_bytes()),
+            None => buf.extend_from_slice(b"null"),
+        }
+        let base = [
+            ("device", row.device),
+            ("type", row.kind),
+            ("sensor_no", row.sensor_no),
+            ("sensor", row.sensor),
+            ("data", row.data),
+        ];
+        for (k, v) in base {
+            push_json_pair(buf, k, v);
+        }
+        for (name, v) in columns[BASE_COLUMNS.len()..].iter().zip(row.extra) {
+            push_json_key(buf, name);
+            push_json_str(buf, v);
+        }
+        if self.opts.raw {
+            buf.extend_from_slice(b",\"raw\":\"");
+            push_hex_bytes(buf, row.raw);
+            buf.push(b'"');
+        }
+        if let Some(t) = time {
+            push_json_pair(buf, "time", &t);
+        }
+        buf.extend_from_slice(b"}\n");
+    }
+
+    fn pretty(&mut self, row: &Row<'_>) {
+        let mut ib = itoa::Buffer::new();
+        let counter = ib.format(self.counter).to_owned();
+        let millis = row
+            .micros
+            .map_or(String::new(), |us| (us / 1000).to_string());
+        let id = row.id.map_or(String::new(), |i| i.to_string());
+        let raw = if self.opts.raw {
+            let mut v = Vec::new();
+            push_hex_bytes(&mut v, row.raw);
+            Some(String::from_utf8(v).unwrap_or_default())
+        } else {
+            None
+        };
+        let time = if self.opts.time_abs {
+            Some(self.wall_time(row.micros).to_owned())
+        } else {
+            None
+        };
+        let mut cells: Vec<&str> = vec![
+            &counter,
+            &millis,
+            &id,
+            row.device,
+            row.kind,
+            row.sensor_no,
+            row.sensor,
+            row.data,
+        ];
+        cells.extend_from_slice(row.extra);
+        if let Some(r) = &raw {
+            cells.push(r);
+        }
+        if let Some(t) = &time {
+            cells.push(t);
+        }
+        let line = self.pretty_line(cells.into_iter(), &[true, true, true]);
+        let style = match row.class {
+            Class::Plain => None,
+            Class::Quiet => Some(Style::new().dimmed()),
+            Class::Warning => Some(Style::new().yellow()),
+            Class::Error => Some(Style::new().red()),
+            Class::Info => Some(Style::new().cyan()),
+        };
+        let color = self.opts.color;
+        let buf = self.out.buf();
+        match style {
+            Some(s) if color => {
+                let _ = writeln!(buf, "{}", line.style(s));
+            }
+            _ => {
+                let _ = writeln!(buf, "{line}");
+            }
+        }
+    }
+
+    /// Pads cells to the pretty widths; the first `right.len()` columns are right-aligned.
+    fn pretty_line<'a>(&self, cells: impl Iterator<Item = &'a str>, right: &[bool]) -> String {
+        let mut line = String::new();
+        let cells: Vec<&str> = cells.collect();
+        let n = cells.len();
+        for (i, cell) in cells.into_iter().enumerate() {
+            let cell = sanitize(cell);
+            if i > 0 {
+                line.push_str("  ");
+            }
+            let width = PRETTY_WIDTHS
+                .get(i)
+                .copied()
+                .unwrap_or_else(|| self.columns.get(i).map_or(0, |c| c.len().max(4)));
+            let last = i + 1 == n;
+            let len = cell.chars().count();
+            if i < right.len() && right[i] {
+                line.extend(std::iter::repeat_n(' ', width.saturating_sub(len)));
+                line.push_str(&cell);
+            } else {
+                line.push_str(&cell);
+                if !last {
+                    line.extend(std::iter::repeat_n(' ', width.saturating_sub(len)));
+                }
+            }
+        }
+        let trimmed = line.trim_end().len();
+        line.truncate(trimmed);
+        line
+    }
+}
+
+impl RowOut for Table {
+    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
+        match self.write(row) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                let kind = e.error.kind();
+                let msg = e.to_string();
+                self.error = Some(e);
+                Err(io::Error::new(kind, msg))
+            }
+        }
+    }
+}
+
+/// Replaces control characters (tabs, newlines) that would break a TSV row with spaces.
+fn push_tsv_field(buf: &mut Vec<u8>, field: &str) {
+    let bytes = field.as_bytes();
+    if bytes.iter().all(|&b| b >= 0x20) {
+        buf.extend_from_slice(bytes);
+    } else {
+        buf.extend(bytes.iter().map(|&b| if b < 0x20 { b' ' } else { b }));
+    }
+}
+
+fn sanitize(cell: &str) -> std::borrow::Cow<'_, str> {
+    if cell.chars().any(char::is_control) {
+        cell.chars()
+            .map(|c| if c.is_control() { ' ' } else { c })
+            .collect::<String>()
+            .into()
+    } else {
+        cell.into()
+    }
+}
+
+fn push_json_key(buf: &mut Vec<u8>, name: &str) {
+    buf.extend_from_slice(b",\"");
+    for c in name.chars() {
+        match c {
+            ' ' => buf.push(b'_'),
+            '#' => buf.extend_from_slice(b"no"),
+            c => {
+                for l in c.to_lowercase() {
+                    let mut tmp = [0u8; 4];
+                    buf.extend_from_slice(l.encode_utf8(&mut tmp).as_bytes());
+                }
+            }
+        }
+    }
+    buf.extend_from_slice(b"\":");
+}
+
+fn push_json_pair(buf: &mut Vec<u8>, key: &str, value: &str) {
+    buf.extend_from_slice(b",\"");
+    buf.extend_from_slice(key.as_bytes());
+    buf.extend_from_slice(b"\":");
+    push_json_str(buf, value);
+}
+
+fn push_json_str(buf: &mut Vec<u8>, s: &str) {
+    buf.push(b'"');
+    for &b in s.as_bytes() {
+        match b {
+            b'"' => buf.extend_from_slice(b"\\\""),
+            b'\\' => buf.extend_from_slice(b"\\\\"),
+            b'\n' => buf.extend_from_slice(b"\\n"),
+            b'\r' => buf.extend_from_slice(b"\\r"),
+            b'\t' => buf.extend_from_slice(b"\\t"),
+            0..=0x1F => {
+                let _ = write!(buf, "\\u{b:04x}");
+            }
+            _ => buf.push(b),
+        }
+    }
+    buf.push(b'"');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_row() -> Row<'static> {
+        Row {
+            micros: Some(4_280_999),
+            id: Some(0),
+            device: "Vario",
+            kind: "Data",
+            class: Class::Plain,
+            sensor_no: "100",
+            sensor: "Alt",
+            data: "65.43",
+            extra: &["m", "a \"quoted\", note"],
+            raw: &[0x7E, 0x00],
+        }
+    }
+
+    fn render(format: Format, raw: bool) -> String {
+        let opts = TableOptions {
+            format,
+            color: false,
+            raw,
+            time_abs: false,
+            utc: false,
+        };
+        let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
+        t.write(&sample_row()).unwrap();
+        t.flush().unwrap();
+        String::from_utf8(t.output().memory_contents().to_vec()).unwrap()
+    }
+
+    #[test]
+    fn tsv_has_header_and_fields() {
+        let s = render(Format::Tsv, true);
+        let lines: Vec<&str> = s.lines().collect();
+        assert_eq!(
+            lines[0],
+            "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote\tRaw"
+        );
+        assert_eq!(
+            lines[1],
+            "1\t4280\t0\tVario\tData\t100\tAlt\t65.43\tm\ta \"quoted\", note\t7E 00"
+        );
+    }
+
+    #[test]
+    fn csv_quotes() {
+        let s = render(Format::Csv, false);
+        let mut r = csv::Reader::from_reader(s.as_bytes());
+        let headers = r.headers().unwrap().clone();
+        assert_eq!(&headers[5], "Sensor #");
+        let rec = r.records().next().unwrap().unwrap();
+        assert_eq!(&rec[9], "a \"quoted\", note");
+        assert_eq!(&rec[7], "65.43");
+    }
+
+    #[test]
+    fn jsonl_escapes() {
+        let s = render(Format::Jsonl, true);
+        assert_eq!(
+            s.trim_end(),
+            r#"{"counter":1,"millis":4280,"id":0,"device":"Vario","type":"Data","sensor_no":"100","sensor":"Alt","data":"65.43","unit":"m","note":"a \"quoted\", note","raw":"7E 00"}"#
+        );
+    }
+
+    #[test]
+    fn pretty_aligns() {
+        let s = render(Format::Pretty, false);
+        let lines: Vec<&str> = s.lines().collect();
+        assert!(lines[0].starts_with("Counter    Millis   ID  Device"));
+        assert!(lines[1].starts_with("      1      4280    0  Vario"));
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(Format::from_path(Path::new("a.CSV")), Some(Format::Csv));
+        assert_eq!(Format::from_path(Path::new("a.jsonl")), Some(Format::Jsonl));
+        assert_eq!(Format::from_path(Path::new("a.bin")), None);
+    }
+}

@@ -1,0 +1,164 @@
+//! Where formatted rows go: standard output or a file, written in whole rows only.
+//!
+//! Rows are appended to an in-memory buffer and written out in whole rows, so a reader of the
+//! output never sees half a row. When a write to a file fails (a full disk), the file is cut
+//! back to the end of the last row that was written completely.
+
+use std::fs::File;
+use std::io::{self, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Flush the buffer once it holds this much.
+const HIGH_WATER: usize = 64 * 1024;
+
+enum Dest {
+    Stdout(io::Stdout),
+    File { file: File, path: PathBuf },
+    Memory(Vec<u8>),
+}
+
+/// A write failed.
+#[derive(Debug)]
+pub struct WriteError {
+    /// `None` for standard output.
+    pub path: Option<PathBuf>,
+    pub error: io::Error,
+}
+
+impl std::fmt::Display for WriteError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.path {
+            Some(p) => write!(f, "cannot write to {}: {}", p.display(), self.error),
+            None => write!(f, "cannot write to standard output: {}", self.error),
+        }
+    }
+}
+
+/// A buffered destination that only ever writes complete rows.
+pub struct Output {
+    dest: Dest,
+    buf: Vec<u8>,
+    /// Bytes known to be in the file (whole rows).
+    committed: u64,
+    /// Last write error; once set, nothing more is written.
+    failed: bool,
+}
+
+impl Output {
+    pub fn stdout() -> Self {
+        Self::new(Dest::Stdout(io::stdout()))
+    }
+
+    /// Creates (truncates) `path`.
+    pub fn create(path: &Path) -> io::Result<Self> {
+        let file = File::create(path)?;
+        Ok(Self::new(Dest::File {
+            file,
+            path: path.to_owned(),
+        }))
+    }
+
+    /// Keeps everything in memory (tests).
+    pub fn memory() -> Self {
+        Self::new(Dest::Memory(Vec::new()))
+    }
+
+    fn new(dest: Dest) -> Self {
+        Output {
+            dest,
+            buf: Vec::with_capacity(HIGH_WATER * 2),
+            committed: 0,
+            failed: false,
+        }
+    }
+
+    /// The buffer to append whole rows to. Call [`Output::row_done`] after each row.
+    pub fn buf(&mut self) -> &mut Vec<u8> {
+        &mut self.buf
+    }
+
+    /// A complete row is in the buffer: write out when enough has gathered.
+    #[inline]
+    pub fn row_done(&mut self) -> Result<(), WriteError> {
+        if self.buf.len() >= HIGH_WATER {
+            self.flush()
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Whether the output is a terminal (for colour and format defaults).
+    pub fn is_terminal(&self) -> bool {
+        use std::io::IsTerminal;
+        match &self.dest {
+            Dest::Stdout(s) => s.is_terminal(),
+            _ => false,
+        }
+    }
+
+    /// Writes every buffered row.
+    pub fn flush(&mut self) -> Result<(), WriteError> {
+        if self.failed {
+            self.buf.clear();
+            return Ok(());
+        }
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        let result = match &mut self.dest {
+            Dest::Stdout(s) => {
+                let mut lock = s.lock();
+                lock.write_all(&self.buf).and_then(|_| lock.flush())
+            }
+            Dest::File { file, .. } => file.write_all(&self.buf),
+            Dest::Memory(v) => {
+                v.extend_from_slice(&self.buf);
+                Ok(())
+            }
+        };
+        match result {
+            Ok(()) => {
+                self.committed += self.buf.len() as u64;
+                self.buf.clear();
+                Ok(())
+            }
+            Err(error) => {
+                self.failed = true;
+                self.buf.clear();
+                let path = match &mut self.dest {
+                    Dest::File { file, path } => {
+                        // Cut a partly written row off again; ignore errors, the write error
+                        // is what the user needs to see.
+                        let _ = file.set_len(self.committed);
+                        let _ = file.seek(SeekFrom::Start(self.committed));
+                        Some(path.clone())
+                    }
+                    _ => None,
+                };
+                Err(WriteError { path, error })
+            }
+        }
+    }
+
+    /// Flushes and syncs a file to disk.
+    pub fn close(&mut self) -> Result<(), WriteError> {
+        self.flush()?;
+        if let Dest::File { file, path } = &mut self.dest
+            && !self.failed
+        {
+            file.sync_data().map_err(|error| WriteError {
+                path: Some(path.clone()),
+                error,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The bytes written so far (memory outputs only).
+    pub fn memory_contents(&self) -> &[u8] {
+        match &self.dest {
+            Dest::Memory(v) => v,
+            _ => &[],
+        }
+    }
+}

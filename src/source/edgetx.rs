@@ -1,0 +1,263 @@
+//! The EdgeTX/OpenTX S.Port debug log: one poll or frame per line,
+//! `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 10 …` (hex bytes as on the wire, stuffing included; a line
+//! may end in the middle of a frame). Millis counts from the first line.
+
+use std::io::{self, Read};
+use std::sync::mpsc::SyncSender;
+
+use chrono::NaiveDateTime;
+
+use super::{Batch, ChunkReader, Message, Opened};
+use crate::exit::Failure;
+use crate::sink::Anchor;
+
+/// Length of the `YYYY-MM-DD,HH:MM:SS.mmm:` stamp.
+const STAMP_LEN: usize = 24;
+/// Longer lines are not log lines; they are skipped.
+const MAX_LINE: usize = 4096;
+/// A batch is sent once it holds this many bytes, or when the input has nothing more buffered.
+const BATCH_BYTES: usize = 64 * 1024;
+
+/// `Some(true)` when `prefix` starts like a log line, `Some(false)` when it cannot be one,
+/// `None` when more bytes are needed to tell.
+pub fn looks_like_log(prefix: &[u8]) -> Option<bool> {
+    // Blank lines and a UTF-8 byte-order mark may come first (the EdgeTX sample starts with one
+    // empty line).
+    let prefix = prefix.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(prefix);
+    let start = prefix.iter().position(|b| !b.is_ascii_whitespace())?;
+    let prefix = &prefix[start..];
+    // Shape: dddd-dd-dd,dd:dd:dd.ddd:
+    const SHAPE: &[u8; STAMP_LEN] = b"dddd-dd-dd,dd:dd:dd.ddd:";
+    for (i, &want) in SHAPE.iter().enumerate() {
+        let &b = prefix.get(i)?;
+        let ok = if want == b'd' {
+            b.is_ascii_digit()
+        } else {
+            b == want
+        };
+        if !ok {
+            return Some(false);
+        }
+    }
+    Some(true)
+}
+
+/// A parsed log line.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Line {
+    pub time: NaiveDateTime,
+    pub bytes: Vec<u8>,
+}
+
+/// Parses one line (without its line end). `None` if it is not a log line.
+pub fn parse_line(line: &[u8]) -> Option<Line> {
+    let text = std::str::from_utf8(line).ok()?.trim_end_matches('\r');
+    if looks_like_log(text.as_bytes()) != Some(true) {
+        return None;
+    }
+    let time =
+        NaiveDateTime::parse_from_str(&text[..STAMP_LEN - 1], "%Y-%m-%d,%H:%M:%S%.3f").ok()?;
+    let mut bytes = Vec::new();
+    for tok in text[STAMP_LEN..].split_ascii_whitespace() {
+        if tok.len() != 2 {
+            return None;
+        }
+        bytes.push(u8::from_str_radix(tok, 16).ok()?);
+    }
+    Some(Line { time, bytes })
+}
+
+/// Streams a log file as batches, one time mark per line.
+pub struct EdgeTxReader {
+    reader: Box<dyn Read + Send>,
+    name: String,
+    buf: Vec<u8>,
+    pos: usize,
+    eof: bool,
+    line: Vec<u8>,
+    overlong: bool,
+    line_no: u64,
+    first: Option<NaiveDateTime>,
+    bad_lines: u64,
+}
+
+impl EdgeTxReader {
+    pub fn new(opened: Opened) -> Self {
+        EdgeTxReader {
+            reader: opened.reader,
+            name: opened.name,
+            buf: opened.prefix,
+            pos: 0,
+            eof: false,
+            line: Vec::new(),
+            overlong: false,
+            line_no: 0,
+            first: None,
+            bad_lines: 0,
+        }
+    }
+
+    fn fill(&mut self) -> Result<(), Failure> {
+        self.buf.clear();
+        self.pos = 0;
+        self.buf.resize(super::READ_SIZE, 0);
+        loop {
+            match self.reader.read(&mut self.buf) {
+                Ok(n) => {
+                    self.buf.truncate(n);
+                    self.eof = n == 0;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => {
+                    self.buf.clear();
+                    return Err(Failure::Input(format!("cannot read {}: {e}", self.name)));
+                }
+            }
+        }
+    }
+
+    /// Handles one complete line; adds its bytes to `batch`.
+    fn take_line(&mut self, batch: &mut Batch, tx: &SyncSender<Message>) {
+        self.line_no += 1;
+        let line = std::mem::take(&mut self.line);
+        let overlong = std::mem::replace(&mut self.overlong, false);
+        if line.iter().all(|b| b.is_ascii_whitespace()) && !overlong {
+            self.line = line;
+            self.line.clear();
+            return;
+        }
+        match parse_line(&line).filter(|_| !overlong) {
+            Some(l) => {
+                let first = *self.first.get_or_insert_with(|| {
+                    let _ = tx.send(Message::Anchor(Anchor::Naive(l.time)));
+                    l.time
+                });
+                let micros = (l.time - first).num_microseconds().unwrap_or(0).max(0) as u64;
+                batch.marks.push((batch.bytes.len(), Some(micros)));
+                batch.bytes.extend_from_slice(&l.bytes);
+            }
+            None => {
+                self.bad_lines += 1;
+                if self.bad_lines <= 3 {
+                    let _ = tx.send(Message::Warning(format!(
+                        "{}: line {} is not an EdgeTX log line, skipped",
+                        self.name, self.line_no
+                    )));
+                }
+            }
+        }
+        self.line = line;
+        self.line.clear();
+    }
+}
+
+impl ChunkReader for EdgeTxReader {
+    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+        let mut batch = Batch::default();
+        loop {
+            if self.pos >= self.buf.len() {
+                // Send what we have before blocking on a slow pipe.
+                if !batch.bytes.is_empty() {
+                    break;
+                }
+                if self.eof {
+                    if !self.line.is_empty() || self.overlong {
+                        self.take_line(&mut batch, tx);
+                    }
+                    if self.bad_lines > 3 {
+                        let _ = tx.send(Message::Warning(format!(
+                            "{}: {} lines in all were not EdgeTX log lines and were skipped",
+                            self.name, self.bad_lines
+                        )));
+                        self.bad_lines = 0;
+                    }
+                    return Ok(if batch.bytes.is_empty() {
+                        None
+                    } else {
+                        Some(batch)
+                    });
+                }
+                self.fill()?;
+                continue;
+            }
+            let rest = &self.buf[self.pos..];
+            match rest.iter().position(|&b| b == b'\n') {
+                Some(i) => {
+                    if self.line.len() + i <= MAX_LINE {
+                        self.line.extend_from_slice(&rest[..i]);
+                    } else {
+                        self.overlong = true;
+                    }
+                    self.pos += i + 1;
+                    self.take_line(&mut batch, tx);
+                    if batch.bytes.len() >= BATCH_BYTES {
+                        break;
+                    }
+                }
+                None => {
+                    if self.line.len() + rest.len() <= MAX_LINE {
+                        self.line.extend_from_slice(rest);
+                    } else {
+                        self.overlong = true;
+                        self.line.clear();
+                    }
+                    self.pos = self.buf.len();
+                }
+            }
+        }
+        Ok(Some(batch))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_lines() {
+        let l = parse_line(b"2014-07-11,22:41:01.770: 7E 98 10 05 F1 10 35 0F 96 0E\r").unwrap();
+        assert_eq!(l.bytes.len(), 10);
+        assert_eq!(l.time.to_string(), "2014-07-11 22:41:01.770");
+        assert!(parse_line(b"2014-07-11,22:41:01.770: 7E 9").is_none());
+        assert!(parse_line(b"hello").is_none());
+        assert_eq!(
+            looks_like_log(b"\r\n2014-07-11,22:41:01.340: 7E"),
+            Some(true)
+        );
+        assert_eq!(looks_like_log(b"\r\n\r\n"), None);
+        assert_eq!(looks_like_log(b"\r\n~"), Some(false));
+        assert_eq!(
+            parse_line(b"2014-07-11,22:41:01.770:").unwrap().bytes,
+            Vec::<u8>::new()
+        );
+    }
+
+    #[test]
+    fn reads_batches_with_marks() {
+        let text = b"2014-07-11,22:41:01.340: 7E 00\n\nnot a log line\n2014-07-11,22:41:01.350: 7E A1\n2014-07-11,22:41:01.360: 7E".to_vec();
+        let opened = Opened {
+            kind: super::super::Kind::EdgeTxLog,
+            prefix: Vec::new(),
+            reader: Box::new(std::io::Cursor::new(text)),
+            name: "t".into(),
+        };
+        let (tx, rx) = std::sync::mpsc::sync_channel(16);
+        let mut r = EdgeTxReader::new(opened);
+        let mut all = Batch::default();
+        while let Some(b) = r.next_batch(&tx).unwrap() {
+            for (bytes, t) in b.segments() {
+                all.marks.push((all.bytes.len(), t));
+                all.bytes.extend_from_slice(bytes);
+            }
+        }
+        assert_eq!(all.bytes, [0x7E, 0x00, 0x7E, 0xA1, 0x7E]);
+        assert_eq!(
+            all.marks,
+            [(0, Some(0)), (2, Some(10_000)), (4, Some(20_000))]
+        );
+        let msgs: Vec<Message> = rx.try_iter().collect();
+        assert!(matches!(msgs[0], Message::Anchor(_)));
+        assert!(matches!(&msgs[1], Message::Warning(w) if w.contains("line 3")));
+    }
+}

@@ -1,0 +1,517 @@
+//! FrSky S.Port (Smart Port): reassembly, the log table mapping, and statistics.
+//!
+//! The table mapping and the timing rule are documented in `docs/sport.md`.
+
+pub mod names;
+pub mod passthrough;
+pub mod values;
+pub mod wire;
+
+use std::fmt::Write as _;
+use std::io;
+
+use crate::decoder::{Decoder, RowOut};
+use crate::fmt::{push_hex, push_u64};
+use crate::row::{Class, Row};
+use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
+
+/// Poll slot length used to reconstruct Millis for sources without time.
+pub const SLOT_MICROS: u64 = 12_000;
+
+/// Default serial settings.
+pub const DEFAULT_BAUD: u32 = 57_600;
+
+/// Extra columns after the eight base columns.
+pub const COLUMNS: &[&str] = &["Unit", "Note"];
+
+#[derive(Clone, Debug, Default)]
+struct PhysStats {
+    polls: u64,
+    answers: u64,
+    null: u64,
+    data: u64,
+    other: u64,
+    crc_errors: u64,
+    truncated: u64,
+    last_poll: Option<u64>,
+    interval_sum: u64,
+    intervals: u64,
+    interval_max: u64,
+}
+
+/// Counters kept while decoding (`--stats`).
+#[derive(Clone, Debug)]
+pub struct Stats {
+    per: Vec<PhysStats>,
+    pub valid_frames: u64,
+    pub crc_errors: u64,
+    pub truncated: u64,
+    pub garbage_bytes: u64,
+    pub garbage_runs: u64,
+    pub check_bits: u64,
+    pub unusual_escapes: u64,
+    pub repeats: u64,
+    last_body: Option<[u8; BODY_LEN]>,
+}
+
+impl Default for Stats {
+    fn default() -> Self {
+        Stats {
+            per: vec![PhysStats::default(); 32],
+            valid_frames: 0,
+            crc_errors: 0,
+            truncated: 0,
+            garbage_bytes: 0,
+            garbage_runs: 0,
+            check_bits: 0,
+            unusual_escapes: 0,
+            repeats: 0,
+            last_body: None,
+        }
+    }
+}
+
+/// Scratch buffers reused for every row.
+#[derive(Default)]
+struct Scratch {
+    sensor_no: String,
+    sensor: String,
+    data: String,
+    note: String,
+}
+
+impl Scratch {
+    fn clear(&mut self) {
+        self.sensor_no.clear();
+        self.sensor.clear();
+        self.data.clear();
+        self.note.clear();
+    }
+
+    fn note(&mut self, text: &str) {
+        if !self.note.is_empty() {
+            self.note.push_str("; ");
+        }
+        self.note.push_str(text);
+    }
+}
+
+/// The S.Port decoder: reassembler + table mapping + statistics.
+#[derive(Default)]
+pub struct SportDecoder {
+    re: Reassembler,
+    events: Vec<Event>,
+    scratch: Scratch,
+    stats: Stats,
+}
+
+impl SportDecoder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn stats_counters(&self) -> &Stats {
+        &self.stats
+    }
+
+    fn drain(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
+        let mut events = std::mem::take(&mut self.events);
+        let mut result = Ok(());
+        for ev in &events {
+            let r = match ev {
+                Event::Slot(s) => self.slot_row(s, out),
+                Event::Garbage(g) => self.garbage_row(g, out),
+            };
+            if let Err(e) = r {
+                result = Err(e);
+                break;
+            }
+        }
+        events.clear();
+        self.events = events;
+        result
+    }
+
+    fn slot_row(&mut self, s: &Slot, out: &mut dyn RowOut) -> io::Result<()> {
+        let micros = s.time.unwrap_or(s.index * SLOT_MICROS);
+        let phys = s.phys();
+        let sc = &mut self.scratch;
+        sc.clear();
+        let st = &mut self.stats;
+        let ps = &mut st.per[phys as usize];
+        ps.polls += 1;
+        if let Some(last) = ps.last_poll {
+            let d = micros.saturating_sub(last);
+            ps.interval_sum += d;
+            ps.intervals += 1;
+            ps.interval_max = ps.interval_max.max(d);
+        }
+        ps.last_poll = Some(micros);
+
+        let mut class = Class::Plain;
+        let mut unit = "";
+        let kind: &str = match s.body {
+            Body::None => "",
+            Body::Truncated { bytes, len } => {
+                ps.truncated += 1;
+                st.truncated += 1;
+                class = Class::Error;
+                push_hex(&mut sc.data, &bytes[..len as usize]);
+                let _ = write!(
+                    sc.note,
+                    "{len} of {BODY_LEN} bytes before the frame was cut"
+                );
+                "Truncated"
+            }
+            Body::Complete(b) => {
+                ps.answers += 1;
+                if st.last_body == Some(b) {
+                    st.repeats += 1;
+                }
+                st.last_body = Some(b);
+                let app_id = u16::from_le_bytes([b[1], b[2]]);
+                let value = u32::from_le_bytes([b[3], b[4], b[5], b[6]]);
+                let ok = wire::crc_ok(&b);
+                let firmware = b[0] == 0x50;
+                if firmware {
+                    // Firmware-update frames carry their own checksum (wire reference §5.6).
+                    ps.other += 1;
+                    st.valid_frames += 1;
+                    push_hex(&mut sc.data, &b[1..]);
+                    sc.note("firmware update frame, own checksum not checked");
+                    "FwUpdate"
+                } else {
+                    if ok {
+                        st.valid_frames += 1;
+                        match b[0] {
+                            0x00 => ps.null += 1,
+                            0x10 => ps.data += 1,
+                            _ => ps.other += 1,
+                        }
+                    } else {
+                        ps.crc_errors += 1;
+                        st.crc_errors += 1;
+                        class = Class::Error;
+                    }
+                    unit = describe(b[0], s.header, app_id, value, sc);
+                    if !ok {
+                        let expected = wire::crc(&b[..7]);
+                        let type_name = names::frame_type(b[0]).unwrap_or("unknown");
+                        let mut note = String::new();
+                        let _ = write!(
+                            note,
+                            "CRC 0x{:02X}, expected 0x{expected:02X} ({type_name} frame)",
+                            b[7]
+                        );
+                        sc.note(&note);
+                        "BadCRC"
+                    } else {
+                        match names::frame_type(b[0]) {
+                            Some(n) => {
+                                if b[0] == 0x00 {
+                                    class = Class::Quiet;
+                                }
+                                n
+                            }
+                            None => {
+                                class = Class::Warning;
+                                let mut note = String::new();
+                                let _ = write!(note, "unknown frame type 0x{:02X}", b[0]);
+                                sc.note(&note);
+                                "Unknown"
+                            }
+                        }
+                    }
+                }
+            }
+        };
+        if !wire::header_ok(s.header) {
+            st.check_bits += 1;
+            let mut note = String::new();
+            let _ = write!(note, "non-standard check bits (header 0x{:02X})", s.header);
+            sc.note(&note);
+            if class == Class::Plain || class == Class::Quiet {
+                class = Class::Warning;
+            }
+        }
+        if s.unusual_escape {
+            st.unusual_escapes += 1;
+            sc.note("unusual escape (0x7D not followed by 0x5E/0x5D)");
+            if class != Class::Error {
+                class = Class::Warning;
+            }
+        }
+        let extra = [unit, sc.note.as_str()];
+        out.row(&Row {
+            micros: Some(micros),
+            id: Some(phys as u32),
+            device: names::device(phys),
+            kind,
+            class,
+            sensor_no: &sc.sensor_no,
+            sensor: &sc.sensor,
+            data: &sc.data,
+            extra: &extra,
+            raw: s.wire(),
+        })
+    }
+
+    fn garbage_row(&mut self, g: &Garbage, out: &mut dyn RowOut) -> io::Result<()> {
+        let micros = g
+            .time
+            .unwrap_or(g.after_slot.map_or(0, |i| i * SLOT_MICROS));
+        let sc = &mut self.scratch;
+        sc.clear();
+        self.stats.garbage_bytes += g.bytes().len() as u64;
+        self.stats.garbage_runs += 1;
+        push_hex(&mut sc.data, g.bytes());
+        if g.bytes() == [wire::START] {
+            sc.note.push_str("0x7E without a header byte");
+        } else {
+            push_u64(&mut sc.note, g.bytes().len() as u64);
+            sc.note.push_str(if g.after_slot.is_some() {
+                " bytes after a complete frame"
+            } else {
+                " bytes before the first 0x7E"
+            });
+        }
+        let extra = ["", sc.note.as_str()];
+        out.row(&Row {
+            micros: Some(micros),
+            id: None,
+            device: "",
+            kind: "Garbage",
+            class: Class::Error,
+            sensor_no: "",
+            sensor: "",
+            data: &sc.data,
+            extra: &extra,
+            raw: g.bytes(),
+        })
+    }
+}
+
+/// Fills Sensor #, Sensor, Data and Note for a complete frame of type `kind`; returns the unit.
+fn describe(kind: u8, header: u8, app_id: u16, value: u32, sc: &mut Scratch) -> &'static str {
+    match kind {
+        0x10 => {
+            values::push_sensor_no(&mut sc.sensor_no, app_id);
+            values::decode(app_id, value, &mut sc.sensor, &mut sc.data)
+        }
+        0x00 => {
+            // Keep-alive: the sample leaves Sensor #/Sensor/Data empty; Pawelsky-style sensors
+            // name the app ID due next, which is worth showing.
+            if app_id != 0 {
+                values::push_sensor_no(&mut sc.sensor_no, app_id);
+                values::label(app_id, &mut sc.sensor);
+            }
+            if value != 0 {
+                let _ = write!(sc.data, "value=0x{value:08X}");
+                sc.note("keep-alive with a non-zero value");
+            }
+            ""
+        }
+        0x20 | 0x21 => {
+            values::push_sensor_no(&mut sc.sensor_no, app_id);
+            values::label(app_id, &mut sc.sensor);
+            let _ = write!(sc.data, "value=0x{value:08X}");
+            sc.note(names::frame_type_long(kind));
+            ""
+        }
+        0x30..=0x32 => {
+            values::push_sensor_no(&mut sc.sensor_no, app_id);
+            values::label(app_id, &mut sc.sensor);
+            let mut payload = [0u8; 6];
+            payload[..2].copy_from_slice(&app_id.to_le_bytes());
+            payload[2..].copy_from_slice(&value.to_le_bytes());
+            push_hex(&mut sc.data, &payload);
+            config_note(kind, header, value, sc);
+            ""
+        }
+        _ => {
+            let mut payload = [0u8; 6];
+            payload[..2].copy_from_slice(&app_id.to_le_bytes());
+            payload[2..].copy_from_slice(&value.to_le_bytes());
+            push_hex(&mut sc.data, &payload);
+            ""
+        }
+    }
+}
+
+/// Notes for read/write/reply frames: FrSky configuration fields, or MSP/MAVlite traffic.
+fn config_note(kind: u8, header: u8, value: u32, sc: &mut Scratch) {
+    let phys = header & 0x1F;
+    if phys == 13 {
+        sc.note("uplink (MSP/MAVlite request)");
+        return;
+    }
+    if kind == 0x32 && matches!(phys, 7 | 20 | 27) {
+        sc.note("downlink (MSP/MAVlite reply)");
+        return;
+    }
+    let field = value as u8;
+    let arg = value >> 8;
+    let mut note = String::new();
+    match (kind, field) {
+        (0x30, 0x01) => note.push_str("config: read physical ID"),
+        (0x31, 0x01) => {
+            let _ = write!(note, "config: set physical ID to {arg}");
+        }
+        (0x32, 0x01) => {
+            let _ = write!(note, "config: physical ID is {arg}");
+        }
+        _ => {
+            let _ = write!(note, "{} field 0x{field:02X}", names::frame_type_long(kind));
+        }
+    }
+    sc.note(&note);
+}
+
+impl Decoder for SportDecoder {
+    fn columns(&self) -> &'static [&'static str] {
+        COLUMNS
+    }
+
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
+        let events = &mut self.events;
+        self.re.push(data, time, &mut |e| events.push(*e));
+        self.drain(out)
+    }
+
+    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
+        let events = &mut self.events;
+        self.re.finish(&mut |e| events.push(*e));
+        self.drain(out)
+    }
+
+    fn reset(&mut self) {
+        let events = &mut self.events;
+        self.re.reset(&mut |e| events.push(*e));
+        // Garbage flushed by a reset is still reported on the next push.
+    }
+
+    fn valid_frames(&self) -> u64 {
+        self.stats.valid_frames
+    }
+
+    fn stats(&self) -> String {
+        let st = &self.stats;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} {:>8} {:>8}",
+            "ID",
+            "Device",
+            "Polls",
+            "Answers",
+            "Null",
+            "Data",
+            "Other",
+            "BadCRC",
+            "Trunc",
+            "Mean ms",
+            "Max ms"
+        );
+        let mut total = PhysStats::default();
+        for (phys, p) in st.per.iter().enumerate() {
+            if p.polls == 0 {
+                continue;
+            }
+            total.polls += p.polls;
+            total.answers += p.answers;
+            total.null += p.null;
+            total.data += p.data;
+            total.other += p.other;
+            total.crc_errors += p.crc_errors;
+            total.truncated += p.truncated;
+            let (mean, max) = if p.intervals > 0 {
+                (
+                    format!("{:.1}", p.interval_sum as f64 / p.intervals as f64 / 1000.0),
+                    format!("{:.1}", p.interval_max as f64 / 1000.0),
+                )
+            } else {
+                ("-".into(), "-".into())
+            };
+            let _ = writeln!(
+                s,
+                "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} {:>8} {:>8}",
+                phys,
+                names::device(phys as u8),
+                p.polls,
+                p.answers,
+                p.null,
+                p.data,
+                p.other,
+                p.crc_errors,
+                p.truncated,
+                mean,
+                max
+            );
+        }
+        let _ = writeln!(
+            s,
+            "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6}",
+            "all",
+            "",
+            total.polls,
+            total.answers,
+            total.null,
+            total.data,
+            total.other,
+            total.crc_errors,
+            total.truncated
+        );
+        let _ = write!(
+            s,
+            "valid frames {}, garbage {} bytes in {} runs, non-standard check bits {}, unusual escapes {}, repeated frames {}",
+            st.valid_frames,
+            st.garbage_bytes,
+            st.garbage_runs,
+            st.check_bits,
+            st.unusual_escapes,
+            st.repeats
+        );
+        s
+    }
+
+    fn problems(&self) -> Option<String> {
+        let st = &self.stats;
+        let mut parts = Vec::new();
+        let plural =
+            |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        if st.crc_errors > 0 {
+            parts.push(plural(st.crc_errors, "CRC error", "CRC errors"));
+        }
+        if st.truncated > 0 {
+            parts.push(plural(st.truncated, "truncated frame", "truncated frames"));
+        }
+        if st.garbage_bytes > 0 {
+            parts.push(format!(
+                "{} skipped ({})",
+                plural(st.garbage_bytes, "garbage byte", "garbage bytes"),
+                plural(st.garbage_runs, "run", "runs")
+            ));
+        }
+        if st.unusual_escapes > 0 {
+            parts.push(plural(
+                st.unusual_escapes,
+                "unusual escape",
+                "unusual escapes",
+            ));
+        }
+        if parts.is_empty() {
+            None
+        } else {
+            Some(format!(
+                "S.Port: {} in {} valid frames",
+                parts.join(", "),
+                st.valid_frames
+            ))
+        }
+    }
+
+    fn no_frames_hint(&self) -> &'static str {
+        "wrong baud rate (S.Port runs at 57600, the TX16S/F16 mirror at 115200) or the signal is \
+         not inverted (S.Port needs an inverting adapter or an FTDI with inverted RX, see docs/live.md)"
+    }
+}

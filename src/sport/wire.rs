@@ -1,0 +1,439 @@
+//! S.Port wire format: framing, byte stuffing, CRC, and the pure reassembler.
+//!
+//! A slot on the wire is `7E hdr` (a poll) optionally followed by 8 stuffed bytes
+//! `type idL idH v0 v1 v2 v3 crc`. Every 0x7E starts a new slot; 0x7D escapes the next byte
+//! (XOR 0x20). See `docs/sport.md` for the sources.
+
+/// Start of every poll/frame.
+pub const START: u8 = 0x7E;
+/// Escape byte.
+pub const ESCAPE: u8 = 0x7D;
+/// Unstuffed frame length after the header: type, app ID (2), value (4), CRC.
+pub const BODY_LEN: usize = 8;
+/// Longest slot on the wire: 7E, header, 8 bytes each possibly stuffed.
+pub const MAX_WIRE: usize = 2 + 2 * BODY_LEN;
+/// Garbage is reported in rows of at most this many bytes.
+pub const GARBAGE_ROW_MAX: usize = 64;
+
+/// Header byte for a physical ID (0..31): ID in bits 0-4 plus three check bits.
+pub const fn header_for(phys: u8) -> u8 {
+    let id = phys & 0x1F;
+    let (b0, b1, b2, b3, b4) = (
+        id & 1,
+        (id >> 1) & 1,
+        (id >> 2) & 1,
+        (id >> 3) & 1,
+        (id >> 4) & 1,
+    );
+    let bit5 = b0 ^ b1 ^ b2;
+    let bit6 = b2 ^ b3 ^ b4;
+    let bit7 = b0 ^ b2 ^ b4;
+    id | bit5 << 5 | bit6 << 6 | bit7 << 7
+}
+
+/// True when the header's check bits match its physical ID.
+pub const fn header_ok(header: u8) -> bool {
+    header_for(header & 0x1F) == header
+}
+
+/// End-around-carry sum of `bytes` (the S.Port checksum arithmetic).
+pub fn carry_sum(bytes: &[u8]) -> u8 {
+    let mut s: u16 = 0;
+    for &b in bytes {
+        s += b as u16;
+        s = (s & 0xFF) + (s >> 8);
+    }
+    s as u8
+}
+
+/// CRC byte for the 7 bytes type..v3.
+pub fn crc(body7: &[u8]) -> u8 {
+    0xFF - carry_sum(body7)
+}
+
+/// True when the 8 unstuffed bytes (type..crc) pass the check.
+pub fn crc_ok(body: &[u8; BODY_LEN]) -> bool {
+    carry_sum(body) == 0xFF
+}
+
+/// Appends `byte` to `out`, stuffed if needed.
+pub fn push_stuffed(out: &mut Vec<u8>, byte: u8) {
+    if byte == START || byte == ESCAPE {
+        out.push(ESCAPE);
+        out.push(byte ^ 0x20);
+    } else {
+        out.push(byte);
+    }
+}
+
+/// Encodes a poll `7E hdr`.
+pub fn encode_poll(out: &mut Vec<u8>, header: u8) {
+    out.push(START);
+    out.push(header);
+}
+
+/// Encodes a whole frame `7E hdr` + stuffed body with a correct CRC.
+pub fn encode_frame(out: &mut Vec<u8>, header: u8, kind: u8, app_id: u16, value: u32) {
+    let mut body = [0u8; BODY_LEN];
+    body[0] = kind;
+    body[1..3].copy_from_slice(&app_id.to_le_bytes());
+    body[3..7].copy_from_slice(&value.to_le_bytes());
+    body[7] = crc(&body[..7]);
+    encode_raw(out, header, &body);
+}
+
+/// Encodes `7E hdr` + the 8 given body bytes (CRC not recomputed), stuffed.
+pub fn encode_raw(out: &mut Vec<u8>, header: u8, body: &[u8; BODY_LEN]) {
+    encode_poll(out, header);
+    for &b in body {
+        push_stuffed(out, b);
+    }
+}
+
+/// What followed a poll in its slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Body {
+    /// Nothing before the next 0x7E: an unanswered poll.
+    None,
+    /// All 8 bytes (type..crc), unstuffed.
+    Complete([u8; BODY_LEN]),
+    /// Cut short by the next 0x7E, a 0x7D right before it, or the end of input.
+    Truncated { bytes: [u8; BODY_LEN], len: u8 },
+}
+
+/// One poll slot: `7E hdr` and its response, if any.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    /// Arrival time of the 0x7E (µs since the capture started), when the source has times.
+    pub time: Option<u64>,
+    /// Number of this slot since the start, from 0 (the bus schedule for untimed sources).
+    pub index: u64,
+    pub header: u8,
+    pub body: Body,
+    /// An escape was followed by a byte other than 0x5E/0x5D.
+    pub unusual_escape: bool,
+    wire: [u8; MAX_WIRE],
+    wire_len: u8,
+}
+
+impl Slot {
+    /// The slot's bytes exactly as they were on the wire.
+    pub fn wire(&self) -> &[u8] {
+        &self.wire[..self.wire_len as usize]
+    }
+
+    /// Physical ID, 0-based (`header & 0x1F`).
+    pub fn phys(&self) -> u8 {
+        self.header & 0x1F
+    }
+}
+
+/// Bytes that belong to no slot: before the first 0x7E, after a complete frame, or a 0x7E
+/// without a header.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Garbage {
+    /// Arrival time of the first byte.
+    pub time: Option<u64>,
+    /// Index of the slot these bytes followed (`None` before the first slot).
+    pub after_slot: Option<u64>,
+    bytes: [u8; GARBAGE_ROW_MAX],
+    len: u8,
+}
+
+impl Garbage {
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes[..self.len as usize]
+    }
+}
+
+/// What the reassembler emits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Event {
+    Slot(Slot),
+    Garbage(Garbage),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    /// Outside any slot (before the first 0x7E, or after a complete frame).
+    Outside,
+    /// Saw 0x7E, waiting for the header.
+    Header,
+    /// Collecting the body.
+    Body,
+}
+
+/// Pure S.Port reassembler: bytes and times in, [`Event`]s out. The output does not depend on
+/// how the input is split into chunks.
+#[derive(Clone, Debug)]
+pub struct Reassembler {
+    state: State,
+    escaped: bool,
+    next_index: u64,
+    cur: Slot,
+    body: [u8; BODY_LEN],
+    body_len: usize,
+    garbage: Garbage,
+    last_slot: Option<u64>,
+}
+
+impl Default for Reassembler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+const EMPTY_SLOT: Slot = Slot {
+    time: None,
+    index: 0,
+    header: 0,
+    body: Body::None,
+    unusual_escape: false,
+    wire: [0; MAX_WIRE],
+    wire_len: 0,
+};
+
+const EMPTY_GARBAGE: Garbage = Garbage {
+    time: None,
+    after_slot: None,
+    bytes: [0; GARBAGE_ROW_MAX],
+    len: 0,
+};
+
+impl Reassembler {
+    pub fn new() -> Self {
+        Reassembler {
+            state: State::Outside,
+            escaped: false,
+            next_index: 0,
+            cur: EMPTY_SLOT,
+            body: [0; BODY_LEN],
+            body_len: 0,
+            garbage: EMPTY_GARBAGE,
+            last_slot: None,
+        }
+    }
+
+    /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+        for &b in data {
+            self.byte(b, time, emit);
+        }
+    }
+
+    /// End of input: emits an open slot (as unanswered or truncated) and pending garbage.
+    pub fn finish(&mut self, emit: &mut impl FnMut(&Event)) {
+        match self.state {
+            State::Outside => {}
+            State::Header => self.lone_start(emit),
+            State::Body => self.close_slot(emit),
+        }
+        self.flush_garbage(emit);
+        self.state = State::Outside;
+        self.escaped = false;
+    }
+
+    /// Forgets a partial slot without emitting it (a gap in a live capture).
+    pub fn reset(&mut self, emit: &mut impl FnMut(&Event)) {
+        self.flush_garbage(emit);
+        self.state = State::Outside;
+        self.escaped = false;
+        self.body_len = 0;
+    }
+
+    /// Slots started so far.
+    pub fn slots(&self) -> u64 {
+        self.next_index
+    }
+
+    #[inline]
+    fn byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+        if b == START {
+            match self.state {
+                State::Outside => {}
+                State::Header => self.lone_start(emit),
+                State::Body => self.close_slot(emit),
+            }
+            self.flush_garbage(emit);
+            self.cur.time = time;
+            self.cur.index = self.next_index;
+            self.cur.unusual_escape = false;
+            self.cur.wire[0] = START;
+            self.cur.wire_len = 1;
+            self.escaped = false;
+            self.body_len = 0;
+            self.state = State::Header;
+            return;
+        }
+        match self.state {
+            State::Outside => self.garbage_byte(b, time, emit),
+            State::Header => {
+                self.cur.header = b;
+                self.cur.wire[1] = b;
+                self.cur.wire_len = 2;
+                self.next_index += 1;
+                self.last_slot = Some(self.cur.index);
+                self.state = State::Body;
+            }
+            State::Body => {
+                self.cur.wire[self.cur.wire_len as usize] = b;
+                self.cur.wire_len += 1;
+                if self.escaped {
+                    self.escaped = false;
+                    if b != 0x5E && b != 0x5D {
+                        self.cur.unusual_escape = true;
+                    }
+                    self.body_byte(b ^ 0x20, emit);
+                } else if b == ESCAPE {
+                    self.escaped = true;
+                } else {
+                    self.body_byte(b, emit);
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn body_byte(&mut self, b: u8, emit: &mut impl FnMut(&Event)) {
+        self.body[self.body_len] = b;
+        self.body_len += 1;
+        if self.body_len == BODY_LEN {
+            self.cur.body = Body::Complete(self.body);
+            emit(&Event::Slot(self.cur));
+            self.state = State::Outside;
+        }
+    }
+
+    /// The open slot ends before its 8 bytes arrived.
+    fn close_slot(&mut self, emit: &mut impl FnMut(&Event)) {
+        self.cur.body = if self.body_len == 0 && !self.escaped {
+            Body::None
+        } else {
+            Body::Truncated {
+                bytes: self.body,
+                len: self.body_len as u8,
+            }
+        };
+        emit(&Event::Slot(self.cur));
+        self.state = State::Outside;
+    }
+
+    /// A 0x7E that was not followed by a header byte.
+    fn lone_start(&mut self, emit: &mut impl FnMut(&Event)) {
+        self.state = State::Outside;
+        self.garbage_byte(START, self.cur.time, emit);
+    }
+
+    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+        if self.garbage.len == 0 {
+            self.garbage.time = time;
+            self.garbage.after_slot = self.last_slot;
+        }
+        self.garbage.bytes[self.garbage.len as usize] = b;
+        self.garbage.len += 1;
+        if self.garbage.len as usize == GARBAGE_ROW_MAX {
+            self.flush_garbage(emit);
+        }
+    }
+
+    fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event)) {
+        if self.garbage.len > 0 {
+            emit(&Event::Garbage(self.garbage));
+            self.garbage.len = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmt::parse_hex;
+
+    fn events(data: &[u8]) -> Vec<Event> {
+        let mut r = Reassembler::new();
+        let mut out = Vec::new();
+        r.push(data, None, &mut |e| out.push(*e));
+        r.finish(&mut |e| out.push(*e));
+        out
+    }
+
+    #[test]
+    fn header_table_matches_reference() {
+        // sport.md §2.1
+        let table = [
+            0x00, 0xA1, 0x22, 0x83, 0xE4, 0x45, 0xC6, 0x67, 0x48, 0xE9, 0x6A, 0xCB, 0xAC, 0x0D,
+            0x8E, 0x2F, 0xD0, 0x71, 0xF2, 0x53, 0x34, 0x95, 0x16, 0xB7, 0x98, 0x39, 0xBA, 0x1B,
+            0x7C, 0xDD, 0x5E, 0xFF,
+        ];
+        for (phys, &h) in table.iter().enumerate() {
+            assert_eq!(header_for(phys as u8), h, "phys {phys}");
+            assert!(header_ok(h));
+        }
+        assert!(!header_ok(0x18));
+        assert!(!header_ok(0x1C));
+        assert!(!header_ok(0xA2));
+    }
+
+    #[test]
+    fn crc_worked_examples() {
+        // sport.md §4.2
+        assert_eq!(crc(&[0x10, 0x00, 0x03, 0x30, 0x0D, 0x88, 0x81]), 0xA5);
+        assert_eq!(crc(&[0x10, 0x00, 0x03, 0x32, 0x34, 0x08, 0x00]), 0x7E);
+        assert_eq!(crc(&[0; 7]), 0xFF);
+        assert!(crc_ok(&[0, 0, 0, 0, 0, 0, 0, 0xFF]));
+    }
+
+    #[test]
+    fn stuffed_crc_is_unstuffed() {
+        let wire = parse_hex("7E A1 10 00 03 32 34 08 00 7D 5E").unwrap();
+        let ev = events(&wire);
+        assert_eq!(ev.len(), 1);
+        let Event::Slot(s) = ev[0] else { panic!() };
+        assert_eq!(s.body, Body::Complete([0x10, 0, 3, 0x32, 0x34, 8, 0, 0x7E]));
+        assert_eq!(s.wire(), &wire[..]);
+        assert!(!s.unusual_escape);
+    }
+
+    #[test]
+    fn polls_truncation_and_garbage() {
+        let wire =
+            parse_hex("55 66 7E 00 7E A1 10 00 7E 22 10 00 02 00 00 00 00 ED AA 7E 7E 83 7D")
+                .unwrap();
+        let ev = events(&wire);
+        let kinds: Vec<String> = ev
+            .iter()
+            .map(|e| match e {
+                Event::Garbage(g) => format!("garbage {}", crate::fmt::hex(g.bytes())),
+                Event::Slot(s) => match s.body {
+                    Body::None => format!("poll {}", s.phys()),
+                    Body::Complete(_) => format!("frame {}", s.phys()),
+                    Body::Truncated { len, .. } => format!("trunc {} {len}", s.phys()),
+                },
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                "garbage 55 66",
+                "poll 0",
+                "trunc 1 2",
+                "frame 2",
+                "garbage AA",
+                "garbage 7E",
+                "trunc 3 0"
+            ]
+        );
+    }
+
+    #[test]
+    fn encoder_round_trip() {
+        let mut wire = Vec::new();
+        encode_frame(&mut wire, 0x1B, 0x10, 0x7D7E, 0x7E7D_7E7D);
+        let ev = events(&wire);
+        let Event::Slot(s) = ev[0] else { panic!() };
+        let Body::Complete(b) = s.body else { panic!() };
+        assert!(crc_ok(&b));
+        assert_eq!(u16::from_le_bytes([b[1], b[2]]), 0x7D7E);
+        assert_eq!(u32::from_le_bytes([b[3], b[4], b[5], b[6]]), 0x7E7D_7E7D);
+    }
+}
