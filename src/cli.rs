@@ -167,39 +167,49 @@ fn init_tracing(verbose: u8) {
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Sport(args) => {
-            let mut decoder = crate::sport::SportDecoder::new();
-            run_capture(
-                &mut decoder,
-                &args.source,
-                &args.output,
-                "S.Port",
-                |kind, opened| match kind {
-                    Kind::Raw => Ok(Box::new(source::RawReader::new(opened))),
-                    Kind::EdgeTxLog => Ok(Box::new(source::edgetx::EdgeTxReader::new(opened))),
-                    Kind::Pcap | Kind::Pcapng => Err(Failure::Input(format!(
-                        "{} is a pcap file; S.Port captures are raw .bin files or EdgeTX logs",
-                        opened.name
-                    ))),
-                },
-            )
+            run_capture(&args.source, &args.output, "S.Port", |kind, opened| {
+                let reader: Box<dyn ChunkReader> = match kind {
+                    Kind::Raw => Box::new(source::RawReader::new(opened)),
+                    Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
+                    Kind::Pcap | Kind::Pcapng => {
+                        return Err(Failure::Input(format!(
+                            "{} is a pcap file; S.Port captures are raw .bin files or EdgeTX logs",
+                            opened.name
+                        )));
+                    }
+                };
+                Ok(Plan {
+                    decoder: Box::new(crate::sport::SportDecoder::new()),
+                    reader,
+                })
+            })
         }
     }
 }
 
-/// Opens SOURCE, picks a reader for its kind, decodes it into the table, prints the summary.
+/// What to run on an opened input: the protocol decoder and the reader for the input's kind.
+pub struct Plan {
+    pub decoder: Box<dyn Decoder>,
+    pub reader: Box<dyn ChunkReader>,
+}
+
+/// Opens SOURCE, lets `plan` pick a decoder and a reader for its kind, decodes it into the
+/// table and prints the summary.
 pub fn run_capture(
-    decoder: &mut dyn Decoder,
     source_arg: &str,
     out: &OutputArgs,
     protocol: &str,
-    reader_for: impl FnOnce(Kind, source::Opened) -> Result<Box<dyn ChunkReader>, Failure>,
+    plan: impl FnOnce(Kind, source::Opened) -> Result<Plan, Failure>,
 ) -> Result<(), Failure> {
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let input = Input::parse(source_arg);
     let opened = source::open(&input)?;
     tracing::info!("{}: detected {:?}", opened.name, opened.kind);
-    let reader = reader_for(opened.kind, opened)?;
+    let Plan {
+        mut decoder,
+        reader,
+    } = plan(opened.kind, opened)?;
 
     let output = match &out.output {
         Some(p) => Output::create(p)
@@ -212,8 +222,8 @@ pub fn run_capture(
     let result = table
         .header()
         .map_err(Failure::from)
-        .and_then(|()| drive(decoder, &rx, &mut table, &stop));
-    report(decoder, out.stats, protocol, table.rows(), &result);
+        .and_then(|()| drive(decoder.as_mut(), &rx, &mut table, &stop));
+    report(decoder.as_ref(), out.stats, protocol, table.rows(), &result);
     result
 }
 
