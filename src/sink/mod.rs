@@ -135,6 +135,10 @@ impl Table {
         self.anchor = anchor;
     }
 
+    pub fn has_anchor(&self) -> bool {
+        self.anchor.is_some()
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), WriteError> {
         if self.header_written {
@@ -451,6 +455,12 @@ impl Table {
 }
 
 impl RowOut for Table {
+    fn anchor(&mut self, anchor: Anchor) {
+        if self.anchor.is_none() {
+            self.anchor = Some(anchor);
+        }
+    }
+
     fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
         match self.write(row) {
             Ok(()) => Ok(()),
