@@ -35,6 +35,10 @@ pub struct Cli {
 pub enum Command {
     /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC.
     Sport(SportArgs),
+    /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
+    /// requests paired with responses.
+    #[command(alias = "sab")]
+    Sab2(crate::sab::SabArgs),
 }
 
 #[derive(Args, Debug)]
@@ -184,6 +188,29 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 })
             })
         }
+        Command::Sab2(args) => run_capture(&args.source, &args.output, "SAB", |kind, opened| {
+            let reader: Box<dyn ChunkReader> = match kind {
+                Kind::Raw => Box::new(source::RawReader::new(opened)),
+                Kind::EdgeTxLog => {
+                    return Err(Failure::Input(format!(
+                        "{} is an EdgeTX/OpenTX S.Port log; SAB captures are raw .bin files of \
+                         the wire bytes",
+                        opened.name
+                    )));
+                }
+                Kind::Pcap | Kind::Pcapng => {
+                    return Err(Failure::Input(format!(
+                        "{} is a pcap file; SAB cannot read pcap recordings yet, give a raw \
+                         .bin capture of the wire bytes",
+                        opened.name
+                    )));
+                }
+            };
+            Ok(Plan {
+                decoder: Box::new(crate::sab::SabDecoder::new(args.options())),
+                reader,
+            })
+        }),
     }
 }
 

@@ -11,6 +11,7 @@ pub mod exit;
 pub mod fmt;
 pub mod row;
 pub mod run;
+pub mod sab;
 pub mod sink;
 pub mod source;
 pub mod sport;
