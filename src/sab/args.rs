@@ -79,7 +79,9 @@ fn parse_pair(arg: &str, what: &str, max: u64) -> Result<(String, u8), String> {
     }
     match parse_number(value) {
         Some(v) if v <= max => Ok((name.to_owned(), v as u8)),
-        Some(_) => Err(format!("{what} `{value}` is out of range 0..={max} (0x{max:02X})")),
+        Some(_) => Err(format!(
+            "{what} `{value}` is out of range 0..={max} (0x{max:02X})"
+        )),
         None => Err(format!(
             "{what} `{value}` is not a number (write 0x34 for hex, 52 for decimal)"
         )),

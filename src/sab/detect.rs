@@ -190,14 +190,17 @@ impl Held {
     }
 
     pub fn segments(&self) -> impl Iterator<Item = Segment<'_>> {
-        self.marks.iter().enumerate().map(move |(i, &(start, time, gap))| {
-            let end = self.marks.get(i + 1).map_or(self.bytes.len(), |m| m.0);
-            Segment {
-                bytes: &self.bytes[start..end],
-                time,
-                gap,
-            }
-        })
+        self.marks
+            .iter()
+            .enumerate()
+            .map(move |(i, &(start, time, gap))| {
+                let end = self.marks.get(i + 1).map_or(self.bytes.len(), |m| m.0);
+                Segment {
+                    bytes: &self.bytes[start..end],
+                    time,
+                    gap,
+                }
+            })
     }
 }
 

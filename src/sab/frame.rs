@@ -181,6 +181,25 @@ pub struct OwnedEvent {
 }
 
 impl OwnedEvent {
+    /// Overwrites this copy with `e`, reusing its buffers.
+    pub fn set_from(&mut self, e: &Event<'_>) {
+        let mut wire = std::mem::take(&mut self.wire);
+        let mut body = std::mem::take(&mut self.body);
+        wire.clear();
+        wire.extend_from_slice(e.wire);
+        body.clear();
+        body.extend_from_slice(e.body);
+        *self = OwnedEvent {
+            wire,
+            body,
+            ..OwnedEvent::from(&Event {
+                wire: &[],
+                body: &[],
+                ..*e
+            })
+        };
+    }
+
     /// The event again, borrowing from this copy.
     pub fn as_event(&self) -> Event<'_> {
         Event {

@@ -357,7 +357,10 @@ mod tests {
     fn escaping_round_trip() {
         let mut out = Vec::new();
         encode(&mut out, 0x02, 0x7E, &[0x7D, 0x7E, 0x20]);
-        assert_eq!(out, parse_hex("7E 02 7D 5E 7D 5D 7D 5E 20 F5 88 7E").unwrap());
+        assert_eq!(
+            out,
+            parse_hex("7E 02 7D 5E 7D 5D 7D 5E 20 F5 88 7E").unwrap()
+        );
         let ev = events(&out);
         assert_eq!(ev[0].kind, EventKind::Frame);
         assert_eq!(ev[0].body, [0x02, 0x7E, 0x7D, 0x7E, 0x20]);

@@ -14,6 +14,7 @@ pub mod frame;
 pub mod hdlc;
 pub mod header;
 pub mod pairing;
+pub mod sample;
 pub mod stats;
 pub mod sync;
 
@@ -251,7 +252,8 @@ impl Mapper {
     }
 
     fn start_of(&self, ev: &Event<'_>) -> u64 {
-        ev.start_time.unwrap_or_else(|| self.micros_at(ev.start_pos))
+        ev.start_time
+            .unwrap_or_else(|| self.micros_at(ev.start_pos))
     }
 
     fn end_of(&self, ev: &Event<'_>) -> u64 {
@@ -452,8 +454,9 @@ impl Mapper {
                     st.repeats += 1;
                     per.repeats += 1;
                     class = Class::Warning;
-                    sc.note()
-                        .push_str("repeated response to the same request (two slaves on one address?)");
+                    sc.note().push_str(
+                        "repeated response to the same request (two slaves on one address?)",
+                    );
                 } else {
                     per.times.add(micros);
                 }
@@ -512,8 +515,9 @@ impl Mapper {
             if class == Class::Plain {
                 class = Class::Warning;
             }
-            sc.note()
-                .push_str("unusual escape (0x7D not followed by 0x5E or 0x5D), decoded as modm does");
+            sc.note().push_str(
+                "unusual escape (0x7D not followed by 0x5E or 0x5D), decoded as modm does",
+            );
         }
         self.put(
             RowParts {
@@ -597,7 +601,11 @@ impl Mapper {
                 push_hex(&mut sc.data, ev.wire);
                 let n = sc.note();
                 push_u64(n, ev.wire.len() as u64);
-                n.push_str(if ev.wire.len() == 1 { " byte" } else { " bytes" });
+                n.push_str(if ev.wire.len() == 1 {
+                    " byte"
+                } else {
+                    " bytes"
+                });
                 n.push_str(match (ev.before_first, ev.framing) {
                     (true, Framing::Hdlc) => " before the first 0x7E",
                     (true, Framing::Sync) => " before the first frame",
@@ -778,6 +786,8 @@ struct Shadow {
     reasm: Reasm,
     /// Its valid frames since the active reassembler's last valid frame.
     since: u64,
+    /// Its last valid frame (the one that makes busnoop switch is shown).
+    last: Option<frame::OwnedEvent>,
 }
 
 enum Mode {
@@ -888,8 +898,16 @@ impl SabDecoder {
                 });
                 let Some(sh) = shadow else { return };
                 let mut shadow_valid = false;
-                sh.reasm
-                    .step(b, time, &mut |e| shadow_valid |= e.is_valid());
+                let last = &mut sh.last;
+                sh.reasm.step(b, time, &mut |e| {
+                    if e.is_valid() {
+                        shadow_valid = true;
+                        match last {
+                            Some(l) => l.set_from(e),
+                            None => *last = Some(frame::OwnedEvent::from(e)),
+                        }
+                    }
+                });
                 if active_valid {
                     sh.since = 0;
                 }
@@ -897,10 +915,15 @@ impl SabDecoder {
                     sh.since += 1;
                 }
                 if sh.since >= detect::SWITCH_FRAMES {
+                    // The old framing's unfinished frame held the bytes of the new framing's
+                    // last frame: forget it and show that frame instead.
                     active.reset(&mut |e| map.event(e, out));
                     std::mem::swap(active.as_mut(), &mut sh.reasm);
                     sh.since = 0;
                     map.chosen(active.framing(), Reason::Switched { at: pos + 1 });
+                    if let Some(l) = &sh.last {
+                        map.event(&l.as_event(), out);
+                    }
                 }
             }
         }
@@ -943,6 +966,7 @@ impl SabDecoder {
             shadow: Some(Box::new(Shadow {
                 reasm: other,
                 since: 0,
+                last: None,
             })),
         };
     }

@@ -111,7 +111,9 @@ impl Pairing {
 
     /// The request the master is waiting for, if any.
     pub fn waiting(&self) -> Option<Request> {
-        self.open.filter(|o| o.answers == 0 && !o.expired).map(|o| o.req)
+        self.open
+            .filter(|o| o.answers == 0 && !o.expired)
+            .map(|o| o.req)
     }
 
     fn deadline(&self, req: &Request) -> u64 {
@@ -304,7 +306,11 @@ mod tests {
     fn deadline_and_late_response() {
         let mut p = Pairing::new(T);
         p.request(req(5, 0x10, 1000));
-        assert_eq!(p.advance(11_000), None, "exactly at the deadline is in time");
+        assert_eq!(
+            p.advance(11_000),
+            None,
+            "exactly at the deadline is in time"
+        );
         let x = p.advance(11_001).unwrap();
         assert_eq!((x.at, x.why, x.waited), (11_000, Why::Deadline, T));
         assert_eq!(p.advance(20_000), None, "reported once");

@@ -47,13 +47,18 @@ fn bucket_low(i: usize) -> u64 {
     low + r * (low / 100)
 }
 
-/// Response times of one address: exact count, minimum and maximum; median from a histogram
-/// with three significant digits (exact below 1 ms).
+/// Response times kept exactly per address; beyond this many the median comes from a
+/// histogram (three significant digits, exact below 1 ms).
+pub const EXACT_SAMPLES: usize = 65_536;
+
+/// Response times of one address: exact count, minimum and maximum; the median exactly for
+/// the first [`EXACT_SAMPLES`] responses, then from a histogram.
 #[derive(Clone, Debug, Default)]
 pub struct Times {
     pub count: u64,
     pub min: u64,
     pub max: u64,
+    samples: Vec<u32>,
     hist: Option<Box<[u32]>>,
 }
 
@@ -67,29 +72,42 @@ impl Times {
             self.max = self.max.max(micros);
         }
         self.count += 1;
+        if self.hist.is_none() && self.samples.len() < EXACT_SAMPLES {
+            self.samples.push(micros.min(u32::MAX as u64) as u32);
+            return;
+        }
+        let samples = std::mem::take(&mut self.samples);
         let hist = self
             .hist
             .get_or_insert_with(|| vec![0u32; BUCKETS].into_boxed_slice());
-        let slot = &mut hist[bucket(micros)];
-        *slot = slot.saturating_add(1);
+        for v in samples.into_iter().map(u64::from).chain([micros]) {
+            let slot = &mut hist[bucket(v)];
+            *slot = slot.saturating_add(1);
+        }
     }
 
-    /// The median (lower median for an even count), to three significant digits.
-    pub fn median(&self) -> Option<u64> {
-        let hist = self.hist.as_ref()?;
-        let total: u64 = hist.iter().map(|&c| c as u64).sum();
-        if total == 0 {
+    /// The median (the lower one for an even count) and whether it is exact (otherwise it has
+    /// three significant digits).
+    pub fn median(&self) -> Option<(u64, bool)> {
+        if let Some(hist) = &self.hist {
+            let total: u64 = hist.iter().map(|&c| c as u64).sum();
+            let rank = total.div_ceil(2);
+            let mut seen = 0u64;
+            for (i, &c) in hist.iter().enumerate() {
+                seen += c as u64;
+                if seen >= rank && c > 0 {
+                    return Some((bucket_low(i).clamp(self.min, self.max), false));
+                }
+            }
             return None;
         }
-        let rank = total.div_ceil(2);
-        let mut seen = 0u64;
-        for (i, &c) in hist.iter().enumerate() {
-            seen += c as u64;
-            if seen >= rank {
-                return Some(bucket_low(i).clamp(self.min, self.max));
-            }
+        if self.samples.is_empty() {
+            return None;
         }
-        None
+        let mut v = self.samples.clone();
+        let mid = (v.len() - 1) / 2;
+        let (_, m, _) = v.select_nth_unstable(mid);
+        Some((*m as u64, true))
     }
 }
 
@@ -226,7 +244,9 @@ impl Stats {
             let (min, median, max) = if a.times.count > 0 {
                 (
                     ms(a.times.min),
-                    a.times.median().map_or("-".into(), ms),
+                    a.times.median().map_or("-".into(), |(m, exact)| {
+                        if exact { ms(m) } else { format!("~{}", ms(m)) }
+                    }),
                     ms(a.times.max),
                 )
             } else {
@@ -240,8 +260,7 @@ impl Stats {
                 NackCode::of(code).push_name(&mut codes);
                 let _ = write!(codes, " {n}");
             }
-            let _ = writeln!(
-                s,
+            let line = format!(
                 "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6} {:>9} {:>9} {:>9}  {}",
                 addr,
                 device(addr as u8),
@@ -256,6 +275,7 @@ impl Stats {
                 max,
                 codes
             );
+            let _ = writeln!(s, "{}", line.trim_end());
         }
         let _ = writeln!(
             s,
@@ -352,7 +372,19 @@ mod tests {
     #[test]
     fn buckets_are_monotonic_and_tight() {
         let mut last = 0;
-        for v in [0, 1, 999, 1000, 1009, 1010, 9999, 10_000, 123_456, 999_999_999, 1 << 40] {
+        for v in [
+            0,
+            1,
+            999,
+            1000,
+            1009,
+            1010,
+            9999,
+            10_000,
+            123_456,
+            999_999_999,
+            1 << 40,
+        ] {
             let b = bucket(v);
             assert!(b >= last, "{v}");
             last = b;
@@ -377,13 +409,26 @@ mod tests {
             t.add(v);
         }
         assert_eq!((t.min, t.max, t.count), (100, 12_345, 5));
-        assert_eq!(t.median(), Some(500));
+        assert_eq!(t.median(), Some((500, true)));
         t.add(1_234);
         // Lower median of 100 300 500 1234 2345 12345.
-        assert_eq!(t.median(), Some(500));
-        t.add(1_234);
-        t.add(1_234);
-        assert_eq!(t.median(), Some(1_230));
+        assert_eq!(t.median(), Some((500, true)));
+        t.add(1_215);
+        t.add(1_215);
+        assert_eq!(t.median(), Some((1_215, true)));
+    }
+
+    #[test]
+    fn median_beyond_the_exact_samples() {
+        let mut t = Times::default();
+        for i in 0..EXACT_SAMPLES as u64 + 1001 {
+            t.add(1_000 + i % 2_000);
+        }
+        let (m, exact) = t.median().unwrap();
+        assert!(!exact);
+        // True median 1999 or 2000; three significant digits.
+        assert!((1_980..=2_000).contains(&m), "{m}");
+        assert_eq!((t.min, t.max), (1_000, 2_999));
     }
 
     #[test]

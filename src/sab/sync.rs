@@ -328,10 +328,7 @@ impl Reassembler {
         self.flush_garbage(emit);
         let mut ev = self.span_event(EventKind::Frame, end);
         ev.body = &self.buf[2..end - 1];
-        ev.crc = Some((
-            self.buf[end - 1] as u16,
-            crc8(&self.buf[1..end - 1]) as u16,
-        ));
+        ev.crc = Some((self.buf[end - 1] as u16, crc8(&self.buf[1..end - 1]) as u16));
         emit(&ev);
         self.frames += 1;
         self.valid = None;
@@ -405,7 +402,10 @@ mod tests {
             0x78,
             &parse_hex("FF FF 0C 78 56 34 12").unwrap(),
         );
-        assert_eq!(out, parse_hex("54 07 86 78 FF FF 0C 78 56 34 12 C1").unwrap());
+        assert_eq!(
+            out,
+            parse_hex("54 07 86 78 FF FF 0C 78 56 34 12 C1").unwrap()
+        );
         // SYNC is not covered: including it would give E6 / 75 / E4.
         assert_eq!(crc8(&parse_hex("54 04 12 34 EF BE AD DE").unwrap()), 0xE6);
     }
@@ -485,8 +485,14 @@ mod tests {
     #[test]
     fn truncated_at_the_end() {
         let ev = events(&parse_hex("54 04 12 34 EF").unwrap());
-        assert_eq!(kinds(&ev), [(EventKind::Truncated, "54 04 12 34 EF".into())]);
-        assert_eq!(kinds(&events(&[SYNC])), [(EventKind::Truncated, "54".into())]);
+        assert_eq!(
+            kinds(&ev),
+            [(EventKind::Truncated, "54 04 12 34 EF".into())]
+        );
+        assert_eq!(
+            kinds(&events(&[SYNC])),
+            [(EventKind::Truncated, "54".into())]
+        );
         // A frame inside a truncated candidate is still found.
         let mut wire = parse_hex("54 20").unwrap();
         encode(&mut wire, 0x01, 0x02, &[]);
@@ -517,6 +523,9 @@ mod tests {
             max = max.max(r.held());
         }
         assert!(max <= CAPACITY, "{max}");
-        assert!(max > MAX_FRAME, "the test should exercise the nested case ({max})");
+        assert!(
+            max > MAX_FRAME,
+            "the test should exercise the nested case ({max})"
+        );
     }
 }
