@@ -237,7 +237,7 @@ impl Mapper {
             baud: opts.baud.max(1),
             max_payload: opts.max_payload,
             names: Names::new(opts),
-            pairing: Pairing::new(opts.timeout_micros),
+            pairing: Pairing::new(opts.timeout_micros.saturating_mul(1000)),
             stats: Stats::default(),
             scratch: Scratch::default(),
             framing_note: None,
@@ -245,19 +245,28 @@ impl Mapper {
         }
     }
 
-    /// Time of stream offset `pos` reconstructed from the baud rate (µs).
-    fn micros_at(&self, pos: u64) -> u64 {
-        let us = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000 / self.baud as u128;
-        us.min(u64::MAX as u128) as u64
+    // Pairing runs in nanoseconds so that reconstructed times (86.8 µs per byte at 115200
+    // baud) give the same response time for the same exchange wherever it is in the capture;
+    // rows show µs.
+
+    /// Time of stream offset `pos` reconstructed from the baud rate (ns).
+    fn nanos_at(&self, pos: u64) -> u64 {
+        let ns = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / self.baud as u128;
+        ns.min(u64::MAX as u128) as u64
     }
 
-    fn start_of(&self, ev: &Event<'_>) -> u64 {
-        ev.start_time
-            .unwrap_or_else(|| self.micros_at(ev.start_pos))
+    fn start_ns(&self, ev: &Event<'_>) -> u64 {
+        match ev.start_time {
+            Some(us) => us.saturating_mul(1000),
+            None => self.nanos_at(ev.start_pos),
+        }
     }
 
-    fn end_of(&self, ev: &Event<'_>) -> u64 {
-        ev.end_time.unwrap_or_else(|| self.micros_at(ev.end_pos))
+    fn end_ns(&self, ev: &Event<'_>) -> u64 {
+        match ev.end_time {
+            Some(us) => us.saturating_mul(1000),
+            None => self.nanos_at(ev.end_pos),
+        }
     }
 
     fn chosen(&mut self, framing: Framing, reason: Reason) {
@@ -336,23 +345,23 @@ impl Mapper {
         match x.why {
             Why::Deadline => {
                 n.push_str("no response within ");
-                push_ms_short(n, self.pairing.timeout());
+                push_ms_short(n, self.pairing.timeout() / 1000);
                 n.push_str(" ms");
             }
             Why::NextRequest => {
                 n.push_str("no response before the next request (after ");
-                push_ms(n, x.waited);
+                push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }
             Why::EndOfCapture => {
                 n.push_str("no response before the end of the capture (after ");
-                push_ms(n, x.waited);
+                push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }
         }
         self.put(
             RowParts {
-                micros: x.at,
+                micros: x.at / 1000,
                 id: Some(r.address),
                 command: Some(r.command),
                 kind: "Timeout",
@@ -366,20 +375,21 @@ impl Mapper {
 
     /// Handles one event of the active reassembler.
     fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) {
-        let start = self.start_of(ev);
+        let start = self.start_ns(ev);
         if let Some(x) = self.pairing.advance(start) {
             self.timeout_row(&x, ev.framing, out);
         }
         match ev.kind {
             EventKind::Frame => self.frame(ev, start, out),
-            EventKind::BadCrc => self.bad_crc(ev, start, out),
-            _ => self.broken(ev, start, out),
+            EventKind::BadCrc => self.bad_crc(ev, start / 1000, out),
+            _ => self.broken(ev, start / 1000, out),
         }
     }
 
+    /// A valid frame; `start` in ns.
     fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
         let (Some(header), Some(command)) = (ev.header(), ev.command()) else {
-            return self.broken(ev, start, out);
+            return self.broken(ev, start / 1000, out);
         };
         let flags = Flags::of(header);
         let addr = header::address(header);
@@ -389,7 +399,7 @@ impl Mapper {
         let mut class = Class::Plain;
         let mut answer = None;
         if flags.is_response() {
-            let a = self.pairing.response(addr, command, self.end_of(ev));
+            let a = self.pairing.response(addr, command, self.end_ns(ev));
             if let Answer::Paired {
                 expired: Some(x), ..
             } = a
@@ -449,6 +459,7 @@ impl Mapper {
                 repeat,
                 ..
             }) => {
+                let micros = micros / 1000;
                 push_ms(&mut sc.resp, micros);
                 if repeat {
                     st.repeats += 1;
@@ -468,7 +479,7 @@ impl Mapper {
                         class = Class::Warning;
                         let n = sc.note();
                         n.push_str("late: after the master's ");
-                        push_ms_short(n, self.pairing.timeout());
+                        push_ms_short(n, self.pairing.timeout() / 1000);
                         n.push_str(" ms timeout");
                     }
                     Lateness::AfterNextRequest => {
@@ -477,7 +488,7 @@ impl Mapper {
                         class = Class::Warning;
                         let n = sc.note();
                         n.push_str("late: after the master's next request (request at ");
-                        push_ms(n, request.start);
+                        push_ms(n, request.start / 1000);
                         n.push_str(" ms)");
                     }
                 }
@@ -521,7 +532,7 @@ impl Mapper {
         }
         self.put(
             RowParts {
-                micros: start,
+                micros: start / 1000,
                 id: Some(addr),
                 command: Some(command),
                 kind: flags.type_name(),
@@ -703,7 +714,7 @@ impl Mapper {
         );
     }
 
-    /// End of the capture at `now`.
+    /// End of the capture at `now` (ns).
     fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
         if let Some(x) = self.pairing.finish(now) {
             self.timeout_row(&x, framing, out);
@@ -858,11 +869,13 @@ impl SabDecoder {
         &self.map.stats
     }
 
-    /// The capture's current time: the last source time, or the reconstructed time of the
-    /// bytes read so far.
-    fn now(&self) -> u64 {
-        self.last_time
-            .unwrap_or_else(|| self.map.micros_at(self.pos))
+    /// The capture's current time in ns: the last source time, or the reconstructed time of
+    /// the bytes read so far.
+    fn now_ns(&self) -> u64 {
+        match self.last_time {
+            Some(us) => us.saturating_mul(1000),
+            None => self.map.nanos_at(self.pos),
+        }
     }
 
     /// Feeds one byte in the modes that need byte-exact decisions (detection, background
@@ -1030,7 +1043,7 @@ impl Decoder for SabDecoder {
             let map = &mut self.map;
             let framing = active.framing();
             active.flush_garbage(&mut |e| map.event(e, out));
-            if let Some(x) = map.pairing.advance(now) {
+            if let Some(x) = map.pairing.advance(now.saturating_mul(1000)) {
                 map.timeout_row(&x, framing, out);
             }
         }
@@ -1050,7 +1063,7 @@ impl Decoder for SabDecoder {
                 out,
             );
         }
-        let now = self.now();
+        let now = self.now_ns();
         if let Mode::Locked { active, .. } = &mut self.mode {
             let map = &mut self.map;
             let framing = active.framing();

@@ -779,7 +779,7 @@ fn tx() -> impl Strategy<Value = Tx> {
 /// Encodes a session; returns the bytes and the expected `(type, resp micros)` rows at the
 /// given baud rate (requests and responses back to back, reconstructed time).
 fn session(framing: Framing, txs: &[Tx], baud: u32) -> (Vec<u8>, Vec<(String, Option<u64>)>) {
-    let us = |pos: usize| (pos as u128 * 10_000_000 / baud as u128) as u64;
+    let ns = |pos: usize| pos as u128 * 10_000_000_000 / baud as u128;
     let mut w = Vec::new();
     let mut rows = Vec::new();
     for (i, t) in txs.iter().enumerate() {
@@ -797,7 +797,10 @@ fn session(framing: Framing, txs: &[Tx], baud: u32) -> (Vec<u8>, Vec<(String, Op
                     Err(code) => (Flags::Nack, vec![*code], "NACK"),
                 };
                 sample::frame(&mut w, framing, flags, t.addr, t.cmd, &p);
-                rows.push((kind.to_owned(), Some(us(w.len()) - us(start))));
+                rows.push((
+                    kind.to_owned(),
+                    Some(((ns(w.len()) - ns(start)) / 1000) as u64),
+                ));
             }
         }
     }
