@@ -172,9 +172,10 @@ impl SportDecoder {
                 let app_id = u16::from_le_bytes([b[1], b[2]]);
                 let value = u32::from_le_bytes([b[3], b[4], b[5], b[6]]);
                 let ok = wire::crc_ok(&b);
-                let firmware = b[0] == 0x50;
+                // Firmware-update frames (`7E FF 50 …` from the radio, `7E 5E 50 …` from the
+                // device) carry their own checksum instead of the S.Port sum (wire reference §5.6).
+                let firmware = b[0] == 0x50 && matches!(s.header, 0xFF | 0x5E);
                 if firmware {
-                    // Firmware-update frames carry their own checksum (wire reference §5.6).
                     ps.other += 1;
                     st.valid_frames += 1;
                     push_hex(&mut sc.data, &b[1..]);
