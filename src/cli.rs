@@ -99,13 +99,14 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
-    fn table_options(&self, to_terminal: bool) -> TableOptions {
+    /// The table options for an output that is (or is not) a terminal, given whether the
+    /// `NO_COLOR` environment variable is set to a non-empty value.
+    fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
         let format = self.format.unwrap_or_else(|| match &self.output {
             Some(p) => Format::from_path(p).unwrap_or(Format::Tsv),
             None if to_terminal => Format::Pretty,
             None => Format::Tsv,
         });
-        let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
         let color = format == Format::Pretty
             && match self.color {
                 ColorChoice::Always => true,
@@ -217,7 +218,12 @@ pub fn run_capture(
         None => Output::stdout(),
     };
     let to_terminal = out.output.is_none() && std::io::stdout().is_terminal();
-    let mut table = Table::new(output, out.table_options(to_terminal), decoder.columns());
+    let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+    let mut table = Table::new(
+        output,
+        out.table_options(to_terminal, no_color_env),
+        decoder.columns(),
+    );
     let rx = source::spawn(reader);
     let result = table
         .header()
@@ -248,5 +254,62 @@ fn report(
     }
     if let Err(Failure::Signal(_)) = result {
         eprintln!("busnoop: interrupted after {rows} rows; all decoded rows were written");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(extra: &[&str]) -> OutputArgs {
+        let mut argv = vec!["busnoop", "sport", "x"];
+        argv.extend_from_slice(extra);
+        match Cli::try_parse_from(argv).unwrap().command {
+            Command::Sport(a) => a.output,
+        }
+    }
+
+    #[test]
+    fn format_defaults() {
+        assert_eq!(args(&[]).table_options(true, false).format, Format::Pretty);
+        assert_eq!(args(&[]).table_options(false, false).format, Format::Tsv);
+        assert_eq!(
+            args(&["-o", "a.csv"]).table_options(false, false).format,
+            Format::Csv
+        );
+        assert_eq!(
+            args(&["-o", "a.bin"]).table_options(false, false).format,
+            Format::Tsv
+        );
+        assert_eq!(
+            args(&["-o", "a.csv", "-f", "jsonl"])
+                .table_options(false, false)
+                .format,
+            Format::Jsonl
+        );
+    }
+
+    #[test]
+    fn colour_follows_terminal_no_color_and_the_option() {
+        assert!(args(&[]).table_options(true, false).color);
+        assert!(
+            !args(&[]).table_options(true, true).color,
+            "NO_COLOR turns auto off"
+        );
+        assert!(
+            !args(&[]).table_options(false, false).color,
+            "not a terminal"
+        );
+        assert!(
+            args(&["-f", "pretty", "--color", "always"])
+                .table_options(false, true)
+                .color
+        );
+        assert!(!args(&["--color", "never"]).table_options(true, false).color);
+        assert!(
+            !args(&["-f", "tsv", "--color", "always"])
+                .table_options(true, false)
+                .color
+        );
     }
 }

@@ -416,3 +416,45 @@ fn a_pipe_is_decoded_as_it_arrives() {
     drop(stdin);
     assert!(child.wait().unwrap().success());
 }
+
+#[test]
+fn ctrl_c_flushes_every_row_and_prints_stats() {
+    // busnoop reads a pipe that stays open; SIGINT stops it cleanly with exit code 130.
+    let dir = tempfile::tempdir().unwrap();
+    let csv_path = dir.path().join("live.csv");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
+        .args(["sport", "-", "--stats", "-o"])
+        .arg(&csv_path)
+        .stdin(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let mut bytes = Vec::new();
+    for i in 0..50u32 {
+        wire::encode_frame(&mut bytes, wire::header_for((i % 3) as u8), 0x10, 0x0100, i);
+    }
+    stdin.write_all(&bytes).unwrap();
+    stdin.flush().unwrap();
+    // Wait until the rows are in the file (they are flushed per chunk), then interrupt.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    while std::fs::read_to_string(&csv_path)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < 51
+    {
+        assert!(std::time::Instant::now() < deadline, "rows did not arrive");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let out = child.wait_with_output().unwrap();
+    drop(stdin);
+    assert_eq!(out.status.code(), Some(130));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("S.Port statistics (50 rows)"), "{err}");
+    assert!(err.contains("interrupted after 50 rows"), "{err}");
+    let text = std::fs::read_to_string(&csv_path).unwrap();
+    assert_eq!(text.lines().count(), 51);
+    assert!(text.ends_with("\r\n"), "the file ends with a whole row");
+}
