@@ -9,6 +9,7 @@ pub mod cli;
 pub mod decoder;
 pub mod exit;
 pub mod fmt;
+pub mod record;
 pub mod row;
 pub mod run;
 pub mod sink;

@@ -67,6 +67,8 @@ pub struct Table {
     opts: TableOptions,
     out: Output,
     columns: Vec<&'static str>,
+    /// Number of the decoder's extra columns.
+    n_extra: usize,
     counter: u64,
     anchor: Option<Anchor>,
     header_written: bool,
@@ -109,6 +111,7 @@ impl Table {
             opts,
             out,
             columns,
+            n_extra: extra.len(),
             counter: 0,
             anchor: None,
             header_written: false,
@@ -247,6 +250,7 @@ impl Table {
             None
         };
         let raw = self.opts.raw;
+        let n_extra = self.n_extra;
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
         buf.extend_from_slice(ib.format(counter).as_bytes());
@@ -262,9 +266,9 @@ impl Table {
             buf.push(b'\t');
             push_tsv_field(buf, field);
         }
-        for field in row.extra {
+        for i in 0..n_extra {
             buf.push(b'\t');
-            push_tsv_field(buf, field);
+            push_tsv_field(buf, row.extra.get(i).copied().unwrap_or(""));
         }
         if raw {
             buf.push(b'\t');
@@ -290,8 +294,10 @@ impl Table {
         for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
             let _ = self.csv.write_field(field);
         }
-        for field in row.extra {
-            let _ = self.csv.write_field(field);
+        for i in 0..self.n_extra {
+            let _ = self
+                .csv
+                .write_field(row.extra.get(i).copied().unwrap_or(""));
         }
         if self.opts.raw {
             let mut hex = Vec::new();
@@ -326,6 +332,7 @@ impl Table {
             None
         };
         let counter = self.counter;
+        let n_extra = self.n_extra;
         let columns = &self.columns;
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
@@ -351,9 +358,9 @@ impl Table {
         for (k, v) in base {
             push_json_pair(buf, k, v);
         }
-        for (name, v) in columns[BASE_COLUMNS.len()..].iter().zip(row.extra) {
+        for (i, name) in columns[BASE_COLUMNS.len()..][..n_extra].iter().enumerate() {
             push_json_key(buf, name);
-            push_json_str(buf, v);
+            push_json_str(buf, row.extra.get(i).copied().unwrap_or(""));
         }
         if self.opts.raw {
             buf.extend_from_slice(b",\"raw\":\"");
@@ -395,7 +402,9 @@ impl Table {
             row.sensor,
             row.data,
         ];
-        cells.extend_from_slice(row.extra);
+        for i in 0..self.n_extra {
+            cells.push(row.extra.get(i).copied().unwrap_or(""));
+        }
         if let Some(r) = &raw {
             cells.push(r);
         }

@@ -18,8 +18,20 @@ use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
 /// Poll slot length used to reconstruct Millis for sources without time.
 pub const SLOT_MICROS: u64 = 12_000;
 
-/// Default serial settings.
+/// Default serial speed.
 pub const DEFAULT_BAUD: u32 = 57_600;
+
+/// What the command line needs to know: 57600 baud 8N1 (inverted on the wire: the adapter must
+/// invert, see docs/live.md).
+pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+    name: "S.Port",
+    serial: crate::source::serial::SerialConfig {
+        baud: DEFAULT_BAUD,
+        data_bits: serialport::DataBits::Eight,
+        parity: serialport::Parity::None,
+        stop_bits: serialport::StopBits::One,
+    },
+};
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
@@ -383,12 +395,6 @@ impl Decoder for SportDecoder {
         let events = &mut self.events;
         self.re.finish(&mut |e| events.push(*e));
         self.drain(out)
-    }
-
-    fn reset(&mut self) {
-        let events = &mut self.events;
-        self.re.reset(&mut |e| events.push(*e));
-        // Garbage flushed by a reset is still reported on the next push.
     }
 
     fn valid_frames(&self) -> u64 {
