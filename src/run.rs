@@ -261,8 +261,8 @@ impl Driver<'_> {
             .map_err(|_| output_error(self.table))?;
         self.down_at = Some(micros);
         let data = format!(
-            "adapter disconnected after {} frames; waiting for it",
-            self.decoder.valid_frames()
+            "adapter disconnected after {}; waiting for it",
+            crate::exit::count(self.decoder.valid_frames(), "frame", "frames")
         );
         self.info_row(micros, "LinkDown", &data)?;
         self.flush()?;
