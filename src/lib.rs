@@ -12,6 +12,8 @@ pub mod fmt;
 pub mod record;
 pub mod row;
 pub mod run;
+#[doc(hidden)]
+pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;

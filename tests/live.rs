@@ -220,7 +220,14 @@ fn sigterm_flushes_the_output_file() {
     let csv = dir.path().join("out.csv");
     let mut b = bus();
     let (mut child, rx) = spawn(
-        &["sport", "-o", csv.to_str().unwrap(), "--time", "abs", "--utc"],
+        &[
+            "sport",
+            "-o",
+            csv.to_str().unwrap(),
+            "--time",
+            "abs",
+            "--utc",
+        ],
         &b.path,
     );
     for s in slots(10) {
@@ -245,9 +252,9 @@ fn sigterm_flushes_the_output_file() {
     assert!(text.ends_with("\r\n"));
     // --time abs --utc: RFC 3339 wall-clock times with milliseconds, close to now.
     let mut r = csv::Reader::from_reader(text.as_bytes());
-    assert_eq!(r.headers().unwrap().iter().last(), Some("Time"));
+    assert_eq!(r.headers().unwrap().iter().next_back(), Some("Time"));
     let first = r.records().next().unwrap().unwrap();
-    let t = first.iter().last().unwrap();
+    let t = first.iter().next_back().unwrap();
     assert_eq!(t.len(), "2026-01-02T03:04:05.678Z".len(), "{t}");
     let t: chrono::DateTime<chrono::Utc> = t.parse().unwrap();
     assert!((chrono::Utc::now() - t).num_seconds().abs() < 60, "{t}");
