@@ -75,6 +75,7 @@ pub struct Table {
     csv: csv::Writer<SharedBuf>,
     csv_buf: SharedBuf,
     scratch: String,
+    hex: Vec<u8>,
     error: Option<WriteError>,
 }
 
@@ -120,6 +121,7 @@ impl Table {
                 .from_writer(csv_buf.clone()),
             csv_buf,
             scratch: String::new(),
+            hex: Vec::new(),
             error: None,
         }
     }
@@ -284,13 +286,16 @@ impl Table {
     fn csv_row(&mut self, row: &Row<'_>) {
         let mut ib = itoa::Buffer::new();
         let _ = self.csv.write_field(ib.format(self.counter));
-        let millis = row.micros.map(|us| us / 1000);
-        let _ = self
-            .csv
-            .write_field(millis.map_or(String::new(), |m| m.to_string()));
-        let _ = self
-            .csv
-            .write_field(row.id.map_or(String::new(), |i| i.to_string()));
+        match row.micros {
+            Some(us) => self.csv.write_field(ib.format(us / 1000)),
+            None => self.csv.write_field(""),
+        }
+        .ok();
+        match row.id {
+            Some(id) => self.csv.write_field(ib.format(id)),
+            None => self.csv.write_field(""),
+        }
+        .ok();
         for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
             let _ = self.csv.write_field(field);
         }
@@ -300,9 +305,9 @@ impl Table {
                 .write_field(row.extra.get(i).copied().unwrap_or(""));
         }
         if self.opts.raw {
-            let mut hex = Vec::new();
-            push_hex_bytes(&mut hex, row.raw);
-            let _ = self.csv.write_field(&hex);
+            self.hex.clear();
+            push_hex_bytes(&mut self.hex, row.raw);
+            let _ = self.csv.write_field(&self.hex);
         }
         if self.opts.time_abs {
             let t = self.wall_time(row.micros).to_owned();
