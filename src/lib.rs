@@ -9,9 +9,12 @@ pub mod cli;
 pub mod decoder;
 pub mod exit;
 pub mod fmt;
+pub mod record;
 pub mod row;
 pub mod run;
 pub mod sab;
+#[doc(hidden)]
+pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;

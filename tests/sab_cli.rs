@@ -263,7 +263,7 @@ fn unusable_inputs_and_options_fail_clearly() {
         .arg(&pcap)
         .assert()
         .code(9)
-        .stderr(predicate::str::contains("is a pcap file"));
+        .stderr(predicate::str::contains("pcap of network traffic"));
     busnoop()
         .args(["sab2"])
         .arg(fixture("edgetx-MODELE24-2014-07-11-sport.log"))
@@ -284,4 +284,45 @@ fn unusable_inputs_and_options_fail_clearly() {
             .assert()
             .code(2);
     }
+}
+
+#[test]
+fn timed_recordings_use_the_real_times() {
+    use busnoop::record::Recorder;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("timed.pcap");
+    let frame = |flags, cmd, data: &[u8]| {
+        let mut w = Vec::new();
+        sample::frame(&mut w, Framing::Hdlc, flags, 5, cmd, data);
+        w
+    };
+    let mut r = Recorder::create(&path, true).unwrap();
+    r.start(None).unwrap();
+    r.data(&frame(Flags::Request, 0x10, &[]), Some(1_000))
+        .unwrap();
+    r.data(&frame(Flags::Ack, 0x10, &[7]), Some(3_500)).unwrap();
+    r.data(&frame(Flags::Request, 0x11, &[]), Some(20_000))
+        .unwrap();
+    r.data(&frame(Flags::Ack, 0x11, &[8]), Some(40_000))
+        .unwrap();
+    r.data(&frame(Flags::Request, 0x12, &[]), Some(50_000))
+        .unwrap();
+    r.flush().unwrap();
+    drop(r);
+    let (t, stderr) = run_tsv(&["sab2", path.to_str().unwrap()]);
+    assert_eq!(
+        t.column("Type"),
+        [
+            "Request", "ACK", "Request", "Timeout", "ACK", "Request", "Timeout"
+        ]
+    );
+    assert_eq!(t.column("Millis"), ["1", "3", "20", "30", "40", "50", "50"]);
+    assert_eq!(t.column("Resp ms"), ["", "2.500", "", "", "20.000", "", ""]);
+    assert_eq!(t.get(3, "Note"), "no response within 10 ms");
+    assert_eq!(t.get(4, "Note"), "late: after the master's 10 ms timeout");
+    assert!(
+        t.get(6, "Note")
+            .starts_with("no response before the end of the capture")
+    );
+    assert!(stderr.contains("2 timeouts, 1 late response"), "{stderr}");
 }

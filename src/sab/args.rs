@@ -2,13 +2,13 @@
 
 use clap::Args;
 
-use super::{DEFAULT_BAUD, DEFAULT_TIMEOUT_MS, FramingChoice, Options, hdlc};
-use crate::cli::OutputArgs;
+use super::{DEFAULT_TIMEOUT_MS, FramingChoice, Options, hdlc};
+use crate::cli::CaptureArgs;
 
 #[derive(Args, Debug)]
 pub struct SabArgs {
-    /// Capture to read: a raw `.bin` of wire bytes, or `-` for standard input.
-    pub source: String,
+    #[command(flatten)]
+    pub capture: CaptureArgs,
 
     /// Framing on the wire: `sync` = SAB v1 (`54 LEN HDR CMD DATA CRC8`, what modm's
     /// documentation describes), `hdlc` = SAB2 (`7E HDR CMD DATA CRC16 7E`, what modm's SAB2 code
@@ -31,28 +31,21 @@ pub struct SabArgs {
           value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub timeout_ms: u64,
 
-    /// Baud rate (8N1). Raw captures carry no time: busnoop reconstructs it from the byte
-    /// position, 10 bits per byte at this rate.
-    #[arg(long, default_value_t = DEFAULT_BAUD,
-          value_parser = clap::value_parser!(u32).range(300..=20_000_000))]
-    pub baud: u32,
-
     /// SAB2 payload limit (modm's template parameter `N` of `sab2::Interface`): longer frames
     /// are flagged as overlong.
     #[arg(long, value_name = "BYTES", default_value_t = hdlc::DEFAULT_MAX_PAYLOAD as u16,
           value_parser = clap::value_parser!(u16).range(1..=255))]
     pub max_payload: u16,
-
-    #[command(flatten)]
-    pub output: OutputArgs,
 }
 
 impl SabArgs {
-    /// The decoder settings.
-    pub fn options(&self) -> Options {
+    /// The decoder settings for a line at `baud` (`--baud` or the protocol's default): raw
+    /// captures carry no time, busnoop reconstructs it from the byte position, 10 bits per byte
+    /// at this rate.
+    pub fn options(&self, baud: u32) -> Options {
         Options {
             framing: self.framing,
-            baud: self.baud,
+            baud,
             timeout_micros: self.timeout_ms * 1000,
             max_payload: self.max_payload as usize,
             devices: self.device.clone(),

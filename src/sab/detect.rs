@@ -107,7 +107,7 @@ impl Reason {
                 out.push(')');
             }
             Reason::EndOfInput { sync, hdlc } => {
-                out.push_str(", chosen by majority at the end of the input (");
+                out.push_str(", chosen by majority when the input ended or was cut (");
                 counts(out, sync, hdlc);
                 out.push(')');
             }
@@ -134,46 +134,27 @@ impl Reason {
     }
 }
 
-/// Bytes held while undecided, with their times and the gaps of the capture.
+/// Bytes held while undecided, with their times.
 #[derive(Clone, Debug, Default)]
 pub struct Held {
     bytes: Vec<u8>,
-    /// `(offset, time, gap before)`: bytes from `offset` up to the next mark arrived at `time`;
-    /// `gap` = the capture had a gap (reset) before them.
-    marks: Vec<(usize, Option<u64>, bool)>,
-    gap_pending: bool,
+    /// `(offset, time)`: bytes from `offset` up to the next mark arrived at `time`.
+    marks: Vec<(usize, Option<u64>)>,
 }
 
-/// One run of held bytes.
+/// One run of held bytes with their time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Segment<'a> {
     pub bytes: &'a [u8],
     pub time: Option<u64>,
-    /// The capture had a gap before these bytes.
-    pub gap: bool,
 }
 
 impl Held {
     pub fn push(&mut self, b: u8, time: Option<u64>) {
-        let new_mark = match self.marks.last() {
-            None => true,
-            Some(&(_, t, _)) => t != time || self.gap_pending,
-        };
-        if new_mark {
-            self.marks.push((self.bytes.len(), time, self.gap_pending));
-            self.gap_pending = false;
+        if self.marks.last().is_none_or(|&(_, t)| t != time) {
+            self.marks.push((self.bytes.len(), time));
         }
         self.bytes.push(b);
-    }
-
-    /// The capture has a gap here.
-    pub fn gap(&mut self) {
-        self.gap_pending = true;
-    }
-
-    /// A gap after the last byte (no byte followed it yet).
-    pub fn trailing_gap(&self) -> bool {
-        self.gap_pending
     }
 
     pub fn len(&self) -> usize {
@@ -193,12 +174,11 @@ impl Held {
         self.marks
             .iter()
             .enumerate()
-            .map(move |(i, &(start, time, gap))| {
+            .map(move |(i, &(start, time))| {
                 let end = self.marks.get(i + 1).map_or(self.bytes.len(), |m| m.0);
                 Segment {
                     bytes: &self.bytes[start..end],
                     time,
-                    gap,
                 }
             })
     }
@@ -230,37 +210,30 @@ mod tests {
     }
 
     #[test]
-    fn held_segments_keep_times_and_gaps() {
+    fn held_segments_keep_times() {
         let mut h = Held::default();
         h.push(1, Some(5));
         h.push(2, Some(5));
         h.push(3, Some(9));
-        h.gap();
-        h.push(4, Some(9));
+        h.push(4, None);
         let segs: Vec<_> = h.segments().collect();
         assert_eq!(
             segs,
             [
                 Segment {
                     bytes: &[1, 2],
-                    time: Some(5),
-                    gap: false
+                    time: Some(5)
                 },
                 Segment {
                     bytes: &[3],
-                    time: Some(9),
-                    gap: false
+                    time: Some(9)
                 },
                 Segment {
                     bytes: &[4],
-                    time: Some(9),
-                    gap: true
+                    time: None
                 },
             ]
         );
-        assert!(!h.trailing_gap());
-        h.gap();
-        assert!(h.trailing_gap());
         assert_eq!(h.first_time(), Some(5));
         assert_eq!(h.len(), 4);
     }

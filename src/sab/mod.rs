@@ -32,6 +32,17 @@ use stats::Stats;
 
 /// SAB runs at 115200 baud 8N1.
 pub const DEFAULT_BAUD: u32 = 115_200;
+
+/// What the shared command-line code needs to know about SAB.
+pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+    name: "SAB",
+    serial: crate::source::serial::SerialConfig {
+        baud: DEFAULT_BAUD,
+        data_bits: serialport::DataBits::Eight,
+        parity: serialport::Parity::None,
+        stop_bits: serialport::StopBits::One,
+    },
+};
 /// modm's `sab::Master` waits 10 ms for a response.
 pub const DEFAULT_TIMEOUT_MS: u64 = 10;
 /// Bits per byte on the wire (8N1: start, 8 data, stop), for time reconstruction.
@@ -818,8 +829,6 @@ pub struct SabDecoder {
     pos: u64,
     /// The last source time seen.
     last_time: Option<u64>,
-    /// Events collected when an output callback cannot write directly (gaps).
-    deferred: Vec<frame::OwnedEvent>,
 }
 
 impl SabDecoder {
@@ -852,7 +861,6 @@ impl SabDecoder {
             map,
             pos: 0,
             last_time: None,
-            deferred: Vec::new(),
         }
     }
 
@@ -959,15 +967,7 @@ impl SabDecoder {
         let map = &mut self.map;
         map.chosen(framing, reason);
         for seg in u.held.segments() {
-            if seg.gap {
-                active.reset(&mut |e| map.event(e, out));
-                map.pairing.reset();
-            }
             active.push(seg.bytes, seg.time, &mut |e| map.event(e, out));
-        }
-        if u.held.trailing_gap() {
-            active.reset(&mut |e| map.event(e, out));
-            map.pairing.reset();
         }
         let Undecided { sync, hdlc, .. } = *u;
         let other = match framing {
@@ -983,16 +983,6 @@ impl SabDecoder {
             })),
         };
     }
-
-    fn flush_deferred(&mut self, out: &mut dyn RowOut) {
-        if self.deferred.is_empty() {
-            return;
-        }
-        let deferred = std::mem::take(&mut self.deferred);
-        for e in &deferred {
-            self.map.event(&e.as_event(), out);
-        }
-    }
 }
 
 impl Decoder for SabDecoder {
@@ -1004,7 +994,6 @@ impl Decoder for SabDecoder {
         if time.is_some() {
             self.last_time = time;
         }
-        self.flush_deferred(out);
         self.map.stats.bytes += data.len() as u64;
         match &mut self.mode {
             Mode::Locked {
@@ -1025,7 +1014,6 @@ impl Decoder for SabDecoder {
     }
 
     fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
-        self.flush_deferred(out);
         if let Mode::Undecided(u) = &self.mode
             && !u.held.is_empty()
             && u.held
@@ -1050,8 +1038,10 @@ impl Decoder for SabDecoder {
         self.map.take_error()
     }
 
+    /// End of the input, or a gap in a live capture (the driver calls `push` again after a
+    /// gap): decides the framing if still undecided, closes what is open, and reports the
+    /// request still waiting for a response. Decoding goes on with the next `push`.
     fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        self.flush_deferred(out);
         if let Mode::Undecided(u) = &self.mode {
             let (s, h) = (u.sync_valid, u.hdlc_valid);
             if self.pos == 0 {
@@ -1064,35 +1054,17 @@ impl Decoder for SabDecoder {
             );
         }
         let now = self.now_ns();
-        if let Mode::Locked { active, .. } = &mut self.mode {
+        if let Mode::Locked { active, shadow } = &mut self.mode {
             let map = &mut self.map;
             let framing = active.framing();
             active.finish(&mut |e| map.event(e, out));
             map.finish(now, framing, out);
+            if let Some(sh) = shadow {
+                sh.reasm.reset(&mut |_| {});
+                sh.since = 0;
+            }
         }
         self.map.take_error()
-    }
-
-    fn reset(&mut self) {
-        // Rows cannot be written here: garbage flushed by the reassemblers is kept and
-        // reported on the next push.
-        let deferred = &mut self.deferred;
-        let mut keep = |e: &Event<'_>| deferred.push(frame::OwnedEvent::from(e));
-        match &mut self.mode {
-            Mode::Undecided(u) => {
-                u.held.gap();
-                u.sync.reset(&mut |_| {});
-                u.hdlc.reset(&mut |_| {});
-            }
-            Mode::Locked { active, shadow } => {
-                active.reset(&mut keep);
-                if let Some(sh) = shadow {
-                    sh.reasm.reset(&mut |_| {});
-                    sh.since = 0;
-                }
-                self.map.pairing.reset();
-            }
-        }
     }
 
     fn valid_frames(&self) -> u64 {
