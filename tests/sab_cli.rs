@@ -215,9 +215,11 @@ fn baud_and_timeout_change_the_reconstructed_timing() {
     assert_eq!(t.get(1, "Resp ms"), "1.736");
     // 20.833 ms at 9600 baud: late for the 10 ms timeout …
     let (t, stderr) = run_tsv(&["sab2", p, "--baud", "9600"]);
-    assert_eq!(t.column("Type"), ["Request", "Timeout", "ACK"]);
-    assert_eq!(t.get(1, "Millis"), "10");
-    assert_eq!(t.get(2, "Resp ms"), "20.833");
+    // The ACK starts at 6.25 ms, before the deadline, and ends after it: its Timeout row
+    // (at 10 ms) follows it.
+    assert_eq!(t.column("Type"), ["Request", "ACK", "Timeout"]);
+    assert_eq!(t.column("Millis"), ["0", "6", "10"]);
+    assert_eq!(t.get(1, "Resp ms"), "20.833");
     assert!(stderr.contains("1 timeout, 1 late response"), "{stderr}");
     // … but not for 25 ms.
     let (t, _) = run_tsv(&["sab2", p, "--baud", "9600", "--timeout-ms", "25"]);

@@ -67,8 +67,8 @@ pub enum Answer {
         late: Lateness,
         /// Not the first response to this request.
         repeat: bool,
-        /// The request timed out with this response (it ends after the deadline): emit the
-        /// `Timeout` row before the response.
+        /// The request timed out while this response was on the wire (it started before the
+        /// deadline and ended after it): emit the `Timeout` row after the response.
         expired: Option<Expired>,
     },
     /// No request matches; `open` is the request the master was waiting for, if any.
