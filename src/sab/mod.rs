@@ -739,6 +739,71 @@ impl Mapper {
     }
 }
 
+/// One byte into a reassembler (lets the detection loops be monomorphised per framing pair).
+trait Stepper {
+    fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>));
+}
+
+impl Stepper for sync::Reassembler {
+    #[inline]
+    fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.step(b, time, emit);
+    }
+}
+
+impl Stepper for hdlc::Reassembler {
+    #[inline]
+    fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.step(b, time, emit);
+    }
+}
+
+impl Stepper for Reasm {
+    #[inline]
+    fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.step(b, time, emit);
+    }
+}
+
+/// Feeds `data` to the active reassembler (rows) and the background one (counting its valid
+/// frames since the active one's last). Returns the number of bytes consumed when a byte makes
+/// the background framing win (busnoop switches after that byte), `None` when all were fed.
+#[allow(clippy::too_many_arguments)]
+fn shadowed<A: Stepper, S: Stepper>(
+    active: &mut A,
+    shadow: &mut S,
+    since: &mut u64,
+    last: &mut Option<frame::OwnedEvent>,
+    map: &mut Mapper,
+    data: &[u8],
+    time: Option<u64>,
+    out: &mut dyn RowOut,
+) -> Option<usize> {
+    for (i, &b) in data.iter().enumerate() {
+        let mut active_valid = false;
+        active.step_byte(b, time, &mut |e| {
+            active_valid |= e.is_valid();
+            map.event(e, out);
+        });
+        if active_valid {
+            *since = 0;
+        }
+        shadow.step_byte(b, time, &mut |e| {
+            if e.is_valid() {
+                *since += 1;
+                match last {
+                    Some(l) => l.set_from(e),
+                    None => *last = Some(frame::OwnedEvent::from(e)),
+                }
+            }
+        });
+        if *since >= detect::SWITCH_FRAMES {
+            return Some(i + 1);
+        }
+    }
+    None
+}
+
 /// A reassembler of either framing.
 #[derive(Clone, Debug)]
 enum Reasm {
@@ -892,10 +957,8 @@ impl SabDecoder {
         }
     }
 
-    /// Feeds one byte in the modes that need byte-exact decisions (detection, background
-    /// reader).
+    /// Feeds one byte while detection is undecided.
     fn step(&mut self, b: u8, time: Option<u64>, out: &mut dyn RowOut) {
-        let pos = self.pos;
         self.pos += 1;
         match &mut self.mode {
             Mode::Undecided(u) => {
@@ -916,42 +979,47 @@ impl SabDecoder {
                     self.decide(f, reason, out);
                 }
             }
-            Mode::Locked { active, shadow } => {
-                let map = &mut self.map;
-                let mut active_valid = false;
-                active.step(b, time, &mut |e| {
-                    active_valid |= e.is_valid();
-                    map.event(e, out);
-                });
-                let Some(sh) = shadow else { return };
-                let mut shadow_valid = false;
-                let last = &mut sh.last;
-                sh.reasm.step(b, time, &mut |e| {
-                    if e.is_valid() {
-                        shadow_valid = true;
-                        match last {
-                            Some(l) => l.set_from(e),
-                            None => *last = Some(frame::OwnedEvent::from(e)),
-                        }
-                    }
-                });
-                if active_valid {
-                    sh.since = 0;
+            Mode::Locked { .. } => {}
+        }
+    }
+
+    /// Feeds `data` to the chosen and the background reassembler; switches framing when the
+    /// background one wins (see [`detect`]).
+    fn push_shadowed(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) {
+        let mut rest = data;
+        while !rest.is_empty() {
+            let Mode::Locked {
+                active,
+                shadow: Some(sh),
+            } = &mut self.mode
+            else {
+                return;
+            };
+            let map = &mut self.map;
+            let (since, last) = (&mut sh.since, &mut sh.last);
+            let switched = match (active.as_mut(), &mut sh.reasm) {
+                (Reasm::Sync(a), Reasm::Hdlc(s)) => {
+                    shadowed(a, s, since, last, map, rest, time, out)
                 }
-                if shadow_valid {
-                    sh.since += 1;
+                (Reasm::Hdlc(a), Reasm::Sync(s)) => {
+                    shadowed(a, s, since, last, map, rest, time, out)
                 }
-                if sh.since >= detect::SWITCH_FRAMES {
-                    // The old framing's unfinished frame held the bytes of the new framing's
-                    // last frame: forget it and show that frame instead.
-                    active.reset(&mut |e| map.event(e, out));
-                    std::mem::swap(active.as_mut(), &mut sh.reasm);
-                    sh.since = 0;
-                    map.chosen(active.framing(), Reason::Switched { at: pos + 1 });
-                    if let Some(l) = &sh.last {
-                        map.event(&l.as_event(), out);
-                    }
-                }
+                (a, s) => shadowed(a, s, since, last, map, rest, time, out),
+            };
+            let Some(n) = switched else {
+                self.pos += rest.len() as u64;
+                return;
+            };
+            self.pos += n as u64;
+            rest = &rest[n..];
+            // The old framing's unfinished frame held the bytes of the new framing's last
+            // frame: forget it and show that frame instead.
+            active.reset(&mut |e| map.event(e, out));
+            std::mem::swap(active.as_mut(), &mut sh.reasm);
+            sh.since = 0;
+            map.chosen(active.framing(), Reason::Switched { at: self.pos });
+            if let Some(l) = &sh.last {
+                map.event(&l.as_event(), out);
             }
         }
     }
@@ -1010,9 +1078,15 @@ impl Decoder for SabDecoder {
                 active.push(data, time, &mut |e| map.event(e, out));
                 self.pos += data.len() as u64;
             }
-            _ => {
-                for &b in data {
+            Mode::Locked { .. } => self.push_shadowed(data, time, out),
+            Mode::Undecided(_) => {
+                for (i, &b) in data.iter().enumerate() {
                     self.step(b, time, out);
+                    if !matches!(self.mode, Mode::Undecided(_)) {
+                        // Decided: the rest goes the fast way.
+                        self.push_shadowed(&data[i + 1..], time, out);
+                        break;
+                    }
                 }
             }
         }

@@ -146,6 +146,11 @@ impl Reassembler {
     /// Feeds one byte.
     #[inline]
     pub fn step(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.len == 0 && b != SYNC {
+            // Nothing held and no frame start: garbage, without going through the buffer.
+            self.garbage_byte(b, time, emit);
+            return;
+        }
         if self.len == CAPACITY {
             // Cannot happen (see the module documentation); never panic on input, though.
             debug_assert!(false, "SAB v1 buffer overflow");
@@ -299,17 +304,26 @@ impl Reassembler {
 
     /// Moves `buf[0]` into the garbage run.
     fn garbage_front(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        let (b, time) = (self.buf[0], self.times[0]);
+        self.consume(1);
+        self.base -= 1;
+        self.garbage_byte(b, time, emit);
+    }
+
+    /// Appends the byte at stream offset `base` to the garbage run (and moves `base` past it).
+    #[inline]
+    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         let r = &mut self.run;
         if r.len == 0 {
             r.start_pos = self.base;
-            r.start_time = self.times[0];
+            r.start_time = time;
             r.before_first = self.frames == 0;
         }
-        r.bytes[r.len] = self.buf[0];
-        r.end_time = self.times[0];
+        r.bytes[r.len] = b;
+        r.end_time = time;
         r.len += 1;
-        self.consume(1);
-        if self.run.len == GARBAGE_ROW_MAX {
+        self.base += 1;
+        if r.len == GARBAGE_ROW_MAX {
             self.flush_garbage(emit);
         }
     }
