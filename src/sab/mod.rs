@@ -43,6 +43,7 @@ pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
         stop_bits: serialport::StopBits::One,
     },
 };
+
 /// modm's `sab::Master` waits 10 ms for a response.
 pub const DEFAULT_TIMEOUT_MS: u64 = 10;
 /// Bits per byte on the wire (8N1: start, 8 data, stop), for time reconstruction.
