@@ -187,8 +187,11 @@ pub fn pcap_link_type(header: &[u8]) -> Option<u32> {
 pub struct RecordingReader {
     reader: Box<dyn Read + Send>,
     name: String,
+    /// Unparsed input is `buf[pos..]`.
     buf: Vec<u8>,
     pos: usize,
+    /// Where reads land before they are appended to `buf`.
+    scratch: Vec<u8>,
     eof: bool,
     header: Option<Header>,
     first: Option<i64>,
@@ -213,6 +216,7 @@ impl RecordingReader {
             name: opened.name,
             buf: opened.prefix,
             pos: 0,
+            scratch: vec![0; 64 * 1024],
             eof: false,
             header: None,
             first: None,
@@ -235,18 +239,13 @@ impl RecordingReader {
                 self.buf.drain(..self.pos);
                 self.pos = 0;
             }
-            let old = self.buf.len();
-            self.buf.resize(old + 64 * 1024, 0);
-            match self.reader.read(&mut self.buf[old..]) {
+            match self.reader.read(&mut self.scratch) {
                 Ok(k) => {
-                    self.buf.truncate(old + k);
+                    self.buf.extend_from_slice(&self.scratch[..k]);
                     self.eof = k == 0;
                 }
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => self.buf.truncate(old),
-                Err(e) => {
-                    self.buf.truncate(old);
-                    return Err(self.bad(&format!("cannot read: {e}")));
-                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(self.bad(&format!("cannot read: {e}"))),
             }
         }
         Ok(true)
