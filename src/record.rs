@@ -197,6 +197,8 @@ pub struct RecordingReader {
     first: Option<i64>,
     untimed: bool,
     pending: Option<Message>,
+    /// A failure met after some records were read; reported on the next call.
+    failure: Option<Failure>,
 }
 
 #[derive(Clone, Copy)]
@@ -222,6 +224,7 @@ impl RecordingReader {
             first: None,
             untimed: false,
             pending: None,
+            failure: None,
         }
     }
 
@@ -268,9 +271,29 @@ impl RecordingReader {
 
 impl ChunkReader for RecordingReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+        if let Some(f) = self.failure.take() {
+            return Err(f);
+        }
         if let Some(m) = self.pending.take() {
             let _ = tx.send(m);
         }
+        let mut batch = Batch::default();
+        match self.fill(tx, &mut batch) {
+            Ok(()) => Ok((!batch.bytes.is_empty()).then_some(batch)),
+            // Hand out what was read before the failure; report the failure next time.
+            Err(f) if !batch.bytes.is_empty() => {
+                self.failure = Some(f);
+                Ok(Some(batch))
+            }
+            Err(f) => Err(f),
+        }
+    }
+}
+
+impl RecordingReader {
+    /// Adds records to `batch` until it is worth sending, a status event must go out first, or
+    /// the input ends.
+    fn fill(&mut self, tx: &SyncSender<Message>, batch: &mut Batch) -> Result<(), Failure> {
         if self.header.is_none() {
             if !self.want(24)? {
                 return Err(self.bad("truncated pcap header"));
@@ -287,10 +310,9 @@ impl ChunkReader for RecordingReader {
             self.pos += 24;
         }
         let h = self.header.unwrap();
-        let mut batch = Batch::default();
         loop {
             if !batch.bytes.is_empty() && (self.drained() || batch.bytes.len() >= 64 * 1024) {
-                return Ok(Some(batch));
+                return Ok(());
             }
             if !self.want(16)? {
                 if self.buf.len() > self.pos {
@@ -301,7 +323,7 @@ impl ChunkReader for RecordingReader {
                     )));
                     self.pos = self.buf.len();
                 }
-                return Ok((!batch.bytes.is_empty()).then_some(batch));
+                return Ok(());
             }
             let secs = self.u32_at(self.pos, h.little) as i64;
             let frac = self.u32_at(self.pos + 4, h.little) as i64;
@@ -316,7 +338,7 @@ impl ChunkReader for RecordingReader {
                     self.buf.len() - self.pos - 16
                 )));
                 self.pos = self.buf.len();
-                return Ok((!batch.bytes.is_empty()).then_some(batch));
+                return Ok(());
             }
             let micros_abs = secs * 1_000_000 + if h.nanos { frac / 1000 } else { frac };
             let start = self.pos + 16;
@@ -359,7 +381,7 @@ impl ChunkReader for RecordingReader {
                             let _ = tx.send(m);
                         } else {
                             self.pending = Some(m);
-                            return Ok(Some(batch));
+                            return Ok(());
                         }
                     }
                 }
