@@ -187,13 +187,18 @@ pub fn pcap_link_type(header: &[u8]) -> Option<u32> {
 pub struct RecordingReader {
     reader: Box<dyn Read + Send>,
     name: String,
+    /// Unparsed input is `buf[pos..]`.
     buf: Vec<u8>,
     pos: usize,
+    /// Where reads land before they are appended to `buf`.
+    scratch: Vec<u8>,
     eof: bool,
     header: Option<Header>,
     first: Option<i64>,
     untimed: bool,
     pending: Option<Message>,
+    /// A failure met after some records were read; reported on the next call.
+    failure: Option<Failure>,
 }
 
 #[derive(Clone, Copy)]
@@ -213,11 +218,13 @@ impl RecordingReader {
             name: opened.name,
             buf: opened.prefix,
             pos: 0,
+            scratch: vec![0; 64 * 1024],
             eof: false,
             header: None,
             first: None,
             untimed: false,
             pending: None,
+            failure: None,
         }
     }
 
@@ -235,18 +242,13 @@ impl RecordingReader {
                 self.buf.drain(..self.pos);
                 self.pos = 0;
             }
-            let old = self.buf.len();
-            self.buf.resize(old + 64 * 1024, 0);
-            match self.reader.read(&mut self.buf[old..]) {
+            match self.reader.read(&mut self.scratch) {
                 Ok(k) => {
-                    self.buf.truncate(old + k);
+                    self.buf.extend_from_slice(&self.scratch[..k]);
                     self.eof = k == 0;
                 }
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => self.buf.truncate(old),
-                Err(e) => {
-                    self.buf.truncate(old);
-                    return Err(self.bad(&format!("cannot read: {e}")));
-                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(self.bad(&format!("cannot read: {e}"))),
             }
         }
         Ok(true)
@@ -269,9 +271,29 @@ impl RecordingReader {
 
 impl ChunkReader for RecordingReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+        if let Some(f) = self.failure.take() {
+            return Err(f);
+        }
         if let Some(m) = self.pending.take() {
             let _ = tx.send(m);
         }
+        let mut batch = Batch::default();
+        match self.fill(tx, &mut batch) {
+            Ok(()) => Ok((!batch.bytes.is_empty()).then_some(batch)),
+            // Hand out what was read before the failure; report the failure next time.
+            Err(f) if !batch.bytes.is_empty() => {
+                self.failure = Some(f);
+                Ok(Some(batch))
+            }
+            Err(f) => Err(f),
+        }
+    }
+}
+
+impl RecordingReader {
+    /// Adds records to `batch` until it is worth sending, a status event must go out first, or
+    /// the input ends.
+    fn fill(&mut self, tx: &SyncSender<Message>, batch: &mut Batch) -> Result<(), Failure> {
         if self.header.is_none() {
             if !self.want(24)? {
                 return Err(self.bad("truncated pcap header"));
@@ -288,10 +310,9 @@ impl ChunkReader for RecordingReader {
             self.pos += 24;
         }
         let h = self.header.unwrap();
-        let mut batch = Batch::default();
         loop {
             if !batch.bytes.is_empty() && (self.drained() || batch.bytes.len() >= 64 * 1024) {
-                return Ok(Some(batch));
+                return Ok(());
             }
             if !self.want(16)? {
                 if self.buf.len() > self.pos {
@@ -302,7 +323,7 @@ impl ChunkReader for RecordingReader {
                     )));
                     self.pos = self.buf.len();
                 }
-                return Ok((!batch.bytes.is_empty()).then_some(batch));
+                return Ok(());
             }
             let secs = self.u32_at(self.pos, h.little) as i64;
             let frac = self.u32_at(self.pos + 4, h.little) as i64;
@@ -317,7 +338,7 @@ impl ChunkReader for RecordingReader {
                     self.buf.len() - self.pos - 16
                 )));
                 self.pos = self.buf.len();
-                return Ok((!batch.bytes.is_empty()).then_some(batch));
+                return Ok(());
             }
             let micros_abs = secs * 1_000_000 + if h.nanos { frac / 1000 } else { frac };
             let start = self.pos + 16;
@@ -360,7 +381,7 @@ impl ChunkReader for RecordingReader {
                             let _ = tx.send(m);
                         } else {
                             self.pending = Some(m);
-                            return Ok(Some(batch));
+                            return Ok(());
                         }
                     }
                 }
