@@ -44,3 +44,8 @@ fn edgetx_log_corpus() {
 fn recording_corpus() {
     replay("recording", busnoop::selfcheck::recording);
 }
+
+#[test]
+fn sab_corpus() {
+    replay("sab", busnoop::selfcheck::sab);
+}

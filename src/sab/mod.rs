@@ -410,18 +410,9 @@ impl Mapper {
         st.valid_frames += 1;
         let mut class = Class::Plain;
         let mut answer = None;
-        // A response that started before the deadline and ended after it: the master's timer
-        // ran out while it was on the wire. Its Timeout row follows it (time order).
-        let mut expired_during = None;
         if flags.is_response() {
-            let a = self.pairing.response(addr, command, self.end_ns(ev));
-            if let Answer::Paired {
-                expired: Some(x), ..
-            } = a
-            {
-                expired_during = Some(x);
-            }
-            answer = Some(a);
+            // A late response's Timeout row comes once the time passes the deadline.
+            answer = Some(self.pairing.response(addr, command, self.end_ns(ev)));
         } else if let Some(x) = self.pairing.request(pairing::Request {
             address: addr,
             command,
@@ -557,9 +548,6 @@ impl Mapper {
             },
             out,
         );
-        if let Some(x) = expired_during {
-            self.timeout_row(&x, ev.framing, out);
-        }
     }
 
     fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {

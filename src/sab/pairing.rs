@@ -9,7 +9,10 @@
 //!   (request start + timeout) without a response, or when the next request comes first
 //!   ("no response before the next request", the only test available without real time);
 //! * a response that arrives after the deadline is paired but *late* (the master had given
-//!   up), and one that matches a request already closed by the next request is late too;
+//!   up; the request still times out), and one that matches a request already closed by the
+//!   next request is late too;
+//! * a `Timeout` is reported once the capture's time has passed the deadline (or at the next
+//!   request, or at the end), so rows stay in time order;
 //! * a second response to the same request is a *repeat* (two slaves on one address?).
 //!
 //! The response time is measured from the first byte of the request to the last byte of the
@@ -67,9 +70,6 @@ pub enum Answer {
         late: Lateness,
         /// Not the first response to this request.
         repeat: bool,
-        /// The request timed out while this response was on the wire (it started before the
-        /// deadline and ended after it): emit the `Timeout` row after the response.
-        expired: Option<Expired>,
     },
     /// No request matches; `open` is the request the master was waiting for, if any.
     Unpaired { open: Option<Request> },
@@ -79,7 +79,17 @@ pub enum Answer {
 struct Open {
     req: Request,
     answers: u32,
+    /// The first response ended after the deadline (the master timed out all the same).
+    late: bool,
+    /// The timeout was reported.
     expired: bool,
+}
+
+impl Open {
+    /// Times out (or has timed out) without a response in time, not yet reported.
+    fn due(&self) -> bool {
+        !self.expired && (self.answers == 0 || self.late)
+    }
 }
 
 /// Requests closed without a response that a late response may still match.
@@ -121,12 +131,12 @@ impl Pairing {
     }
 
     /// The capture's time reached `now`: the open request expires when its deadline passed
-    /// without a response.
+    /// without a response in time.
     pub fn advance(&mut self, now: u64) -> Option<Expired> {
         let timeout = self.timeout;
         let o = self.open.as_mut()?;
         let deadline = o.req.start.saturating_add(timeout);
-        if o.answers > 0 || o.expired || now <= deadline {
+        if !o.due() || now <= deadline {
             return None;
         }
         o.expired = true;
@@ -138,30 +148,39 @@ impl Pairing {
         })
     }
 
-    /// A request was sent: it becomes the open request; the previous one, if unanswered and
-    /// not yet expired, times out now.
+    /// A request was sent: it becomes the open request; the previous one, if its timeout is
+    /// still unreported, times out now (at the deadline or the new request's start, whichever
+    /// comes first, to keep rows in time order).
     pub fn request(&mut self, req: Request) -> Option<Expired> {
         let mut result = None;
-        if let Some(prev) = self.open.take()
-            && prev.answers == 0
-        {
-            let why = if prev.expired {
-                Why::Deadline
-            } else {
-                let deadline = self.deadline(&prev.req);
+        if let Some(prev) = self.open.take() {
+            let deadline = self.deadline(&prev.req);
+            if prev.due() {
+                let (why, waited) = if prev.answers == 0 {
+                    (Why::NextRequest, req.start.saturating_sub(prev.req.start))
+                } else {
+                    (Why::Deadline, self.timeout)
+                };
                 result = Some(Expired {
                     request: prev.req,
                     at: deadline.min(req.start),
-                    why: Why::NextRequest,
-                    waited: req.start.saturating_sub(prev.req.start),
+                    why,
+                    waited,
                 });
-                Why::NextRequest
-            };
-            self.remember(prev.req, why);
+            }
+            if prev.answers == 0 {
+                let why = if prev.expired {
+                    Why::Deadline
+                } else {
+                    Why::NextRequest
+                };
+                self.remember(prev.req, why);
+            }
         }
         self.open = Some(Open {
             req,
             answers: 0,
+            late: false,
             expired: false,
         });
         result
@@ -176,18 +195,10 @@ impl Pairing {
         {
             o.answers += 1;
             let micros = end.saturating_sub(o.req.start);
-            let mut expired = None;
-            let late = if o.expired {
-                Lateness::AfterTimeout
-            } else if micros > timeout {
-                if o.answers == 1 {
-                    o.expired = true;
-                    expired = Some(Expired {
-                        request: o.req,
-                        at: o.req.start.saturating_add(timeout),
-                        why: Why::Deadline,
-                        waited: timeout,
-                    });
+            let late = if o.expired || micros > timeout {
+                if o.answers == 1 && !o.expired {
+                    // Reported by `advance` once the capture's time passes the deadline.
+                    o.late = true;
                 }
                 Lateness::AfterTimeout
             } else {
@@ -198,7 +209,6 @@ impl Pairing {
                 micros,
                 late,
                 repeat: o.answers > 1,
-                expired,
             };
         }
         // A late answer to a request that was already closed?
@@ -217,7 +227,6 @@ impl Pairing {
                         _ => Lateness::AfterTimeout,
                     },
                     repeat: false,
-                    expired: None,
                 };
             }
         }
@@ -230,7 +239,7 @@ impl Pairing {
     pub fn finish(&mut self, now: u64) -> Option<Expired> {
         let timeout = self.timeout;
         let o = self.open.take()?;
-        if o.answers > 0 || o.expired {
+        if !o.due() {
             return None;
         }
         let deadline = o.req.start.saturating_add(timeout);
@@ -287,13 +296,11 @@ mod tests {
                 micros,
                 late,
                 repeat,
-                expired,
                 ..
             } => {
                 assert_eq!(micros, 1500);
                 assert_eq!(late, Lateness::OnTime);
                 assert!(!repeat);
-                assert_eq!(expired, None);
             }
             a => panic!("{a:?}"),
         }
@@ -315,15 +322,11 @@ mod tests {
         assert_eq!((x.at, x.why, x.waited), (11_000, Why::Deadline, T));
         assert_eq!(p.advance(20_000), None, "reported once");
         match p.response(5, 0x10, 15_000) {
-            Answer::Paired {
-                micros,
-                late,
-                expired,
-                ..
-            } => {
+            Answer::Paired { micros, late, .. } => {
                 assert_eq!(micros, 14_000);
                 assert_eq!(late, Lateness::AfterTimeout);
-                assert_eq!(expired, None);
+                // Already reported by `advance`: not again.
+                assert_eq!(p.finish(30_000), None);
             }
             a => panic!("{a:?}"),
         }
@@ -334,17 +337,28 @@ mod tests {
         let mut p = Pairing::new(T);
         p.request(req(1, 2, 0));
         assert_eq!(p.advance(9_000), None);
-        match p.response(1, 2, 10_500) {
+        // Started before the deadline, ended after it: late, and the timeout is reported
+        // once the time passes the deadline (not before rows that start earlier).
+        assert!(matches!(
+            p.response(1, 2, 10_500),
             Answer::Paired {
-                late,
-                expired: Some(x),
+                late: Lateness::AfterTimeout,
                 ..
-            } => {
-                assert_eq!(late, Lateness::AfterTimeout);
-                assert_eq!(x.at, T);
             }
-            a => panic!("{a:?}"),
-        }
+        ));
+        assert_eq!(p.advance(9_950), None);
+        let x = p.advance(10_001).unwrap();
+        assert_eq!((x.at, x.why), (T, Why::Deadline));
+        assert_eq!(p.advance(20_000), None);
+        // Or at the next request, clamped to its start.
+        p.request(req(1, 3, 20_000));
+        p.response(1, 3, 30_500);
+        let x = p.request(req(1, 4, 29_990)).unwrap();
+        assert_eq!((x.at, x.why), (29_990, Why::Deadline));
+        // Or at the end of the capture.
+        p.response(1, 4, 40_000);
+        let x = p.finish(40_000).unwrap();
+        assert_eq!((x.at, x.why), (39_990, Why::Deadline));
     }
 
     #[test]
