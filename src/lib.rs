@@ -13,4 +13,6 @@ pub mod row;
 pub mod run;
 pub mod sink;
 pub mod source;
+pub mod pcap;
+pub mod sbus;
 pub mod sport;
