@@ -220,6 +220,8 @@ pub struct Totals {
     pub not_sbus: u64,
     pub other_links: u64,
     pub seq_gaps: u64,
+    /// Requests still waiting for an answer when the input ended.
+    pub unanswered_at_end: u64,
     /// The capture container itself is broken (message).
     pub pcap_error: Option<String>,
 }
@@ -290,7 +292,8 @@ fn stats_table(rows: &[(String, String, &StationStats)], ether: bool) -> String 
 fn totals_line(t: &Totals, ether: bool) -> String {
     let mut s = format!(
         "valid telegrams {}, CRC errors {}, cut/broken {}, garbage {} bytes in {} runs, \
-         retries {}, timeouts {}, NAKs {}, answers without request {}, length mismatches {}, late {}",
+         retries {}, timeouts {}, NAKs {}, answers without request {}, length mismatches {}, late {}, \
+         unanswered at the end {}",
         t.valid,
         t.crc_errors,
         t.broken,
@@ -301,7 +304,8 @@ fn totals_line(t: &Totals, ether: bool) -> String {
         t.naks,
         t.no_request,
         t.mismatched,
-        t.late
+        t.late,
+        t.unanswered_at_end
     );
     if ether {
         let _ = write!(
@@ -904,23 +908,33 @@ impl SerialCore {
                 }
                 (Some(station), telegram::command_name(cmd))
             }
-            Tele::Response { data } => {
-                push_hex(&mut self.sc.data, data);
-                let st = self.pairing.pending().map(|p| p.info.station);
-                if let Some(s) = st {
-                    self.per[s as usize].crc_errors += 1;
-                    self.pairing.bad_answer();
+            Tele::Response { .. } | Tele::AckNak { .. } => {
+                match f.tele {
+                    Tele::Response { data } => push_hex(&mut self.sc.data, data),
+                    Tele::AckNak { code, .. } => push_hex(&mut self.sc.data, &code.to_be_bytes()),
+                    _ => {}
                 }
-                (st, "Response")
-            }
-            Tele::AckNak { code, .. } => {
-                push_hex(&mut self.sc.data, &code.to_be_bytes());
-                let st = self.pairing.pending().map(|p| p.info.station);
-                if let Some(s) = st {
-                    self.per[s as usize].crc_errors += 1;
-                    self.pairing.bad_answer();
+                match self.pairing.pending().copied() {
+                    Some(p) => {
+                        if let Some(e) = p.info.elem {
+                            telegram::push_elem(
+                                &mut self.sc.sensor_no,
+                                e,
+                                p.info.block,
+                                p.info.addr,
+                            );
+                        }
+                        self.per[p.info.station as usize].crc_errors += 1;
+                        self.pairing.bad_answer();
+                        self.sc.note(if matches!(f.tele, Tele::Response { .. }) {
+                            "response"
+                        } else {
+                            "ACK/NAK"
+                        });
+                        (Some(p.info.station), p.info.name())
+                    }
+                    None => (None, ""),
                 }
-                (st, "ACK/NAK")
             }
             Tele::Other { payload, .. } => {
                 push_hex(&mut self.sc.data, payload);
@@ -1159,21 +1173,12 @@ impl SerialCore {
         }
     }
 
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        if let Some(p) = self.pairing.finish() {
-            let at = if p.timed {
-                p.time + self.pairing.timeout
-            } else {
-                self.last_micros
-            };
-            let why = if p.timed && self.last_micros > p.time + self.pairing.timeout {
-                TimeoutWhy::Deadline
-            } else {
-                TimeoutWhy::End
-            };
-            self.timeout_row(&p, why, at.max(p.time), out)?;
+    fn finish(&mut self) {
+        // A request still waiting at the end: its answer may simply not have been captured,
+        // so it is counted, not reported as a timeout.
+        if self.pairing.finish().is_some() {
+            self.totals.unanswered_at_end += 1;
         }
-        Ok(())
     }
 }
 
@@ -1256,7 +1261,8 @@ impl Decoder for SerialDecoder {
             Framer::Detect { .. } => {}
         }
         result?;
-        self.core.finish(out)
+        self.core.finish();
+        Ok(())
     }
 
     fn reset(&mut self) {
@@ -1810,15 +1816,7 @@ impl Decoder for EtherDecoder {
         let c = &mut self.core;
         let mut left = std::mem::take(&mut c.expired);
         c.pairing.finish(&mut left);
-        for p in &left {
-            let deadline = p.time + c.pairing.timeout;
-            let (why, at) = if c.last_micros > deadline {
-                (TimeoutWhy::Deadline, deadline)
-            } else {
-                (TimeoutWhy::End, c.last_micros.max(p.time))
-            };
-            c.timeout_row(p, why, at, out)?;
-        }
+        c.totals.unanswered_at_end += left.len() as u64;
         left.clear();
         c.expired = left;
         Ok(())
