@@ -559,7 +559,10 @@ enum Framer {
         segments: Vec<(Vec<u8>, Option<u64>)>,
         len: usize,
         trial: Box<DataFramer>,
-        found: bool,
+        trial_break: Box<BreakFramer>,
+        /// CRC-valid telegrams found by each reading: data mode, break mode.
+        counts: [u32; 2],
+        decided: Option<bool>,
     },
     Data(Box<DataFramer>),
     Break(Box<BreakFramer>),
@@ -599,16 +602,25 @@ struct SerialCore {
 impl SerialDecoder {
     pub fn new(opts: Options) -> Self {
         let gap = |bits| Some(opts.gap_ms.map_or(default_gap_us(opts.baud, bits), |g| g * 1000));
+        let timeout = |data_mode| {
+            Some(
+                opts.timeout_ms
+                    .map_or(default_timeout_ms(opts.baud, data_mode), |t| t)
+                    * 1000,
+            )
+        };
         let framer = match opts.mode {
             Mode::Auto => Framer::Detect {
                 segments: Vec::new(),
                 len: 0,
                 trial: Box::new(DataFramer::new(gap(10))),
-                found: false,
+                trial_break: Box::new(BreakFramer::new(false, gap(10), timeout(false))),
+                counts: [0, 0],
+                decided: None,
             },
             Mode::Data | Mode::Secure => Framer::Data(Box::new(DataFramer::new(gap(10)))),
-            Mode::Break => Framer::Break(Box::new(BreakFramer::new(false, gap(10)))),
-            Mode::Parity => Framer::Break(Box::new(BreakFramer::new(true, gap(11)))),
+            Mode::Break => Framer::Break(Box::new(BreakFramer::new(false, gap(10), timeout(false)))),
+            Mode::Parity => Framer::Break(Box::new(BreakFramer::new(true, gap(11), timeout(false)))),
         };
         let mut names = vec![None; 256];
         for (n, a) in &opts.stations {
@@ -664,8 +676,9 @@ impl SerialDecoder {
             self.framer = Framer::Data(Box::new(DataFramer::new(gap)));
             self.core.resolve(Resolved::Data);
         } else {
-            self.framer = Framer::Break(Box::new(BreakFramer::new(false, gap)));
             self.core.resolve(Resolved::Break);
+            let timeout = Some(self.core.pairing.timeout);
+            self.framer = Framer::Break(Box::new(BreakFramer::new(false, gap, timeout)));
         }
         for (bytes, time) in segments {
             self.feed(&bytes, time, out)?;
@@ -1182,6 +1195,25 @@ impl SerialCore {
     }
 }
 
+/// Auto mode settles early when one reading clearly wins: at least 4 valid telegrams and
+/// more than twice as many as the other reading. `Some(true)` = data mode.
+fn early_decision(counts: [u32; 2]) -> Option<bool> {
+    let [d, b] = counts;
+    if d >= 4 && d > 2 * b {
+        Some(true)
+    } else if b >= 4 && b > 2 * d {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// After [`DETECT_BYTES`] or at the end: the reading with more valid telegrams (data mode on a
+/// tie with at least one).
+fn late_decision(counts: [u32; 2]) -> bool {
+    counts[0] > 0 && counts[0] >= counts[1]
+}
+
 impl Decoder for SerialDecoder {
     fn columns(&self) -> &'static [&'static str] {
         COLUMNS
@@ -1192,26 +1224,48 @@ impl Decoder for SerialDecoder {
             segments,
             len,
             trial,
-            found,
+            trial_break,
+            counts,
+            decided,
         } = &mut self.framer
         {
+            // Both readings are tried byte by byte so that the decision does not depend on
+            // how the input is chunked.
             let take = data.len().min(DETECT_BYTES - *len);
-            let mut hit = false;
-            trial.push(&data[..take], time, &mut |ev| {
-                if let Event::Frame(f) = ev
-                    && f.crc.ok()
-                {
-                    hit = true;
+            for &b in &data[..take] {
+                let mut hit = [0u32; 2];
+                trial.push(&[b], time, &mut |ev| {
+                    if let Event::Frame(f) = ev
+                        && f.crc.ok()
+                    {
+                        hit[0] += 1;
+                    }
+                });
+                trial_break.push(&[b], time, &mut |ev| {
+                    if let Event::Frame(f) = ev
+                        && f.crc.ok()
+                        && matches!(f.tele, Tele::Request { .. } | Tele::Response { .. })
+                    {
+                        hit[1] += 1;
+                    }
+                });
+                counts[0] += hit[0];
+                counts[1] += hit[1];
+                if decided.is_none() {
+                    *decided = early_decision(*counts);
                 }
-            });
-            *found |= hit;
+                if decided.is_some() {
+                    break;
+                }
+            }
             segments.push((data.to_vec(), time));
             *len += take;
-            if *found {
-                return self.settle(true, out);
+            if let Some(d) = *decided {
+                return self.settle(d, out);
             }
             if *len >= DETECT_BYTES {
-                return self.settle(false, out);
+                let d = late_decision(*counts);
+                return self.settle(d, out);
             }
             return Ok(());
         }
@@ -1236,17 +1290,37 @@ impl Decoder for SerialDecoder {
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        if let Framer::Detect { trial, found, .. } = &mut self.framer {
-            let mut hit = false;
-            trial.finish(&mut |ev| {
-                if let Event::Frame(f) = ev
-                    && f.crc.ok()
-                {
-                    hit = true;
+        if let Framer::Detect {
+            trial,
+            trial_break,
+            counts,
+            decided,
+            ..
+        } = &mut self.framer
+        {
+            let d = match *decided {
+                Some(d) => d,
+                None => {
+                    let mut hit = [0u32; 2];
+                    trial.finish(&mut |ev| {
+                        if let Event::Frame(f) = ev
+                            && f.crc.ok()
+                        {
+                            hit[0] += 1;
+                        }
+                    });
+                    trial_break.finish(&mut |ev| {
+                        if let Event::Frame(f) = ev
+                            && f.crc.ok()
+                            && matches!(f.tele, Tele::Request { .. } | Tele::Response { .. })
+                        {
+                            hit[1] += 1;
+                        }
+                    });
+                    late_decision([counts[0] + hit[0], counts[1] + hit[1]])
                 }
-            });
-            let data_mode = *found || hit;
-            self.settle(data_mode, out)?;
+            };
+            self.settle(d, out)?;
         }
         let core = &mut self.core;
         let mut result = Ok(());

@@ -620,12 +620,24 @@ pub struct BreakFramer {
     fresh: bool,
     garbage: GarbageRun,
     clock: GapClock,
+    /// Master timeout (µs): with times, bytes that start after it are read as a new request
+    /// first (a request and a response of the same length check the same way).
+    timeout: Option<u64>,
+    /// Time of the last request.
+    req_time: Option<u64>,
+    /// Requests were seen after break characters: a bad-CRC reading is then only confirmed by
+    /// a request that has its break too.
+    breaks_seen: bool,
 }
 
 impl BreakFramer {
-    /// `parity`: SM1 (no break characters); `gap`: silence (µs) that ends a telegram.
-    pub fn new(parity: bool, gap: Option<u64>) -> Self {
+    /// `parity`: SM1 (no break characters); `gap`: silence (µs) that ends a telegram;
+    /// `timeout`: the master timeout (µs).
+    pub fn new(parity: bool, gap: Option<u64>, timeout: Option<u64>) -> Self {
         BreakFramer {
+            timeout,
+            req_time: None,
+            breaks_seen: false,
             parity,
             buf: Vec::with_capacity(4096),
             times: Vec::with_capacity(4096),
@@ -711,44 +723,67 @@ impl BreakFramer {
 
     fn decide(&self, at_end: bool) -> Cand<Found> {
         let b = self.avail();
-        let mut order: [Option<Step>; 7] = [None; 7];
+        let mut order: [Option<Step>; 8] = [None; 8];
         use Step::*;
-        match self.awaiting {
+        // After the master timeout a new request (with its break) is read first; without
+        // breaks (parity mode) a request and a late response cannot be told apart by their
+        // CRC, so the answer reading stays first (docs/sbus.md).
+        let expired = self.breaks_seen
+            && matches!(
+                (self.timeout, self.req_time, self.times.get(self.head)),
+                (Some(to), Some(rt), Some(Some(t))) if *t > rt.saturating_add(to)
+            );
+        let answer = |n| {
+            if expired {
+                [
+                    Some(ReqBreak),
+                    Some(Resp(n)),
+                    Some(AckStep),
+                    self.fresh.then_some(OtherResp(n)),
+                    Some(BadReq),
+                    Some(AckBreak),
+                    Some(BadResp(n)),
+                    Some(AckRelaxed),
+                ]
+            } else {
+                [
+                    Some(Resp(n)),
+                    Some(AckStep),
+                    Some(Req),
+                    self.fresh.then_some(OtherResp(n)),
+                    Some(AckBreak),
+                    Some(BadResp(n)),
+                    Some(AckRelaxed),
+                    Some(BadReq),
+                ]
+            }
+        };
+        // Long after the timeout (3×) nothing is awaited any more.
+        let lapsed = matches!(
+            (self.timeout, self.req_time, self.times.get(self.head)),
+            (Some(to), Some(rt), Some(Some(t))) if *t > rt.saturating_add(to.saturating_mul(3))
+        );
+        let awaiting = if lapsed { Await::Request } else { self.awaiting };
+        match awaiting {
             Await::Request | Await::Answer(Expect::Nothing) => {
                 order[..3].copy_from_slice(&[Some(Req), Some(BadReq), Some(StrayAck)]);
             }
             Await::Answer(Expect::AckNak) => {
-                order[..3].copy_from_slice(&[Some(AckStep), Some(Req), Some(BadReq)]);
+                order[..3].copy_from_slice(&[Some(AckRelaxed), Some(Req), Some(BadReq)]);
             }
-            Await::Answer(Expect::Data(n)) => {
-                order[..6].copy_from_slice(&[
-                    Some(Resp(n)),
-                    Some(AckStep),
-                    Some(Req),
-                    self.fresh.then_some(OtherResp(n)),
-                    Some(BadResp(n)),
-                    Some(BadReq),
-                ]);
-            }
+            Await::Answer(Expect::Data(n)) => order = answer(n),
             Await::Answer(Expect::LengthPrefixed) => {
                 let Some(&n) = b.first() else {
                     return Cand::More;
                 };
-                let n = 1 + n as usize;
-                order[..6].copy_from_slice(&[
-                    Some(Resp(n)),
-                    Some(AckStep),
-                    Some(Req),
-                    self.fresh.then_some(OtherResp(n)),
-                    Some(BadResp(n)),
-                    Some(BadReq),
-                ]);
+                order = answer(1 + n as usize);
             }
             Await::Answer(Expect::Unknown) => {
-                order[..4].copy_from_slice(&[
+                order[..5].copy_from_slice(&[
                     Some(AckStep),
                     Some(Req),
                     self.fresh.then_some(AnyResp),
+                    Some(AckRelaxed),
                     Some(BadReq),
                 ]);
             }
@@ -756,21 +791,32 @@ impl BreakFramer {
         for step in order.into_iter().flatten() {
             let r = match step {
                 Req => map(self.req_at(b, 0, at_end, true), Found::Request),
+                ReqBreak => match self.req_at(b, 0, at_end, true) {
+                    Cand::Match(r) if r.skip == 0 => Cand::No,
+                    other => map(other, Found::Request),
+                },
                 BadReq => map(self.bad_req_at(b, at_end), Found::Request),
-                StrayAck | AckStep => map(self.ack_at(b, 0, at_end), |two| Found::Ack { two }),
+                StrayAck | AckStep => {
+                    map(self.ack_at(b, 0, at_end, Relax::No), |two| Found::Ack { two })
+                }
+                AckRelaxed => map(self.ack_at(b, 0, at_end, Relax::Any), |two| Found::Ack { two }),
+                AckBreak if self.breaks_seen => {
+                    map(self.ack_at(b, 0, at_end, Relax::Break), |two| Found::Ack { two })
+                }
+                AckBreak => Cand::No,
                 Resp(n) => map(resp_at(b, 0, n, at_end), |()| Found::Response {
                     len: n,
                     crc_ok: true,
                     mismatch: false,
                 }),
-                OtherResp(n) => map(self.search_resp(b, at_end, Some(n)), |len| {
+                OtherResp(n) => map(self.clean_search(b, at_end, Some(n)), |len| {
                     Found::Response {
                         len,
                         crc_ok: true,
                         mismatch: true,
                     }
                 }),
-                AnyResp => map(self.search_resp(b, at_end, None), |len| Found::Response {
+                AnyResp => map(self.clean_search(b, at_end, None), |len| Found::Response {
                     len,
                     crc_ok: true,
                     mismatch: false,
@@ -779,7 +825,11 @@ impl BreakFramer {
                     if b.len() < n + 2 {
                         if at_end { Cand::No } else { Cand::More }
                     } else {
-                        map(self.boundary(b, n + 2, at_end), |()| Found::Response {
+                        let ok = match self.clean_inside(b, n + 2, at_end) {
+                            Cand::Match(()) => self.boundary(b, n + 2, at_end),
+                            other => other,
+                        };
+                        map(ok, |()| Found::Response {
                             len: n,
                             crc_ok: false,
                             mismatch: false,
@@ -795,19 +845,45 @@ impl BreakFramer {
         Cand::No
     }
 
+    /// Break characters tried before a request, in order of preference. In SM0 a request
+    /// follows a break (one 0x00 from a raw-mode UART, sometimes two). A CRC-16 with init 0
+    /// ignores leading zero bytes, so when `00 00 st cmd …` checks with two break characters
+    /// it also checks as station 0 with one (when the lengths agree): the reading that skips
+    /// the most zeros wins, which makes station-0 requests need their own CRC to decide.
+    fn skips(&self, allow_break: bool) -> &'static [usize] {
+        if self.parity || !allow_break {
+            &[0]
+        } else {
+            &[2, 1, 0]
+        }
+    }
+
     /// A request at `k` (after up to two break characters in SM0).
     fn req_at(&self, b: &[u8], k: usize, at_end: bool, allow_break: bool) -> Cand<ReqAt> {
-        let max_skip = if self.parity || !allow_break { 0 } else { 2 };
-        for skip in 0..=max_skip {
+        for &skip in self.skips(allow_break) {
             if skip > 0 {
-                match b.get(k + skip - 1) {
-                    Some(0) => {}
-                    Some(_) => break,
-                    None => return if at_end { Cand::No } else { Cand::More },
+                match b.get(k..k + skip) {
+                    Some(z) if z.iter().all(|&x| x == 0) => {}
+                    Some(_) => continue,
+                    None => {
+                        if at_end {
+                            continue;
+                        }
+                        return Cand::More;
+                    }
                 }
             }
             match request_len(b, k + skip, at_end) {
                 Cand::Match((body, true)) => {
+                    if searched(b, k + skip) {
+                        // A CRC-16 with init 0 has residue 0 over a whole telegram, so a
+                        // search can also check across complete telegrams: refuse that.
+                        match self.clean_inside(&b[k + skip..], 2 + body + 2, at_end) {
+                            Cand::Match(()) => {}
+                            Cand::More => return Cand::More,
+                            Cand::No => continue,
+                        }
+                    }
                     return Cand::Match(ReqAt {
                         skip,
                         body,
@@ -824,10 +900,16 @@ impl BreakFramer {
     /// A request of known length whose CRC fails, accepted when a telegram (or silence)
     /// follows right after it.
     fn bad_req_at(&self, b: &[u8], at_end: bool) -> Cand<ReqAt> {
-        let max_skip = if self.parity { 0 } else { 2 };
-        for skip in 0..=max_skip {
-            if skip > 0 && b.get(skip - 1) != Some(&0) {
-                break;
+        for &skip in self.skips(true) {
+            match b.get(..skip) {
+                Some(z) if z.iter().all(|&x| x == 0) => {}
+                Some(_) => continue,
+                None => {
+                    if at_end {
+                        continue;
+                    }
+                    return Cand::More;
+                }
             }
             match request_len(b, skip, at_end) {
                 Cand::Match((body, false)) => {
@@ -836,7 +918,11 @@ impl BreakFramer {
                         body,
                         crc_ok: false,
                     };
-                    match self.boundary(b, r.total(), at_end) {
+                    let ok = match self.clean_inside(b, r.total(), at_end) {
+                        Cand::Match(()) => self.boundary(b, r.total(), at_end),
+                        other => other,
+                    };
+                    match ok {
                         Cand::Match(()) => return Cand::Match(r),
                         Cand::More => return Cand::More,
                         Cand::No => {}
@@ -849,44 +935,108 @@ impl BreakFramer {
         Cand::No
     }
 
-    /// A single-character ACK/NAK at `k`, optionally followed by 00.
-    fn ack_at(&self, b: &[u8], k: usize, at_end: bool) -> Cand<bool> {
+    /// A single-character ACK/NAK at `k` (optionally followed by 00), accepted when silence
+    /// or the next request follows it: a data byte 06/15 is not taken for an answer.
+    /// `relaxed`: a following request with a bad CRC (a bit error) also confirms it
+    /// (`Relax::Break`: only one after a break character).
+    fn ack_at(&self, b: &[u8], k: usize, at_end: bool, relaxed: Relax) -> Cand<bool> {
         match b.get(k) {
             Some(&ACK_CHAR) | Some(&NAK_CHAR) => {}
             Some(_) => return Cand::No,
             None => return if at_end { Cand::No } else { Cand::More },
         }
-        match b.get(k + 1) {
-            None => {
-                if at_end {
-                    Cand::Match(false)
-                } else {
-                    Cand::More
+        let passes: &[Relax] = match relaxed {
+            Relax::No => &[Relax::No],
+            Relax::Break => &[Relax::No, Relax::Break],
+            Relax::Any => &[Relax::No, Relax::Any],
+        };
+        // `06 00` first: with the 00 kept for the request, `00 st cmd …` could check as
+        // station 0 only because the CRC ignores leading zeros (see `skips`).
+        if b.len() == k + 1 && !at_end {
+            return Cand::More;
+        }
+        // In break mode the 00 is the next request's break (the request reading skips it).
+        let order: &[usize] = if self.parity { &[2, 1] } else { &[1, 2] };
+        for &pass in passes {
+            for &n in order {
+                if n == 2 && b.get(k + 1) != Some(&0) {
+                    continue;
+                }
+                match self.follow(b, k + n, at_end, pass) {
+                    Cand::Match(()) => return Cand::Match(n == 2),
+                    Cand::More => return Cand::More,
+                    Cand::No => {}
                 }
             }
-            Some(0) => match self.req_at(b, k + 1, at_end, true) {
-                // The 00 is the next request's break or station 0.
-                Cand::Match(_) => Cand::Match(false),
-                Cand::More => Cand::More,
-                Cand::No => Cand::Match(true),
-            },
-            Some(_) => Cand::Match(false),
+        }
+        Cand::No
+    }
+
+    /// What may follow an answer at `e`: silence, a request, or (relaxed) a request of known
+    /// length whose CRC fails.
+    fn follow(&self, b: &[u8], e: usize, at_end: bool, relaxed: Relax) -> Cand<()> {
+        match self.next_request(b, e, at_end) {
+            Cand::No if relaxed != Relax::No => {
+                for &skip in self.skips(true) {
+                    if relaxed == Relax::Break && skip == 0 {
+                        continue;
+                    }
+                    if b.get(e..e + skip).is_some_and(|z| z.iter().all(|&x| x == 0))
+                        && let Cand::Match(_) = request_len(b, e + skip, at_end)
+                    {
+                        return Cand::Match(());
+                    }
+                }
+                Cand::No
+            }
+            other => other,
         }
     }
 
-    /// Whether a telegram boundary at `e` is confirmed: silence after it, or a request or an
-    /// ACK/NAK character starting there.
+    /// Silence (the end of the buffered bytes at a gap or the end of input) or a request at `e`.
+    fn next_request(&self, b: &[u8], e: usize, at_end: bool) -> Cand<()> {
+        if b.len() == e {
+            return if at_end { Cand::Match(()) } else { Cand::More };
+        }
+        map(self.req_at(b, e, at_end, true), |_| ())
+    }
+
+    /// Whether the end of a bad-CRC reading at `e` is confirmed: silence after it, or a
+    /// request (with its break, once breaks were seen) or an ACK/NAK starting there.
     fn boundary(&self, b: &[u8], e: usize, at_end: bool) -> Cand<()> {
         if b.len() == e {
             return if at_end { Cand::Match(()) } else { Cand::More };
         }
-        if matches!(b.get(e), Some(&ACK_CHAR) | Some(&NAK_CHAR)) {
-            return Cand::Match(());
-        }
         match self.req_at(b, e, at_end, true) {
+            Cand::Match(r) if r.skip == 0 && self.breaks_seen => Cand::No,
             Cand::Match(_) => Cand::Match(()),
             Cand::More => Cand::More,
-            Cand::No => Cand::No,
+            Cand::No => map(self.ack_at(b, e, at_end, Relax::No), |_| ()),
+        }
+    }
+
+    /// A bad-CRC reading of `0..end` is only taken when no valid request starts inside it.
+    fn clean_inside(&self, b: &[u8], end: usize, at_end: bool) -> Cand<()> {
+        // Only requests of known length count here, which keeps the work bounded (no search
+        // inside a search).
+        for j in 1..end {
+            if searched(b, j) {
+                continue;
+            }
+            match request_len(b, j, at_end) {
+                Cand::Match((_, true)) => return Cand::No,
+                Cand::More => return Cand::More,
+                _ => {}
+            }
+        }
+        Cand::Match(())
+    }
+
+    /// [`Self::search_resp`], refusing a length that spans a valid request.
+    fn clean_search(&self, b: &[u8], at_end: bool, expected: Option<usize>) -> Cand<usize> {
+        match self.search_resp(b, at_end, expected) {
+            Cand::Match(len) => map(self.clean_inside(b, len + 2, at_end), |()| len),
+            other => other,
         }
     }
 
@@ -993,6 +1143,12 @@ impl BreakFramer {
             }
         };
         emit(&Event::Frame(frame));
+        if let Found::Request(r) = found {
+            self.req_time = time;
+            if r.skip > 0 {
+                self.breaks_seen = true;
+            }
+        }
         self.awaiting = match frame.tele {
             Tele::Request { station, cmd, body } => match expect_of(station, cmd, body) {
                 Expect::Nothing => Await::Request,
@@ -1009,13 +1165,27 @@ impl BreakFramer {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Step {
     Req,
+    ReqBreak,
     BadReq,
     StrayAck,
     AckStep,
+    AckRelaxed,
+    AckBreak,
     Resp(usize),
     OtherResp(usize),
     AnyResp,
     BadResp(usize),
+}
+
+/// How an ACK/NAK character's end is confirmed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Relax {
+    /// Silence or a request with a good CRC.
+    No,
+    /// Also a request of known length with a bad CRC after a break character.
+    Break,
+    /// Also any request of known length with a bad CRC.
+    Any,
 }
 
 fn map<T, U>(c: Cand<T>, f: impl FnOnce(T) -> U) -> Cand<U> {
@@ -1049,6 +1219,13 @@ fn resp_at(b: &[u8], k: usize, n: usize, at_end: bool) -> Cand<()> {
     } else {
         Cand::No
     }
+}
+
+/// Whether the request at `s` has a command whose length the table does not know.
+fn searched(b: &[u8], s: usize) -> bool {
+    b.get(s + 1)
+        .and_then(|&c| commands::command(c))
+        .is_some_and(|c| c.layout.body_len(&[]).is_none())
 }
 
 /// The body length of a request starting at `s` and whether its CRC checks. Known lengths
