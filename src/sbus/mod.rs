@@ -1650,6 +1650,10 @@ impl EtherCore {
         if !tele.crc_ok() {
             self.totals.crc_errors += 1;
             self.plcs[plc].stats.crc_errors += 1;
+            if tele.at != telegram::AT_REQUEST {
+                // The client got an unusable answer: it retries; no Timeout row.
+                self.pairing.bad_answer(conv, tele.seq);
+            }
             self.sc.note_with(|n| {
                 let _ = write!(
                     n,

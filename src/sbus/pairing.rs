@@ -314,6 +314,13 @@ impl EtherPairing {
         }
     }
 
+    /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
+    pub fn bad_answer(&mut self, conv: u32, seq: u16) {
+        if let Some(r) = self.map.get_mut(&(conv, seq)) {
+            r.bad_answer = true;
+        }
+    }
+
     /// Requests whose timeout passed at `now`, oldest first.
     pub fn expire(&mut self, now: u64, out: &mut Vec<Outstanding>) {
         while let Some(&(deadline, conv, seq, sent)) = self.deadlines.front() {
@@ -326,7 +333,9 @@ impl EtherPairing {
             {
                 let mut r = self.map.remove(&(conv, seq)).expect("present");
                 r.timeout_reported = true;
-                out.push(r);
+                if !r.bad_answer {
+                    out.push(r);
+                }
                 if self.late.len() == LATE_KEPT {
                     self.late.pop_front();
                 }
@@ -341,7 +350,9 @@ impl EtherPairing {
             if let Some(r) = self.map.get(&(conv, seq))
                 && r.time == sent
             {
-                out.push(*r);
+                if !r.bad_answer {
+                    out.push(*r);
+                }
                 self.map.remove(&(conv, seq));
             }
         }

@@ -1032,10 +1032,15 @@ impl BreakFramer {
         Cand::Match(())
     }
 
-    /// [`Self::search_resp`], refusing a length that spans a valid request.
+    /// [`Self::search_resp`], refusing a length that spans a valid request, and taking it only
+    /// when a boundary (silence, a request, an ACK/NAK) follows: a CRC found by searching
+    /// needs that second confirmation.
     fn clean_search(&self, b: &[u8], at_end: bool, expected: Option<usize>) -> Cand<usize> {
         match self.search_resp(b, at_end, expected) {
-            Cand::Match(len) => map(self.clean_inside(b, len + 2, at_end), |()| len),
+            Cand::Match(len) => match self.clean_inside(b, len + 2, at_end) {
+                Cand::Match(()) => map(self.boundary(b, len + 2, at_end), |()| len),
+                other => map(other, |()| len),
+            },
             other => other,
         }
     }
