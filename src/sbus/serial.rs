@@ -792,7 +792,8 @@ impl BreakFramer {
             let r = match step {
                 Req => map(self.req_at(b, 0, at_end, true), Found::Request),
                 ReqBreak => match self.req_at(b, 0, at_end, true) {
-                    Cand::Match(r) if r.skip == 0 => Cand::No,
+                    // only a request of known length after its break beats the answer reading
+                    Cand::Match(r) if r.skip == 0 || searched(b, r.skip) => Cand::No,
                     other => map(other, Found::Request),
                 },
                 BadReq => map(self.bad_req_at(b, at_end), Found::Request),
@@ -804,11 +805,28 @@ impl BreakFramer {
                     map(self.ack_at(b, 0, at_end, Relax::Break), |two| Found::Ack { two })
                 }
                 AckBreak => Cand::No,
-                Resp(n) => map(resp_at(b, 0, n, at_end), |()| Found::Response {
-                    len: n,
-                    crc_ok: true,
-                    mismatch: false,
-                }),
+                Resp(n) => match resp_at(b, 0, n, at_end) {
+                    // (parity mode: a 00 after a telegram is no break, see tail_dominated)
+                    Cand::Match(()) if !self.parity => Cand::Match(Found::Response {
+                        len: n,
+                        crc_ok: true,
+                        mismatch: false,
+                    }),
+                    Cand::Match(()) => match tail_dominated(b, n + 2, at_end) {
+                        Cand::Match(()) => Cand::No,
+                        Cand::More => Cand::More,
+                        Cand::No => Cand::Match(Found::Response {
+                            len: n,
+                            crc_ok: true,
+                            mismatch: false,
+                        }),
+                    },
+                    other => map(other, |()| Found::Response {
+                        len: n,
+                        crc_ok: true,
+                        mismatch: false,
+                    }),
+                },
                 OtherResp(n) => map(self.clean_search(b, at_end, Some(n)), |len| {
                     Found::Response {
                         len,
@@ -875,6 +893,11 @@ impl BreakFramer {
             }
             match request_len(b, k + skip, at_end) {
                 Cand::Match((body, true)) => {
+                    match zero_dominated(b, k + skip, at_end) {
+                        Cand::Match(()) => continue,
+                        Cand::More => return Cand::More,
+                        Cand::No => {}
+                    }
                     if searched(b, k + skip) {
                         // A CRC-16 with init 0 has residue 0 over a whole telegram, so a
                         // search can also check across complete telegrams: refuse that.
@@ -1024,7 +1047,11 @@ impl BreakFramer {
                 continue;
             }
             match request_len(b, j, at_end) {
-                Cand::Match((_, true)) => return Cand::No,
+                Cand::Match((_, true)) => match zero_dominated(b, j, at_end) {
+                    Cand::Match(()) => {}
+                    Cand::More => return Cand::More,
+                    Cand::No => return Cand::No,
+                },
                 Cand::More => return Cand::More,
                 _ => {}
             }
@@ -1223,6 +1250,42 @@ fn resp_at(b: &[u8], k: usize, n: usize, at_end: bool) -> Cand<()> {
         Cand::Match(())
     } else {
         Cand::No
+    }
+}
+
+/// A valid request reading `00 X …` at `s` is dominated by a valid reading at `s + 1`: a
+/// CRC-16 with init 0 ignores a leading zero, and a telegram whose CRC ends in 00 also checks
+/// one byte earlier when a 00 (a break, or the previous telegram's last byte) precedes it.
+fn zero_dominated(b: &[u8], s: usize, at_end: bool) -> Cand<()> {
+    if b.get(s) != Some(&0) {
+        return Cand::No;
+    }
+    match request_len(b, s + 1, at_end) {
+        Cand::Match((_, true)) => Cand::Match(()),
+        Cand::More => Cand::More,
+        _ => Cand::No,
+    }
+}
+
+/// Parity mode: a response reading of `0..end` is dominated by a request reading of
+/// `0..end + 1` when the next byte is 00. A telegram whose CRC ends in 00 also checks without
+/// that byte (and any telegram followed by 00 checks with it): without breaks, a 00 there is
+/// more likely the CRC's last byte than a station-0 request.
+fn tail_dominated(b: &[u8], end: usize, at_end: bool) -> Cand<()> {
+    match b.get(end) {
+        None => {
+            if at_end {
+                Cand::No
+            } else {
+                Cand::More
+            }
+        }
+        Some(0) => match request_len(b, 0, at_end) {
+            Cand::Match((body, true)) if 2 + body + 2 == end + 1 => Cand::Match(()),
+            Cand::More => Cand::More,
+            _ => Cand::No,
+        },
+        Some(_) => Cand::No,
     }
 }
 

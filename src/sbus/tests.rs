@@ -135,6 +135,14 @@ impl SessionGen {
                 }
                 if corrupt {
                     v = reencode_with_crc_of(&good, &bad, self.mode == SMode::Secure, self.seq);
+                    // "accept either CRC basis" lets 2 in 65536 bit errors through: use another bit
+                    let mut bit = 0x10;
+                    while data_crc_checks(&v) {
+                        bit >>= 1;
+                        let n = bad.len();
+                        bad[n - 1] = payload[n - 1] ^ bit;
+                        v = reencode_with_crc_of(&good, &bad, self.mode == SMode::Secure, self.seq);
+                    }
                 } else {
                     v = good;
                 }
@@ -167,6 +175,10 @@ impl SessionGen {
                         let mut bad = data.to_vec();
                         bad[0] ^= 0x01;
                         v = reencode_with_crc_of(&good, &bad, true, self.last_seq);
+                        while data_crc_checks(&v) {
+                            bad[0] = bad[0].rotate_left(1) ^ 0x01;
+                            v = reencode_with_crc_of(&good, &bad, true, self.last_seq);
+                        }
                     } else {
                         v = good;
                     }
@@ -176,6 +188,10 @@ impl SessionGen {
                         let mut bad = data.to_vec();
                         bad[0] ^= 0x01;
                         v = reencode_with_crc_of(&good, &bad, false, 0);
+                        while data_crc_checks(&v) {
+                            bad[0] = bad[0].rotate_left(1) ^ 0x01;
+                            v = reencode_with_crc_of(&good, &bad, false, 0);
+                        }
                     } else {
                         v = good;
                     }
@@ -375,6 +391,24 @@ impl SessionGen {
         }
         self.between();
     }
+}
+
+/// Whether a data/secure-mode telegram's CRC checks over the escaped or the unescaped bytes
+/// (as the decoder does), so that a generated bit error is sure to be visible.
+fn data_crc_checks(wire: &[u8]) -> bool {
+    let mut f = super::serial::DataFramer::new(None);
+    let mut ok = false;
+    f.push(wire, None, &mut |e| {
+        if let super::serial::Event::Frame(fr) = e {
+            ok |= fr.crc.ok();
+        }
+    });
+    f.finish(&mut |e| {
+        if let super::serial::Event::Frame(fr) = e {
+            ok |= fr.crc.ok();
+        }
+    });
+    ok
 }
 
 /// Re-encodes a data-mode telegram with a corrupted payload but the original CRC (a bit error
@@ -740,4 +774,6 @@ fn telegram_encoder_helpers_agree() {
     assert_eq!(rows[0].kind, "BadCRC");
     assert_eq!(telegram::crc16(&[]), 0);
 }
+
+
 
