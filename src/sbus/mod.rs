@@ -11,7 +11,6 @@ pub mod pairing;
 pub mod serial;
 pub mod telegram;
 
-use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::io;
 use std::net::SocketAddr;
@@ -1402,11 +1401,11 @@ struct EtherCore {
     port: u16,
     first_ts: Option<i64>,
     pairing: EtherPairing,
-    convs: HashMap<(SocketAddr, SocketAddr), u32>,
+    convs: pairing::FastMap<(SocketAddr, SocketAddr), u32>,
     /// Per conversation: index of its PLC.
     conv_plc: Vec<usize>,
     plcs: Vec<Plc>,
-    plc_index: HashMap<SocketAddr, usize>,
+    plc_index: pairing::FastMap<SocketAddr, usize>,
     totals: Totals,
     sc: Scratch,
     expired: Vec<Outstanding>,
@@ -1426,10 +1425,10 @@ impl EtherDecoder {
                 pairing: EtherPairing::new(
                     opts.timeout_ms.unwrap_or(DEFAULT_ETHER_TIMEOUT_MS) * 1000,
                 ),
-                convs: HashMap::new(),
+                convs: pairing::FastMap::default(),
                 conv_plc: Vec::new(),
                 plcs: Vec::new(),
-                plc_index: HashMap::new(),
+                plc_index: pairing::FastMap::default(),
                 totals: Totals::default(),
                 sc: Scratch::default(),
                 expired: Vec::new(),

@@ -6,8 +6,50 @@
 //! Both detect retries, report requests that got no answer (`Timeout`) and late answers.
 
 use std::collections::{HashMap, VecDeque};
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::telegram::ReqInfo;
+
+/// A small multiplicative hasher for the decoder's own keys (addresses, sequence numbers):
+/// the maps are looked up for every packet, and SipHash's resistance to crafted keys buys
+/// nothing here (keys only pick buckets; a collision costs time, never correctness).
+#[derive(Default, Clone, Copy)]
+pub struct FastHasher(u64);
+
+impl Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+
+    fn write_u8(&mut self, n: u8) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u16(&mut self, n: u16) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
+    }
+
+    fn write_usize(&mut self, n: usize) {
+        self.write_u64(n as u64);
+    }
+}
+
+/// `HashMap` with [`FastHasher`].
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
 /// A request waiting for its answer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -210,7 +252,7 @@ pub struct SeqGap {
 /// Ether-S-Bus pairing by (conversation, sequence).
 #[derive(Debug)]
 pub struct EtherPairing {
-    map: HashMap<(u32, u16), Outstanding>,
+    map: FastMap<(u32, u16), Outstanding>,
     deadlines: VecDeque<(u64, u32, u16, u64)>,
     /// Recently timed-out requests, for late answers.
     late: VecDeque<((u32, u16), Outstanding)>,
@@ -225,7 +267,7 @@ const LATE_KEPT: usize = 256;
 impl EtherPairing {
     pub fn new(timeout: u64) -> Self {
         EtherPairing {
-            map: HashMap::new(),
+            map: FastMap::default(),
             deadlines: VecDeque::new(),
             late: VecDeque::new(),
             convs: Vec::new(),
