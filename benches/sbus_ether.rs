@@ -71,7 +71,12 @@ fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
         } else if kind < 80 {
             let bits = 1 + (rng.next() % 32) as u8;
             req.extend_from_slice(&[0x02, bits - 1, ah, al]);
-            (1, (0..(bits as usize).div_ceil(8)).map(|_| rng.next() as u8).collect())
+            (
+                1,
+                (0..(bits as usize).div_ceil(8))
+                    .map(|_| rng.next() as u8)
+                    .collect(),
+            )
         } else if kind < 92 {
             req.extend_from_slice(&[0x0E, 9, ah, al]);
             req.extend((0..8).map(|_| rng.next() as u8));

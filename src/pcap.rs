@@ -425,7 +425,7 @@ impl PcapStream {
         };
         let block_type = rd32(b, big);
         let len = rd32(&b[4..], big) as usize;
-        if len < 12 || len % 4 != 0 || len > MAX_RECORD {
+        if len < 12 || !len.is_multiple_of(4) || len > MAX_RECORD {
             return Err(PcapError::BadLength {
                 offset: self.offset,
                 len: len as u64,
@@ -604,12 +604,7 @@ pub mod write {
     }
 
     /// An Ethernet/IPv4/UDP frame around `payload` (checksum 0 = none).
-    pub fn udp4_frame(
-        out: &mut Vec<u8>,
-        src: ([u8; 4], u16),
-        dst: ([u8; 4], u16),
-        payload: &[u8],
-    ) {
+    pub fn udp4_frame(out: &mut Vec<u8>, src: ([u8; 4], u16), dst: ([u8; 4], u16), payload: &[u8]) {
         out.extend_from_slice(&[0x02, 0, 0, 0, 0, 2, 0x02, 0, 0, 0, 0, 1, 0x08, 0x00]);
         let total = 20 + 8 + payload.len();
         let mut ip = [0u8; 20];
@@ -640,7 +635,9 @@ pub mod write {
 mod tests {
     use super::*;
 
-    fn collect(chunks: &[&[u8]]) -> (Vec<(i64, u32, Vec<u8>, u32)>, Result<(), PcapError>) {
+    type Got = Vec<(i64, u32, Vec<u8>, u32)>;
+
+    fn collect(chunks: &[&[u8]]) -> (Got, Result<(), PcapError>) {
         let mut s = PcapStream::new();
         let mut out = Vec::new();
         for c in chunks {
@@ -834,7 +831,10 @@ mod tests {
         let mut f = shb_le();
         f.extend(epb_le(3, 0, b"x"));
         let (_, r) = collect(&[&f]);
-        assert!(matches!(r, Err(PcapError::UnknownInterface { interface: 3, .. })));
+        assert!(matches!(
+            r,
+            Err(PcapError::UnknownInterface { interface: 3, .. })
+        ));
         let mut f = shb_le();
         let n = f.len();
         f[n - 4] ^= 0x10;

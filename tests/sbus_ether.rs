@@ -158,7 +158,11 @@ fn compare(tshark: &str, rows: &[Vec<String>]) {
                 if !fio.is_empty() {
                     let bits = values(&row[7]);
                     assert_eq!(bits.len().to_string(), fio, "{ctx}");
-                    assert_eq!(bits_value(&bits), iof_value(&f(fr, "sbus.data_iof")), "{ctx}");
+                    assert_eq!(
+                        bits_value(&bits),
+                        iof_value(&f(fr, "sbus.data_iof")),
+                        "{ctx}"
+                    );
                 }
             }
             "0x01" => {
@@ -209,9 +213,15 @@ fn compare(tshark: &str, rows: &[Vec<String>]) {
 /// The busnoop row of the request tshark pairs this answer with has the same station,
 /// element and command.
 fn check_pairing(response_to: &str, row: &[String], rows: &[Vec<String>], ctx: &str) {
-    let req_frame: usize = response_to.parse().unwrap_or_else(|_| panic!("no pairing: {ctx}"));
+    let req_frame: usize = response_to
+        .parse()
+        .unwrap_or_else(|_| panic!("no pairing: {ctx}"));
     let req = &rows[req_frame - 1];
-    assert_eq!((&row[2], &row[5], &row[6]), (&req[2], &req[5], &req[6]), "{ctx}");
+    assert_eq!(
+        (&row[2], &row[5], &row[6]),
+        (&req[2], &req[5], &req[6]),
+        "{ctx}"
+    );
     assert_eq!(row[9], req[9], "{ctx}");
     assert!(!row[8].is_empty(), "response time: {ctx}");
 }
@@ -254,7 +264,10 @@ fn digimat_capture_matches_tsharks_fields() {
         assert!(kinds.contains(k), "{k} missing");
     }
     assert!(rows.iter().any(|r| r[4] == "NAK"));
-    assert!(rows.iter().any(|r| r[7].contains("=-1245334075")), "0xB5C5B5C5 raw on UDP");
+    assert!(
+        rows.iter().any(|r| r[7].contains("=-1245334075")),
+        "0xB5C5B5C5 raw on UDP"
+    );
 }
 
 fn tshark_available() -> bool {
@@ -271,7 +284,16 @@ fn run_tshark(pcap: &Path) -> String {
     cmd.args(["-2", "-r"])
         .arg(pcap)
         .args(["--disable-heuristic", "pana_udp", "-T", "fields"])
-        .args(["-E", "header=y", "-E", "separator=/t", "-E", "occurrence=a", "-E", "aggregator=,"]);
+        .args([
+            "-E",
+            "header=y",
+            "-E",
+            "separator=/t",
+            "-E",
+            "occurrence=a",
+            "-E",
+            "aggregator=,",
+        ]);
     for f in FIELDS {
         cmd.args(["-e", f]);
     }
@@ -334,7 +356,9 @@ fn generated_capture(n: usize, faults: bool) -> Vec<u8> {
             }
             1 => {
                 let bits = 1 + (next() % 12) as u8;
-                let data: Vec<u8> = (0..(bits as usize).div_ceil(8)).map(|_| next() as u8).collect();
+                let data: Vec<u8> = (0..(bits as usize).div_ceil(8))
+                    .map(|_| next() as u8)
+                    .collect();
                 let mut masked = data.clone();
                 let rem = bits % 8;
                 if rem != 0 {
@@ -404,7 +428,10 @@ fn generated_session_with_faults() {
     let nak = rows.iter().find(|r| r[4] == "NAK").unwrap();
     assert_eq!(nak[7], "NAK, PGU port is in reduced protocol (0x0003)");
     assert!(!nak[5].is_empty() && !nak[2].is_empty(), "paired: {nak:?}");
-    assert!(rows.iter().any(|r| r[10].contains("sequence gap: 3 skipped")));
+    assert!(
+        rows.iter()
+            .any(|r| r[10].contains("sequence gap: 3 skipped"))
+    );
     let timeout = rows.iter().find(|r| r[4] == "Timeout").unwrap();
     assert_eq!(timeout[10], "no answer within 1000 ms");
     assert!(rows.iter().any(|r| r[3] == "10.0.0.6:5050"));
@@ -418,8 +445,14 @@ fn generated_session_with_faults() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("10.0.0.5:5050"), "{err}");
     assert!(err.contains("SeqGap"), "{err}");
-    assert!(err.contains("NAK reasons: 0x0003 PGU port reduced"), "{err}");
-    let gaps = rows.iter().filter(|r| r[10].contains("sequence gap: 3 skipped")).count();
+    assert!(
+        err.contains("NAK reasons: 0x0003 PGU port reduced"),
+        "{err}"
+    );
+    let gaps = rows
+        .iter()
+        .filter(|r| r[10].contains("sequence gap: 3 skipped"))
+        .count();
     assert!(gaps >= 5, "{gaps}");
     assert!(err.contains(&format!("sequence gaps {gaps}")), "{err}");
     // a longer timeout: the retries are still retries, no Timeout rows
@@ -431,7 +464,11 @@ fn generated_session_with_faults() {
 /// Converts a classic little-endian microsecond pcap into pcapng (SHB, IDB, EPBs).
 fn to_pcapng(pcap: &[u8], big_endian: bool) -> Vec<u8> {
     let w32 = |v: &mut Vec<u8>, x: u32| {
-        v.extend_from_slice(&if big_endian { x.to_be_bytes() } else { x.to_le_bytes() })
+        v.extend_from_slice(&if big_endian {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        })
     };
     let block = |out: &mut Vec<u8>, kind: u32, body: &[u8]| {
         let padded = body.len().div_ceil(4) * 4;
@@ -490,7 +527,10 @@ fn pcapng_gives_the_same_rows() {
 
 #[test]
 fn absolute_time_from_the_capture() {
-    let rows = busnoop_rows(&fixture("sbus_seeds_ether.pcap"), &["--time", "abs", "--utc"]);
+    let rows = busnoop_rows(
+        &fixture("sbus_seeds_ether.pcap"),
+        &["--time", "abs", "--utc"],
+    );
     // pcap header time 0x6B0227EC = 1795303404 s
     assert_eq!(rows[0][11], "2026-11-21T23:23:24.000Z");
 }
@@ -501,7 +541,9 @@ fn a_live_pipe_yields_rows_before_eof() {
     let pcap = std::fs::read(fixture("sbus-digimat.pcap")).unwrap();
     let first_two = 24 + 2 * 16 + {
         // lengths of the first two records
-        let r = |o: usize| u32::from_le_bytes([pcap[o], pcap[o + 1], pcap[o + 2], pcap[o + 3]]) as usize;
+        let r = |o: usize| {
+            u32::from_le_bytes([pcap[o], pcap[o + 1], pcap[o + 2], pcap[o + 3]]) as usize
+        };
         let a = r(24 + 8);
         a + r(24 + 16 + a + 8)
     };
@@ -532,7 +574,11 @@ fn a_live_pipe_yields_rows_before_eof() {
             lines.push(l);
         }
     }
-    assert_eq!(lines.len(), 3, "header + 2 rows while the pipe is still open: {lines:?}");
+    assert_eq!(
+        lines.len(),
+        3,
+        "header + 2 rows while the pipe is still open: {lines:?}"
+    );
     assert!(lines[1].contains("Request\t\tRead DBX"), "{lines:?}");
     assert!(lines[2].contains("\tNAK\t"), "{lines:?}");
     // the rest, then EOF
@@ -563,23 +609,48 @@ fn broken_captures_are_reported_not_fatal() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(text.lines().count(), 1 + 49 + 1, "49 rows + the cut record");
-    assert!(text.lines().last().unwrap().contains("ends inside the record"), "{text}");
+    assert!(
+        text.lines()
+            .last()
+            .unwrap()
+            .contains("ends inside the record"),
+        "{text}"
+    );
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("capture error"), "{err}");
     // a datagram on port 5050 that is not S-Bus, and a wrong length field
     let mut f = Vec::new();
     pw::header(&mut f, 1);
     let mut frame = Vec::new();
-    pw::udp4_frame(&mut frame, ([10, 0, 0, 1], 1234), ([10, 0, 0, 5], 5050), b"\0\0\0\x05hello world");
+    pw::udp4_frame(
+        &mut frame,
+        ([10, 0, 0, 1], 1234),
+        ([10, 0, 0, 5], 5050),
+        b"\0\0\0\x05hello world",
+    );
     pw::record(&mut f, 0, &frame);
     let mut good = Vec::new();
     encode_ether(&mut good, 7, 0, &[1, 6, 0, 0, 0]);
     good[3] += 1;
     frame.clear();
-    pw::udp4_frame(&mut frame, ([10, 0, 0, 1], 1234), ([10, 0, 0, 5], 5050), &good);
+    pw::udp4_frame(
+        &mut frame,
+        ([10, 0, 0, 1], 1234),
+        ([10, 0, 0, 5], 5050),
+        &good,
+    );
     pw::record(&mut f, 10, &frame);
     // an ARP frame: ignored
-    pw::record(&mut f, 20, &[0xFF; 12].iter().copied().chain([0x08, 0x06]).chain([0; 28]).collect::<Vec<u8>>());
+    pw::record(
+        &mut f,
+        20,
+        &[0xFF; 12]
+            .iter()
+            .copied()
+            .chain([0x08, 0x06])
+            .chain([0; 28])
+            .collect::<Vec<u8>>(),
+    );
     let path = dir.path().join("odd.pcap");
     std::fs::write(&path, &f).unwrap();
     let rows = busnoop_rows(&path, &[]);

@@ -32,7 +32,6 @@ struct Row {
     sensor_no: String,
     sensor: String,
     data: String,
-    resp: String,
     seq: String,
     note: String,
 }
@@ -66,7 +65,6 @@ fn decode(bytes: &[u8], args: &[&str]) -> Vec<Row> {
                 sensor_no: c[5].into(),
                 sensor: c[6].into(),
                 data: c[7].into(),
-                resp: c[8].into(),
                 seq: c[9].into(),
                 note: c[10].into(),
             }
@@ -92,7 +90,10 @@ fn secure_seed_telegrams() {
     for mode in ["data", "secure", "auto"] {
         // as printed: CRC F8 1D is a misprint of 8F 1D (alone, auto mode has no valid
         // telegram to recognise the data mode by)
-        let r = decode(&v[0].1, &["--mode", if mode == "auto" { "data" } else { mode }]);
+        let r = decode(
+            &v[0].1,
+            &["--mode", if mode == "auto" { "data" } else { mode }],
+        );
         assert_eq!(r[0].kind, "BadCRC");
         assert_eq!((r[0].id.as_str(), r[0].sensor_no.as_str()), ("5", "R0"));
         assert_eq!(r[0].seq, "2");
@@ -101,7 +102,11 @@ fn secure_seed_telegrams() {
         let r = decode(&join(&v, &[1, 2]), &["--mode", mode]);
         assert_eq!(r.len(), 2, "{r:?}");
         assert_eq!(
-            (r[0].kind.as_str(), r[0].id.as_str(), r[0].sensor_no.as_str()),
+            (
+                r[0].kind.as_str(),
+                r[0].id.as_str(),
+                r[0].sensor_no.as_str()
+            ),
             ("Request", "5", "R0")
         );
         assert_eq!(r[0].sensor, "Read register(s)");
@@ -131,7 +136,10 @@ fn secure_seed_telegrams() {
         let mut s = v[1].1.clone();
         s.extend_from_slice(&std_resp);
         let r = decode(&s, &["--mode", mode]);
-        assert_eq!((r[1].kind.as_str(), r[1].data.as_str()), ("Response", "R0=305419896"));
+        assert_eq!(
+            (r[1].kind.as_str(), r[1].data.as_str()),
+            ("Response", "R0=305419896")
+        );
         assert_eq!(r[1].note, "");
     }
 }
@@ -151,8 +159,7 @@ fn racom_data_mode_seed_telegrams() {
         assert_eq!(r[1].sensor_no, "R0");
         assert_eq!(r[1].sensor, "Read register(s)");
         assert_eq!(
-            r[1].data,
-            "R0=2717 R1=2717 R2=-2081223699 R3=503725518",
+            r[1].data, "R0=2717 R1=2717 R2=-2081223699 R3=503725518",
             "0x00000A9D, 0x00000A9D, 0x83F30BED, 0x1E063DCE"
         );
         assert_eq!(r[1].note, "");
@@ -180,7 +187,10 @@ fn racom_data_mode_seed_telegrams() {
     }
     // ACK and NAK alone: no request
     let r = decode(&v[8].1, &["--mode", "data"]);
-    assert_eq!((r[0].kind.as_str(), r[0].note.as_str()), ("ACK", "no request"));
+    assert_eq!(
+        (r[0].kind.as_str(), r[0].note.as_str()),
+        ("ACK", "no request")
+    );
 }
 
 #[test]
@@ -194,7 +204,10 @@ fn break_mode_seed_telegrams() {
             (r[0].kind.as_str(), r[0].id.as_str(), r[0].data.as_str()),
             ("Request", "2", "O10=1")
         );
-        assert_eq!((r[1].kind.as_str(), r[1].sensor_no.as_str()), ("ACK", "O10"));
+        assert_eq!(
+            (r[1].kind.as_str(), r[1].sensor_no.as_str()),
+            ("ACK", "O10")
+        );
         // read R10; the answer as printed has a stray 06: BadCRC
         let r = decode(&join(&v, &[16, 17]), &["--mode", mode]);
         assert_eq!(r[0].data, "R10");
@@ -202,7 +215,10 @@ fn break_mode_seed_telegrams() {
         assert!(r[1].note.contains("CRC 0x87AC"), "{r:?}");
         // corrected: R10 = 526
         let r = decode(&join(&v, &[16, 18]), &["--mode", mode]);
-        assert_eq!((r[1].kind.as_str(), r[1].data.as_str()), ("Response", "R10=526"));
+        assert_eq!(
+            (r[1].kind.as_str(), r[1].data.as_str()),
+            ("Response", "R10=526")
+        );
         // NAK character
         let r = decode(&join(&v, &[16, 20]), &["--mode", mode]);
         assert_eq!((r[1].kind.as_str(), r[1].data.as_str()), ("NAK", "NAK"));
@@ -217,14 +233,20 @@ fn break_mode_seed_telegrams() {
         );
         assert_eq!(r[0].sensor, "Write register(s)");
         let r = decode(&v[19].1, &["--mode", mode]);
-        assert_eq!((r[0].kind.as_str(), r[0].note.as_str()), ("ACK", "no request"));
+        assert_eq!(
+            (r[0].kind.as_str(), r[0].note.as_str()),
+            ("ACK", "no request")
+        );
         let r = decode(&v[20].1, &["--mode", mode]);
         assert_eq!(r[0].kind, "NAK");
     }
     // parity mode uses 11 bits per character: the answer starts at 7 × 11 / 9600 s
     let r = decode(&join(&v, &[16, 18]), &["--mode", "parity"]);
     assert_eq!(r[1].millis, "8");
-    let r = decode(&join(&v, &[16, 18]), &["--mode", "break", "--baud", "19200"]);
+    let r = decode(
+        &join(&v, &[16, 18]),
+        &["--mode", "break", "--baud", "19200"],
+    );
     assert_eq!(r[1].millis, "3");
 }
 
@@ -238,11 +260,26 @@ fn ether_seed_telegrams() {
         .unwrap();
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
-    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split('\t').collect()).collect();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').collect())
+        .collect();
     assert_eq!(rows.len(), 2);
     assert_eq!(
         rows[0][..10],
-        ["1", "0", "75", "127.0.0.2:5050", "Request", "R0", "Read register(s)", "R0", "", "182"]
+        [
+            "1",
+            "0",
+            "75",
+            "127.0.0.2:5050",
+            "Request",
+            "R0",
+            "Read register(s)",
+            "R0",
+            "",
+            "182"
+        ]
     );
     assert_eq!(
         rows[1][..10],

@@ -226,7 +226,12 @@ pub const fn command(code: u8) -> Option<Command> {
         0x21 => c(code, "Read text", ReadText, Unknown),
         0x22 => c(code, "Read active transition", Raw(1), LengthPrefixed),
         0x23 => change(c(code, "Write user memory", WriteProg(UserMemory), AckNak)),
-        0x24 => change(c(code, "Write program line", WriteProg(ProgramLine), AckNak)),
+        0x24 => change(c(
+            code,
+            "Write program line",
+            WriteProg(ProgramLine),
+            AckNak,
+        )),
         0x25 => change(c(code, "Write text", WriteText, AckNak)),
         0x28 => change(c(code, "Run procedure, CPU 0", Empty, AckNak)),
         0x29 => change(c(code, "Run procedure, CPU 1", Empty, AckNak)),
@@ -313,7 +318,12 @@ pub const fn command(code: u8) -> Option<Command> {
         0xAC => change(c(code, "Change blocks on run", Undocumented, Unknown)),
         0xAD => change(c(code, "Flash card telegram", Undocumented, Unknown)),
         0xAE => change(c(code, "Download firmware", Undocumented, Unknown)),
-        0xAF => c(code, "Web server serial communication", Undocumented, Unknown),
+        0xAF => c(
+            code,
+            "Web server serial communication",
+            Undocumented,
+            Unknown,
+        ),
         _ => return None,
     })
 }

@@ -56,7 +56,10 @@ pub fn extract(link_type: u32, data: &[u8]) -> Extract<'_> {
     let sliced = match link_type {
         linktype::ETHERNET => SlicedPacket::from_ethernet(data),
         linktype::LINUX_SLL => SlicedPacket::from_linux_sll(data),
-        linktype::RAW | linktype::RAW_OLD | linktype::RAW_OLD_OPENBSD | linktype::IPV4
+        linktype::RAW
+        | linktype::RAW_OLD
+        | linktype::RAW_OLD_OPENBSD
+        | linktype::IPV4
         | linktype::IPV6 => SlicedPacket::from_ip(data),
         linktype::LINUX_SLL2 => {
             // protocol type(2) reserved(2) ifindex(4) arphrd(2) pkttype(1) addrlen(1) addr(8)
@@ -117,12 +120,13 @@ pub fn extract(link_type: u32, data: &[u8]) -> Extract<'_> {
         // payload unsliced either way, so take the ports when the header fits.
         let first = match &p.net {
             Some(NetSlice::Ipv4(v4)) => v4.header().fragments_offset().value() == 0,
-            Some(NetSlice::Ipv6(v6)) => v6
-                .extensions()
-                .first_header()
-                .is_some_and(|_| v6.is_payload_fragmented())
-                && b.len() >= 8
-                && frag6_offset_zero(v6),
+            Some(NetSlice::Ipv6(v6)) => {
+                v6.extensions()
+                    .first_header()
+                    .is_some_and(|_| v6.is_payload_fragmented())
+                    && b.len() >= 8
+                    && frag6_offset_zero(v6)
+            }
             _ => false,
         };
         let ports = (first && b.len() >= 8).then(|| {
@@ -260,7 +264,12 @@ mod tests {
     #[test]
     fn extracts_udp_from_link_types() {
         let mut eth = Vec::new();
-        crate::pcap::write::udp4_frame(&mut eth, ([10, 0, 0, 1], 40000), ([10, 0, 0, 5], 5050), b"hi");
+        crate::pcap::write::udp4_frame(
+            &mut eth,
+            ([10, 0, 0, 1], 40000),
+            ([10, 0, 0, 5], 5050),
+            b"hi",
+        );
         let Extract::Udp(u) = extract(linktype::ETHERNET, &eth) else {
             panic!()
         };
@@ -277,15 +286,24 @@ mod tests {
         let mut sll2 = vec![0x08, 0x00];
         sll2.extend_from_slice(&[0; 18]);
         sll2.extend_from_slice(ip);
-        assert!(matches!(extract(linktype::LINUX_SLL2, &sll2), Extract::Udp(_)));
+        assert!(matches!(
+            extract(linktype::LINUX_SLL2, &sll2),
+            Extract::Udp(_)
+        ));
         let mut sll = vec![0, 0, 0, 1, 0, 6, 1, 2, 3, 4, 5, 6, 0, 0, 0x08, 0x00];
         sll.extend_from_slice(ip);
-        assert!(matches!(extract(linktype::LINUX_SLL, &sll), Extract::Udp(_)));
+        assert!(matches!(
+            extract(linktype::LINUX_SLL, &sll),
+            Extract::Udp(_)
+        ));
         // VLAN tag
         let mut vlan = eth[..12].to_vec();
         vlan.extend_from_slice(&[0x81, 0x00, 0x00, 0x05]);
         vlan.extend_from_slice(&eth[12..]);
-        assert!(matches!(extract(linktype::ETHERNET, &vlan), Extract::Udp(_)));
+        assert!(matches!(
+            extract(linktype::ETHERNET, &vlan),
+            Extract::Udp(_)
+        ));
         // first fragment: MF set
         let mut frag = eth.clone();
         frag[14 + 6] = 0x20;

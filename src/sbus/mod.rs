@@ -311,13 +311,7 @@ fn totals_line(t: &Totals, ether: bool) -> String {
             s,
             "\npackets {}, S-Bus datagrams {}, not S-Bus on the port {}, IP fragments skipped {}, \
              unparsable packets {}, other link types {}, sequence gaps {}",
-            t.packets,
-            t.datagrams,
-            t.not_sbus,
-            t.fragments,
-            t.malformed,
-            t.other_links,
-            t.seq_gaps
+            t.packets, t.datagrams, t.not_sbus, t.fragments, t.malformed, t.other_links, t.seq_gaps
         );
     } else {
         let _ = write!(
@@ -365,10 +359,18 @@ fn problems_line(t: &Totals) -> Option<String> {
         ));
     }
     if t.fragments > 0 {
-        parts.push(plural(t.fragments, "IP fragment skipped", "IP fragments skipped"));
+        parts.push(plural(
+            t.fragments,
+            "IP fragment skipped",
+            "IP fragments skipped",
+        ));
     }
     if t.malformed > 0 {
-        parts.push(plural(t.malformed, "unparsable packet", "unparsable packets"));
+        parts.push(plural(
+            t.malformed,
+            "unparsable packet",
+            "unparsable packets",
+        ));
     }
     if let Some(e) = &t.pcap_error {
         parts.push(format!("capture error: {e}"));
@@ -526,8 +528,11 @@ fn timeout_note(sc: &mut Scratch, why: TimeoutWhy, timeout_us: u64) {
 fn ack_text(sc: &mut Scratch, code: u16, short: Option<(u8, bool)>) -> &'static str {
     match short {
         Some((ch, two)) => {
-            sc.data
-                .push_str(if ch == telegram::ACK_CHAR { "ACK" } else { "NAK" });
+            sc.data.push_str(if ch == telegram::ACK_CHAR {
+                "ACK"
+            } else {
+                "NAK"
+            });
             if two {
                 sc.note("sent as 2 bytes (character + 00)");
             }
@@ -600,7 +605,12 @@ struct SerialCore {
 
 impl SerialDecoder {
     pub fn new(opts: Options) -> Self {
-        let gap = |bits| Some(opts.gap_ms.map_or(default_gap_us(opts.baud, bits), |g| g * 1000));
+        let gap = |bits| {
+            Some(
+                opts.gap_ms
+                    .map_or(default_gap_us(opts.baud, bits), |g| g * 1000),
+            )
+        };
         let timeout = |data_mode| {
             Some(
                 opts.timeout_ms
@@ -618,8 +628,12 @@ impl SerialDecoder {
                 decided: None,
             },
             Mode::Data | Mode::Secure => Framer::Data(Box::new(DataFramer::new(gap(10)))),
-            Mode::Break => Framer::Break(Box::new(BreakFramer::new(false, gap(10), timeout(false)))),
-            Mode::Parity => Framer::Break(Box::new(BreakFramer::new(true, gap(11), timeout(false)))),
+            Mode::Break => {
+                Framer::Break(Box::new(BreakFramer::new(false, gap(10), timeout(false))))
+            }
+            Mode::Parity => {
+                Framer::Break(Box::new(BreakFramer::new(true, gap(11), timeout(false))))
+            }
         };
         let mut names = vec![None; 256];
         for (n, a) in &opts.stations {
@@ -781,10 +795,9 @@ impl SerialCore {
             sc.seq(s);
         }
         timeout_note(sc, why, self.pairing.timeout);
-        let device = match self.names[p.info.station as usize].as_deref() {
-            Some(n) => n,
-            None => "PCD",
-        };
+        let device = self.names[p.info.station as usize]
+            .as_deref()
+            .unwrap_or("PCD");
         put_row(
             out,
             &self.tsc,
@@ -1074,7 +1087,12 @@ impl SerialCore {
                 let kind = ack_text(&mut self.sc, code, short);
                 if let Answer::Paired { req, .. } = answer {
                     if let Some(e) = req.info.elem {
-                        telegram::push_elem(&mut self.sc.sensor_no, e, req.info.block, req.info.addr);
+                        telegram::push_elem(
+                            &mut self.sc.sensor_no,
+                            e,
+                            req.info.block,
+                            req.info.addr,
+                        );
                     }
                     let st = &mut self.per[req.info.station as usize];
                     if code == 0 {
@@ -1111,12 +1129,32 @@ impl SerialCore {
                 self.sc.note_with(|n| {
                     let _ = write!(n, "unknown attribute 0x{at:02X}");
                 });
-                put_row(out, &self.sc, t, None, "", "Unknown", Class::Warning, "", f.wire)
+                put_row(
+                    out,
+                    &self.sc,
+                    t,
+                    None,
+                    "",
+                    "Unknown",
+                    Class::Warning,
+                    "",
+                    f.wire,
+                )
             }
             Tele::Broken => {
                 self.totals.broken += 1;
                 push_hex(&mut self.sc.data, f.wire);
-                put_row(out, &self.sc, t, None, "", "Truncated", Class::Error, "", f.wire)
+                put_row(
+                    out,
+                    &self.sc,
+                    t,
+                    None,
+                    "",
+                    "Truncated",
+                    Class::Error,
+                    "",
+                    f.wire,
+                )
             }
         }
     }
@@ -1522,7 +1560,17 @@ impl EtherCore {
                                 "fragmented IP datagram {src}:{sp} -> {dst}:{dp} skipped (not reassembled)"
                             );
                         });
-                        put_row(out, &self.sc, t, None, "", "Fragment", Class::Warning, "", &[])
+                        put_row(
+                            out,
+                            &self.sc,
+                            t,
+                            None,
+                            "",
+                            "Fragment",
+                            Class::Warning,
+                            "",
+                            &[],
+                        )
                     }
                     _ => Ok(()),
                 }
@@ -1543,7 +1591,17 @@ impl EtherCore {
                             "packets with link type {lt} are not network traffic; busnoop sbus reads Ethernet, Linux cooked, raw IP and loopback captures"
                         );
                     });
-                    return put_row(out, &self.sc, t, None, "", "Skipped", Class::Warning, "", &[]);
+                    return put_row(
+                        out,
+                        &self.sc,
+                        t,
+                        None,
+                        "",
+                        "Skipped",
+                        Class::Warning,
+                        "",
+                        &[],
+                    );
                 }
                 Ok(())
             }
@@ -1627,7 +1685,17 @@ impl EtherCore {
                     n.push_str(why.text());
                     let _ = write!(n, " ({} -> {})", u.src, u.dst);
                 });
-                return put_row(out, &self.sc, t, None, "", kind, Class::Error, "", u.payload);
+                return put_row(
+                    out,
+                    &self.sc,
+                    t,
+                    None,
+                    "",
+                    kind,
+                    Class::Error,
+                    "",
+                    u.payload,
+                );
             }
         };
         self.totals.datagrams += 1;

@@ -108,7 +108,10 @@ pub enum RequestKind {
     New,
     /// The same request again: `n` is the retry number (1 = second transmission), `since` the
     /// time since the first transmission (µs).
-    Retry { n: u8, since: u64 },
+    Retry {
+        n: u8,
+        since: u64,
+    },
 }
 
 /// What an answer was paired with.
@@ -284,15 +287,22 @@ impl EtherPairing {
     }
 
     /// A request on conversation `conv` with sequence `seq`.
-    pub fn request(&mut self, conv: u32, seq: u16, req: Outstanding) -> (RequestKind, Option<SeqGap>) {
+    pub fn request(
+        &mut self,
+        conv: u32,
+        seq: u16,
+        req: Outstanding,
+    ) -> (RequestKind, Option<SeqGap>) {
         let last = self.conv(conv).last_seq;
         self.conv(conv).last_seq = Some(seq);
         if last == Some(seq) {
-            let prev = self
-                .map
-                .get(&(conv, seq))
-                .copied()
-                .or_else(|| self.late.iter().rev().find(|(k, _)| *k == (conv, seq)).map(|e| e.1));
+            let prev = self.map.get(&(conv, seq)).copied().or_else(|| {
+                self.late
+                    .iter()
+                    .rev()
+                    .find(|(k, _)| *k == (conv, seq))
+                    .map(|e| e.1)
+            });
             if let Some(p) = prev {
                 let mut next = req;
                 next.first = p.first;
@@ -422,7 +432,10 @@ mod tests {
     fn serial_retry_timeout_and_late() {
         let mut p = SerialPairing::new(375_000);
         let r = Outstanding::new(info(1), 0, true, None);
-        assert_eq!(p.request(&[1, 6, 0, 0, 0], r, true), (RequestKind::New, None));
+        assert_eq!(
+            p.request(&[1, 6, 0, 0, 0], r, true),
+            (RequestKind::New, None)
+        );
         assert_eq!(p.expire(100_000), None);
         let t = p.expire(400_000).unwrap();
         assert_eq!(t.info.station, 1);
@@ -430,7 +443,13 @@ mod tests {
         // the retry: no second Timeout row (already reported)
         let r2 = Outstanding::new(info(1), 400_000, true, None);
         let (kind, prev) = p.request(&[1, 6, 0, 0, 0], r2, true);
-        assert_eq!(kind, RequestKind::Retry { n: 1, since: 400_000 });
+        assert_eq!(
+            kind,
+            RequestKind::Retry {
+                n: 1,
+                since: 400_000
+            }
+        );
         assert_eq!(prev, None);
         match p.answer(900_000, None) {
             Answer::Paired { elapsed, late, req } => {
@@ -457,7 +476,10 @@ mod tests {
         p.request(&[5, 6, 0, 0, 0], r, true);
         assert!(matches!(p.answer(10, Some(2)), Answer::SeqMismatch { .. }));
         // a standard answer to a secure request is normal
-        assert!(matches!(p.answer(20, None), Answer::Paired { late: false, .. }));
+        assert!(matches!(
+            p.answer(20, None),
+            Answer::Paired { late: false, .. }
+        ));
     }
 
     #[test]
@@ -466,12 +488,18 @@ mod tests {
         let r = |t| Outstanding::new(info(75), t, true, None);
         assert_eq!(p.request(0, 1, r(0)), (RequestKind::New, None));
         assert_eq!(p.request(1, 1, r(10)), (RequestKind::New, None));
-        assert!(matches!(p.answer(1, 1, 50), Answer::Paired { elapsed: 40, .. }));
+        assert!(matches!(
+            p.answer(1, 1, 50),
+            Answer::Paired { elapsed: 40, .. }
+        ));
         assert_eq!(
             p.request(0, 1, r(500)),
             (RequestKind::Retry { n: 1, since: 500 }, None)
         );
-        assert!(matches!(p.answer(0, 1, 600), Answer::Paired { elapsed: 100, .. }));
+        assert!(matches!(
+            p.answer(0, 1, 600),
+            Answer::Paired { elapsed: 100, .. }
+        ));
         assert_eq!(p.answer(0, 1, 700), Answer::NoRequest);
         let (k, gap) = p.request(0, 5, r(800));
         assert_eq!(k, RequestKind::New);
@@ -482,6 +510,9 @@ mod tests {
         p.expire(1_900_000, &mut out);
         assert_eq!(out.len(), 1);
         // late answer still pairs
-        assert!(matches!(p.answer(0, 5, 2_000_000), Answer::Paired { late: true, .. }));
+        assert!(matches!(
+            p.answer(0, 5, 2_000_000),
+            Answer::Paired { late: true, .. }
+        ));
     }
 }

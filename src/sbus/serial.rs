@@ -16,8 +16,8 @@
 
 use super::commands::{self, Expect};
 use super::telegram::{
-    ACK_CHAR, AT_ACKNAK, AT_REQUEST, AT_RESPONSE, AT_SECURE_REQUEST, AT_SECURE_RESPONSE,
-    BROADCAST, CrcBasis, DLE, FS, NAK_CHAR, crc_step, crc16,
+    ACK_CHAR, AT_ACKNAK, AT_REQUEST, AT_RESPONSE, AT_SECURE_REQUEST, AT_SECURE_RESPONSE, BROADCAST,
+    CrcBasis, DLE, FS, NAK_CHAR, crc_step, crc16,
 };
 
 /// Garbage is reported in runs of at most this many bytes.
@@ -593,14 +593,20 @@ impl ReqAt {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Found {
     Request(ReqAt),
-    Response { len: usize, crc_ok: bool, mismatch: bool },
-    Ack { two: bool },
+    Response {
+        len: usize,
+        crc_ok: bool,
+        mismatch: bool,
+    },
+    Ack {
+        two: bool,
+    },
 }
 
 /// Lengths tried when a response does not fit the request and is looked for by its CRC:
 /// what the command table's replies can be (1-16 bytes, 26, and whole registers up to 32).
 fn plausible_response_len(n: usize) -> bool {
-    n <= 16 || n == 26 || (n % 4 == 0 && n <= 128)
+    n <= 16 || n == 26 || (n.is_multiple_of(4) && n <= 128)
 }
 
 /// Pure SM0 (break) / SM1 (parity) reassembler.
@@ -738,7 +744,7 @@ impl BreakFramer {
                 [
                     Some(ReqBreak),
                     Some(Resp(n)),
-                    Some(AckStep),
+                    Some(AckStrict),
                     self.fresh.then_some(OtherResp(n)),
                     Some(BadReq),
                     Some(AckBreak),
@@ -748,7 +754,7 @@ impl BreakFramer {
             } else {
                 [
                     Some(Resp(n)),
-                    Some(AckStep),
+                    Some(AckStrict),
                     Some(Req),
                     self.fresh.then_some(OtherResp(n)),
                     Some(AckBreak),
@@ -763,7 +769,11 @@ impl BreakFramer {
             (self.timeout, self.req_time, self.times.get(self.head)),
             (Some(to), Some(rt), Some(Some(t))) if *t > rt.saturating_add(to.saturating_mul(3))
         );
-        let awaiting = if lapsed { Await::Request } else { self.awaiting };
+        let awaiting = if lapsed {
+            Await::Request
+        } else {
+            self.awaiting
+        };
         match awaiting {
             Await::Request | Await::Answer(Expect::Nothing) => {
                 order[..3].copy_from_slice(&[Some(Req), Some(BadReq), Some(StrayAck)]);
@@ -780,7 +790,7 @@ impl BreakFramer {
             }
             Await::Answer(Expect::Unknown) => {
                 order[..5].copy_from_slice(&[
-                    Some(AckStep),
+                    Some(AckStrict),
                     Some(Req),
                     self.fresh.then_some(AnyResp),
                     Some(AckRelaxed),
@@ -797,12 +807,16 @@ impl BreakFramer {
                     other => map(other, Found::Request),
                 },
                 BadReq => map(self.bad_req_at(b, at_end), Found::Request),
-                StrayAck | AckStep => {
-                    map(self.ack_at(b, 0, at_end, Relax::No), |two| Found::Ack { two })
-                }
-                AckRelaxed => map(self.ack_at(b, 0, at_end, Relax::Any), |two| Found::Ack { two }),
+                StrayAck | AckStrict => map(self.ack_at(b, 0, at_end, Relax::No), |two| {
+                    Found::Ack { two }
+                }),
+                AckRelaxed => map(self.ack_at(b, 0, at_end, Relax::Any), |two| Found::Ack {
+                    two,
+                }),
                 AckBreak if self.breaks_seen => {
-                    map(self.ack_at(b, 0, at_end, Relax::Break), |two| Found::Ack { two })
+                    map(self.ack_at(b, 0, at_end, Relax::Break), |two| Found::Ack {
+                        two,
+                    })
                 }
                 AckBreak => Cand::No,
                 Resp(n) => match resp_at(b, 0, n, at_end) {
@@ -1004,7 +1018,8 @@ impl BreakFramer {
                     if relaxed == Relax::Break && skip == 0 {
                         continue;
                     }
-                    if b.get(e..e + skip).is_some_and(|z| z.iter().all(|&x| x == 0))
+                    if b.get(e..e + skip)
+                        .is_some_and(|z| z.iter().all(|&x| x == 0))
                         && let Cand::Match(_) = request_len(b, e + skip, at_end)
                     {
                         return Cand::Match(());
@@ -1200,7 +1215,7 @@ enum Step {
     ReqBreak,
     BadReq,
     StrayAck,
-    AckStep,
+    AckStrict,
     AckRelaxed,
     AckBreak,
     Resp(usize),

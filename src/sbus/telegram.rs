@@ -391,7 +391,7 @@ pub fn describe_request(
             info.addr = be(&body[1..3]);
             push_elem(sensor_no, e, 0, info.addr);
             let values = &body[3..];
-            if values.len() % 4 != 0 || body[0] as usize + 1 != body.len() - 1 {
+            if !values.len().is_multiple_of(4) || body[0] as usize + 1 != body.len() - 1 {
                 problem = problem.or(Some("w-count does not fit the values"));
             }
             push_words(data, e, 0, info.addr, values);
@@ -410,7 +410,7 @@ pub fn describe_request(
             info.addr = be(&body[3..5]);
             push_elem(sensor_no, Elem::DataBlock, info.block, info.addr);
             let values = &body[5..];
-            if values.len() % 4 != 0 {
+            if !values.len().is_multiple_of(4) {
                 problem = problem.or(Some("w-count does not fit the values"));
             }
             push_words(data, Elem::DataBlock, info.block, info.addr, values);
@@ -534,7 +534,10 @@ mod tests {
         assert_eq!(v, parse_hex("B5 00 01 06 03 00 00 5F 4B").unwrap());
         v.clear();
         encode_secure(&mut v, 0x10, 3, 0, &[5, 6, 0, 0, 0xB5], CrcBasis::Escaped);
-        assert_eq!(v, parse_hex("B5 10 09 03 B5 00 05 06 00 00 C5 00 94 C6").unwrap());
+        assert_eq!(
+            v,
+            parse_hex("B5 10 09 03 B5 00 05 06 00 00 C5 00 94 C6").unwrap()
+        );
         v.clear();
         encode_break_request(&mut v, 2, 6, &[0, 0, 0x0A]);
         assert_eq!(v, parse_hex("02 06 00 00 0A C2 50").unwrap());
@@ -577,7 +580,10 @@ mod tests {
         let (s, d, _) = req(10, 0x0A, "05 00 03 FF FF FF FF");
         assert_eq!((s.as_str(), d.as_str()), ("C3", "C3=4294967295"));
         let (s, d, _) = req(10, 0x96, "01 0F A0 00 02");
-        assert_eq!((s.as_str(), d.as_str()), ("DB4000[2]", "DB4000[2]..DB4000[3]"));
+        assert_eq!(
+            (s.as_str(), d.as_str()),
+            ("DB4000[2]", "DB4000[2]..DB4000[3]")
+        );
         let (s, _, t) = req(255, 0x06, "00 00 00");
         assert_eq!(s, "R0");
         assert_eq!(t.info.expect, Expect::Nothing);

@@ -210,7 +210,9 @@ impl SessionGen {
     fn acknak_bytes(&mut self, code: u16) -> Vec<u8> {
         let mut v = Vec::new();
         match self.mode {
-            SMode::Data | SMode::Secure => encode_data(&mut v, 2, &code.to_be_bytes(), CrcBasis::Both),
+            SMode::Data | SMode::Secure => {
+                encode_data(&mut v, 2, &code.to_be_bytes(), CrcBasis::Both)
+            }
             SMode::Break | SMode::Parity => {
                 v.push(if code == 0 { 0x06 } else { 0x15 });
                 if self.rng.below(3) == 0 {
@@ -265,7 +267,9 @@ impl SessionGen {
             3 => {
                 let bits = 1 + self.rng.below(20) as u8;
                 let body = vec![bits - 1, ah, al];
-                let data: Vec<u8> = (0..(bits as usize).div_ceil(8)).map(|_| self.rng.byte()).collect();
+                let data: Vec<u8> = (0..(bits as usize).div_ceil(8))
+                    .map(|_| self.rng.byte())
+                    .collect();
                 let r = self.request_bytes(station, 2, &body, false);
                 self.put(r);
                 self.expect.push(sig("Request", id, &format!("F{addr}")));
@@ -386,7 +390,8 @@ impl SessionGen {
                 body.extend((0..4).map(|_| self.rng.byte()));
                 let r = self.request_bytes(255, 0x0E, &body, false);
                 self.put(r);
-                self.expect.push(sig("Request", Some(255), &format!("R{addr}")));
+                self.expect
+                    .push(sig("Request", Some(255), &format!("R{addr}")));
             }
         }
         self.between();
@@ -558,7 +563,11 @@ fn session_statistics_count_what_happened() {
     let stats = d.stats();
     assert!(stats.contains("Requests"), "{stats}");
     // the data mode's CRC basis is recorded
-    assert!(t.basis[0] + t.basis[1] > 0, "DLE telegrams seen: {:?}", t.basis);
+    assert!(
+        t.basis[0] + t.basis[1] > 0,
+        "DLE telegrams seen: {:?}",
+        t.basis
+    );
 }
 
 #[test]
@@ -593,8 +602,9 @@ fn late_responses_and_response_times() {
 #[test]
 fn untimed_files_get_byte_times() {
     // 9 + 9 bytes at 9600 baud 8N1: the response starts at byte 9 = 9.375 ms.
-    let bytes = crate::fmt::parse_hex("B5 00 02 06 01 00 64 F3 DB B5 01 00 00 01 63 00 00 00 BB C4 E2")
-        .unwrap();
+    let bytes =
+        crate::fmt::parse_hex("B5 00 02 06 01 00 64 F3 DB B5 01 00 00 01 63 00 00 00 BB C4 E2")
+            .unwrap();
     let rows = run(&mut decoder(SMode::Data), &[(bytes, None)]);
     assert_eq!(rows[1].micros, Some(9_375));
     assert_eq!(rows[1].data, "R100=355 R101=187");
@@ -608,7 +618,11 @@ fn secure_sequence_mismatch_is_flagged() {
     encode_secure(&mut v, 0x11, 6, 1, &[0, 0, 0, 1], CrcBasis::Both);
     let rows = run(&mut decoder(SMode::Secure), &[(v, None)]);
     assert_eq!(rows[1].kind, "Response");
-    assert!(rows[1].extra[2].contains("SEQ does not match"), "{:?}", rows[1]);
+    assert!(
+        rows[1].extra[2].contains("SEQ does not match"),
+        "{:?}",
+        rows[1]
+    );
     assert_eq!(rows[1].extra[1], "6");
 }
 
@@ -628,7 +642,12 @@ fn station_names_and_pgu_notes() {
     let mut v = Vec::new();
     encode_data(&mut v, 0, &[10, 0x44], CrcBasis::Both); // stop procedure (all CPUs)
     encode_data(&mut v, 2, &[0, 0], CrcBasis::Both);
-    encode_data(&mut v, 0, &[10, 0x51, 5, 0, 0, 0x10, 1, 2, 3, 4], CrcBasis::Both);
+    encode_data(
+        &mut v,
+        0,
+        &[10, 0x51, 5, 0, 0, 0x10, 1, 2, 3, 4],
+        CrcBasis::Both,
+    );
     let mut d = SerialDecoder::new(Options {
         mode: Mode::Data,
         stations: vec![("Boiler".into(), 10)],
@@ -795,6 +814,31 @@ fn telegram_encoder_helpers_agree() {
     assert_eq!(telegram::crc16(&[]), 0);
 }
 
-
-
-
+/// How often generated sessions (with bit errors, timeouts and late answers) are framed
+/// differently from how they were made: run with `cargo test --release -- --ignored
+/// framing_error_rate --nocapture`; the figures are in docs/sbus.md.
+#[test]
+#[ignore]
+fn framing_error_rate() {
+    for mode in [SMode::Data, SMode::Secure, SMode::Break, SMode::Parity] {
+        for timed in [false, true] {
+            let (mut bad, mut exchanges) = (0, 0);
+            let sessions = 4000u64;
+            for seed in 0..sessions {
+                let g = session(
+                    mode,
+                    timed,
+                    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
+                    25,
+                );
+                exchanges += 25;
+                if sigs(&run(&mut decoder(mode), &g.segments)) != g.expect {
+                    bad += 1;
+                }
+            }
+            println!(
+                "{mode:?} timed={timed}: {bad} of {sessions} sessions ({exchanges} exchanges) differ"
+            );
+        }
+    }
+}
