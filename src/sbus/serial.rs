@@ -857,8 +857,8 @@ impl BreakFramer {
                     if b.len() < n + 2 {
                         if at_end { Cand::No } else { Cand::More }
                     } else {
-                        let ok = match self.clean_inside(b, n + 2, at_end) {
-                            Cand::Match(()) => self.boundary(b, n + 2, at_end),
+                        let ok = match self.boundary(b, n + 2, at_end) {
+                            Cand::Match(()) => self.clean_inside(b, n + 2, at_end),
                             other => other,
                         };
                         map(ok, |()| Found::Response {
@@ -955,8 +955,9 @@ impl BreakFramer {
                         body,
                         crc_ok: false,
                     };
-                    let ok = match self.clean_inside(b, r.total(), at_end) {
-                        Cand::Match(()) => self.boundary(b, r.total(), at_end),
+                    // (the boundary first: it is cheap and rules out most garbage)
+                    let ok = match self.boundary(b, r.total(), at_end) {
+                        Cand::Match(()) => self.clean_inside(b, r.total(), at_end),
                         other => other,
                     };
                     match ok {
@@ -1079,8 +1080,8 @@ impl BreakFramer {
     /// needs that second confirmation.
     fn clean_search(&self, b: &[u8], at_end: bool, expected: Option<usize>) -> Cand<usize> {
         match self.search_resp(b, at_end, expected) {
-            Cand::Match(len) => match self.clean_inside(b, len + 2, at_end) {
-                Cand::Match(()) => map(self.boundary(b, len + 2, at_end), |()| len),
+            Cand::Match(len) => match self.boundary(b, len + 2, at_end) {
+                Cand::Match(()) => map(self.clean_inside(b, len + 2, at_end), |()| len),
                 other => map(other, |()| len),
             },
             other => other,
