@@ -8,16 +8,19 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::decoder::Decoder;
 use crate::exit::{Failure, code};
-use crate::run::{Stop, drive};
+use crate::record::{Recorder, RecordingReader};
+use crate::run::{Context, Stop, drive};
 use crate::sink::{Format, Output, Table, TableOptions};
+use crate::source::serial::{self, SerialConfig, SerialReader};
 use crate::source::{self, ChunkReader, Input, Kind};
 
 #[derive(Parser, Debug)]
 #[command(
     name = "busnoop",
     version,
-    about = "Passive bus sniffer: reassembles FrSky S.Port frames from a capture or a pipe and \
-             prints the S-Port_Snoop log table as coloured text, TSV, CSV or JSON Lines.",
+    about = "Passive bus sniffer: listens to a serial bus (or replays a capture), reassembles \
+             every frame and prints the S-Port_Snoop log table as coloured text, TSV, CSV or \
+             JSON Lines.",
     after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
                   130 Ctrl-C, 141 output closed, 143 SIGTERM."
@@ -33,29 +36,26 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC.
+    /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC (57600 baud).
     Sport(SportArgs),
-    /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes, and Ether-S-Bus
-    /// (UDP 5050) from pcap/pcapng files or a `tcpdump -w -` pipe.
+    /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
+    /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
     Sbus(SbusArgs),
+    /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
+    Ports,
 }
 
 #[derive(Args, Debug)]
 pub struct SbusArgs {
-    /// Capture to read: a raw `.bin` of serial wire bytes, a pcap/pcapng file of Ether-S-Bus
-    /// traffic, or `-` for standard input (`tcpdump -i IFACE -U -w - udp port 5050 | busnoop
-    /// sbus -`). The kind is recognised by content.
-    pub source: String,
+    /// SOURCE may also be a pcap/pcapng capture of Ether-S-Bus traffic (or a `tcpdump -U -w -`
+    /// pipe on standard input); `--baud` also sets the byte times of raw files.
+    #[command(flatten)]
+    pub capture: CaptureArgs,
 
     /// Serial mode; auto picks data/secure mode when the stream uses 0xB5 framing, break mode
     /// otherwise.
     #[arg(long, value_enum, default_value_t = crate::sbus::Mode::Auto)]
     pub mode: crate::sbus::Mode,
-
-    /// Serial baud rate: the default master timeout and, for files without time, the time of
-    /// each byte (10 bits per byte, 11 in parity mode) follow from it.
-    #[arg(long, default_value_t = crate::sbus::DEFAULT_BAUD)]
-    pub baud: u32,
 
     /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
     /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
@@ -74,19 +74,46 @@ pub struct SbusArgs {
     /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
     #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT)]
     pub port: u16,
-
-    #[command(flatten)]
-    pub output: OutputArgs,
 }
 
 #[derive(Args, Debug)]
 pub struct SportArgs {
-    /// Capture to read: a raw `.bin` of wire bytes, an EdgeTX/OpenTX S.Port debug log, or `-`
-    /// for standard input. The kind is recognised by content.
+    #[command(flatten)]
+    pub capture: CaptureArgs,
+}
+
+/// SOURCE and the options every protocol shares.
+#[derive(Args, Debug, Clone)]
+pub struct CaptureArgs {
+    /// What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a capture file
+    /// (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap recording, a pcap of the protocol's
+    /// network traffic) or `-` for standard input. File kinds are recognised by content.
     pub source: String,
 
     #[command(flatten)]
     pub output: OutputArgs,
+
+    #[command(flatten)]
+    pub live: LiveArgs,
+}
+
+/// Options for live capture.
+#[derive(Args, Debug, Clone, Default)]
+pub struct LiveArgs {
+    /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600, sbus
+    /// 9600]
+    #[arg(long, value_name = "BAUD")]
+    pub baud: Option<u32>,
+
+    /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
+    /// number), go on, and mark the gap with a row.
+    #[arg(long)]
+    pub reconnect: bool,
+
+    /// Keep what came off the wire while decoding: FILE.pcap with arrival times (busnoop replays
+    /// it with the original Millis; Wireshark opens it), any other name: the raw bytes.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
 }
 
 /// When to colour pretty output.
@@ -141,13 +168,14 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
-    fn table_options(&self, to_terminal: bool) -> TableOptions {
+    /// The table options for an output that is (or is not) a terminal, given whether the
+    /// `NO_COLOR` environment variable is set to a non-empty value.
+    fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
         let format = self.format.unwrap_or_else(|| match &self.output {
             Some(p) => Format::from_path(p).unwrap_or(Format::Tsv),
             None if to_terminal => Format::Pretty,
             None => Format::Tsv,
         });
-        let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
         let color = format == Format::Pretty
             && match self.color {
                 ColorChoice::Always => true,
@@ -209,94 +237,190 @@ fn init_tracing(verbose: u8) {
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Sport(args) => {
-            run_capture(&args.source, &args.output, "S.Port", |kind, opened| {
-                let reader: Box<dyn ChunkReader> = match kind {
-                    Kind::Raw => Box::new(source::RawReader::new(opened)),
-                    Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
-                    Kind::Pcap | Kind::Pcapng => {
-                        return Err(Failure::Input(format!(
-                            "{} is a pcap file; S.Port captures are raw .bin files or EdgeTX logs",
-                            opened.name
-                        )));
-                    }
-                };
-                Ok(Plan {
-                    decoder: Box::new(crate::sport::SportDecoder::new()),
-                    reader,
-                })
-            })
+            run_capture(
+                &args.capture,
+                &crate::sport::PROTOCOL,
+                |kind, _| match kind {
+                    Kind::Pcap | Kind::Pcapng => Err(Failure::Input(
+                        "this is a pcap of network traffic; S.Port captures are raw wire bytes, \
+                     EdgeTX logs or busnoop recordings"
+                            .into(),
+                    )),
+                    _ => Ok(Box::new(crate::sport::SportDecoder::new())),
+                },
+            )
         }
-        Command::Sbus(args) => run_capture(&args.source, &args.output, "S-Bus", |kind, opened| {
-            sbus_plan(&args, kind, opened)
+        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, cfg| {
+            sbus_decoder(&args, kind, cfg)
         }),
+        Command::Ports => list_ports(),
     }
 }
 
-/// The S-Bus plan: serial decoder for raw bytes, Ether-S-Bus decoder for captures.
-fn sbus_plan(args: &SbusArgs, kind: Kind, opened: source::Opened) -> Result<Plan, Failure> {
+/// The S-Bus decoder for an input kind: serial bytes (raw files, devices, busnoop recordings)
+/// or Ether-S-Bus captures.
+fn sbus_decoder(
+    args: &SbusArgs,
+    kind: Kind,
+    cfg: &SerialConfig,
+) -> Result<Box<dyn Decoder>, Failure> {
     let opts = crate::sbus::Options {
         mode: args.mode,
-        baud: args.baud,
+        baud: cfg.baud,
         timeout_ms: args.timeout_ms,
         gap_ms: args.gap_ms,
         stations: args.stations.clone(),
         port: args.port,
     };
-    let decoder: Box<dyn Decoder> = match kind {
-        Kind::Raw => Box::new(crate::sbus::SerialDecoder::new(opts)),
-        Kind::Pcap | Kind::Pcapng => Box::new(crate::sbus::EtherDecoder::new(&opts)),
-        Kind::EdgeTxLog => {
-            return Err(Failure::Input(format!(
-                "{} is an EdgeTX/OpenTX S.Port log; S-Bus captures are raw serial .bin files or \
-                 pcap/pcapng files of Ether-S-Bus traffic",
-                opened.name
-            )));
+    match kind {
+        Kind::Raw | Kind::Serial | Kind::Recording => {
+            Ok(Box::new(crate::sbus::SerialDecoder::new(opts)))
         }
-    };
-    Ok(Plan {
-        decoder,
-        reader: Box::new(source::RawReader::new(opened)),
-    })
+        Kind::Pcap | Kind::Pcapng => Ok(Box::new(crate::sbus::EtherDecoder::new(&opts))),
+        Kind::EdgeTxLog => Err(Failure::Input(
+            "this is an EdgeTX/OpenTX S.Port log; S-Bus captures are raw serial bytes, busnoop \
+             recordings or pcap/pcapng files of Ether-S-Bus traffic"
+                .into(),
+        )),
+    }
 }
 
-/// What to run on an opened input: the protocol decoder and the reader for the input's kind.
-pub struct Plan {
-    pub decoder: Box<dyn Decoder>,
-    pub reader: Box<dyn ChunkReader>,
+/// What a protocol tells the shared command-line code.
+pub struct Protocol {
+    /// Name in messages ("S.Port").
+    pub name: &'static str,
+    /// Character format and default speed of a live line.
+    pub serial: SerialConfig,
 }
 
-/// Opens SOURCE, lets `plan` pick a decoder and a reader for its kind, decodes it into the
-/// table and prints the summary.
+/// Opens SOURCE (a device, a file or standard input), picks the reader for its kind, asks
+/// `decoder_for` for the protocol decoder, decodes everything into the table and prints the
+/// summary.
 pub fn run_capture(
-    source_arg: &str,
-    out: &OutputArgs,
-    protocol: &str,
-    plan: impl FnOnce(Kind, source::Opened) -> Result<Plan, Failure>,
+    args: &CaptureArgs,
+    protocol: &Protocol,
+    decoder_for: impl FnOnce(Kind, &SerialConfig) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
-    let input = Input::parse(source_arg);
-    let opened = source::open(&input)?;
-    tracing::info!("{}: detected {:?}", opened.name, opened.kind);
-    let Plan {
-        mut decoder,
-        reader,
-    } = plan(opened.kind, opened)?;
+    let mut cfg = protocol.serial;
+    if let Some(b) = args.live.baud {
+        cfg.baud = b;
+    }
+    let (kind, reader) = open_source(&args.source, &cfg, args.live.reconnect)?;
+    tracing::info!("{}: {:?}", args.source, kind);
+    let mut decoder = decoder_for(kind, &cfg)?;
 
+    let mut recorder = match &args.live.record {
+        Some(p) => Some(Recorder::create(
+            p,
+            matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording),
+        )?),
+        None => None,
+    };
+    let out = &args.output;
     let output = match &out.output {
         Some(p) => Output::create(p)
             .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
         None => Output::stdout(),
     };
     let to_terminal = out.output.is_none() && std::io::stdout().is_terminal();
-    let mut table = Table::new(output, out.table_options(to_terminal), decoder.columns());
+    let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+    let mut table = Table::new(
+        output,
+        out.table_options(to_terminal, no_color_env),
+        decoder.columns(),
+    );
     let rx = source::spawn(reader);
+    let ctx = Context {
+        stop: &stop,
+        recorder: recorder.as_mut(),
+        protocol: protocol.name,
+        live: kind == Kind::Serial,
+    };
     let result = table
         .header()
         .map_err(Failure::from)
-        .and_then(|()| drive(decoder.as_mut(), &rx, &mut table, &stop));
-    report(decoder.as_ref(), out.stats, protocol, table.rows(), &result);
+        .and_then(|()| drive(decoder.as_mut(), &rx, &mut table, ctx));
+    report(
+        decoder.as_ref(),
+        out.stats,
+        protocol.name,
+        table.rows(),
+        &result,
+    );
     result
+}
+
+/// Opens SOURCE and returns its kind with the reader for it.
+fn open_source(
+    arg: &str,
+    cfg: &SerialConfig,
+    reconnect: bool,
+) -> Result<(Kind, Box<dyn ChunkReader>), Failure> {
+    let input = Input::parse(arg);
+    if let Input::Device(path) = &input {
+        match serial::open(path, cfg) {
+            Ok(port) => {
+                if let Some(w) = serial::latency_warning(path, std::path::Path::new("/sys")) {
+                    eprintln!("busnoop: note: {w}");
+                }
+                let reader = SerialReader::new(path, port, *cfg, reconnect);
+                return Ok((Kind::Serial, Box::new(reader)));
+            }
+            // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
+            Err(e) if serial::is_not_a_tty(&e) => {}
+            Err(e) => return Err(serial::open_failure(path, &e)),
+        }
+    }
+    let opened = source::open(&input)?;
+    let kind = opened.kind;
+    let reader: Box<dyn ChunkReader> = match kind {
+        Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
+        Kind::Recording => Box::new(RecordingReader::new(opened)),
+        Kind::Raw | Kind::Pcap | Kind::Pcapng | Kind::Serial => {
+            Box::new(source::RawReader::new(opened))
+        }
+    };
+    Ok((kind, reader))
+}
+
+/// `busnoop ports`.
+fn list_ports() -> Result<(), Failure> {
+    let ports = serial::list_ports();
+    if ports.is_empty() {
+        eprintln!("busnoop: no serial ports found");
+        return Ok(());
+    }
+    let mut text = String::new();
+    text.push_str("PORT\tTYPE\tVID:PID\tSERIAL\tMANUFACTURER\tPRODUCT\tBY-ID\n");
+    for p in ports {
+        let vid_pid = p
+            .vid_pid
+            .map_or(String::new(), |(v, pid)| format!("{v:04x}:{pid:04x}"));
+        text.push_str(&format!(
+            "{}\t{}\t{}\t{}\t{}\t{}\t{}\n",
+            p.name,
+            p.kind,
+            vid_pid,
+            p.serial_number.unwrap_or_default(),
+            p.manufacturer.unwrap_or_default(),
+            p.product.unwrap_or_default(),
+            p.by_id.map(|b| b.display().to_string()).unwrap_or_default()
+        ));
+    }
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
+        Err(e) => Err(Failure::Output(format!(
+            "cannot write to standard output: {e}"
+        ))),
+    }
 }
 
 /// The end-of-run summary on stderr: the full statistics with --stats, otherwise one line when
@@ -320,5 +444,63 @@ fn report(
     }
     if let Err(Failure::Signal(_)) = result {
         eprintln!("busnoop: interrupted after {rows} rows; all decoded rows were written");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(extra: &[&str]) -> OutputArgs {
+        let mut argv = vec!["busnoop", "sport", "x"];
+        argv.extend_from_slice(extra);
+        match Cli::try_parse_from(argv).unwrap().command {
+            Command::Sport(a) => a.capture.output,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn format_defaults() {
+        assert_eq!(args(&[]).table_options(true, false).format, Format::Pretty);
+        assert_eq!(args(&[]).table_options(false, false).format, Format::Tsv);
+        assert_eq!(
+            args(&["-o", "a.csv"]).table_options(false, false).format,
+            Format::Csv
+        );
+        assert_eq!(
+            args(&["-o", "a.bin"]).table_options(false, false).format,
+            Format::Tsv
+        );
+        assert_eq!(
+            args(&["-o", "a.csv", "-f", "jsonl"])
+                .table_options(false, false)
+                .format,
+            Format::Jsonl
+        );
+    }
+
+    #[test]
+    fn colour_follows_terminal_no_color_and_the_option() {
+        assert!(args(&[]).table_options(true, false).color);
+        assert!(
+            !args(&[]).table_options(true, true).color,
+            "NO_COLOR turns auto off"
+        );
+        assert!(
+            !args(&[]).table_options(false, false).color,
+            "not a terminal"
+        );
+        assert!(
+            args(&["-f", "pretty", "--color", "always"])
+                .table_options(false, true)
+                .color
+        );
+        assert!(!args(&["--color", "never"]).table_options(true, false).color);
+        assert!(
+            !args(&["-f", "tsv", "--color", "always"])
+                .table_options(true, false)
+                .color
+        );
     }
 }

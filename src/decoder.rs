@@ -84,17 +84,16 @@ pub trait Decoder {
     /// sources without time). Rows for every frame completed by these bytes are emitted at once.
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()>;
 
-    /// Time passed without data (live sources): lets a decoder close frames or report timeouts.
+    /// Time passed without data on a live serial source; `now` is the current capture time
+    /// (µs since the capture started). Lets a decoder report timeouts promptly.
     fn idle(&mut self, _now: u64, _out: &mut dyn RowOut) -> io::Result<()> {
         Ok(())
     }
 
-    /// End of input: emits whatever is still open (a truncated frame, trailing garbage).
+    /// End of input, or a gap in a live capture (adapter unplugged): emits whatever is still open
+    /// (a truncated frame, trailing garbage, unanswered requests). After a gap, `push` is called
+    /// again with the bytes that follow it, so the decoder must be ready to go on.
     fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()>;
-
-    /// Marks a gap in the capture (adapter unplugged and back): forget partial frames without
-    /// reporting them as errors of the bus.
-    fn reset(&mut self) {}
 
     /// Frames with a valid check decoded so far.
     fn valid_frames(&self) -> u64;

@@ -129,7 +129,8 @@ impl fmt::Display for Failure {
             Failure::Device { path, message } => write!(f, "{}: {message}", path.display()),
             Failure::Disconnected { path, frames } => write!(
                 f,
-                "adapter disconnected after {frames} frames ({}); use --reconnect to wait for it",
+                "adapter disconnected after {} ({}); use --reconnect to wait for it",
+                count(*frames, "frame", "frames"),
                 path.display()
             ),
             Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) => f.write_str(m),
@@ -147,4 +148,9 @@ impl From<crate::sink::WriteError> for Failure {
             Failure::Output(e.to_string())
         }
     }
+}
+
+/// `1 frame`, `2 frames`.
+pub fn count(n: u64, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }

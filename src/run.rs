@@ -1,17 +1,25 @@
-//! The protocol-independent driver: messages from a source → decoder → table, with signals.
+//! The protocol-independent driver: messages from a source → decoder → table (and recording),
+//! with signals, adapter gaps and the "no frames" hint.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use crate::decoder::Decoder;
+use crate::decoder::{Decoder, RowOut};
 use crate::exit::Failure;
+use crate::record::Recorder;
+use crate::row::{Class, Row};
 use crate::sink::Table;
-use crate::source::Message;
+use crate::source::{Batch, Message};
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
-const TICK: Duration = Duration::from_millis(50);
+const TICK: Duration = Duration::from_millis(20);
+
+/// After this long with bytes but no valid frame, the user gets a hint once.
+const NO_FRAMES_AFTER: Duration = Duration::from_secs(3);
+/// ... provided at least this many bytes arrived.
+const NO_FRAMES_BYTES: u64 = 256;
 
 /// SIGINT/SIGTERM catcher. The first signal asks busnoop to stop cleanly; a second one of the
 /// same kind ends the process at once.
@@ -55,6 +63,17 @@ impl Stop {
     }
 }
 
+/// What the driver needs besides the decoder and the table.
+pub struct Context<'a> {
+    pub stop: &'a Stop,
+    /// Keep what came off the wire.
+    pub recorder: Option<&'a mut Recorder>,
+    /// Protocol name for messages ("S.Port").
+    pub protocol: &'a str,
+    /// The source is a live serial device: decoders get `idle` calls with the current time.
+    pub live: bool,
+}
+
 /// Feeds every message from `rx` through `decoder` into `table` until the source ends, fails,
 /// or a signal arrives. Rows are flushed after every batch, so live output appears as soon as
 /// a frame completes. Whatever happens, every row decoded so far is written before returning.
@@ -62,83 +81,220 @@ pub fn drive(
     decoder: &mut dyn Decoder,
     rx: &Receiver<Message>,
     table: &mut Table,
-    stop: &Stop,
+    ctx: Context<'_>,
 ) -> Result<(), Failure> {
-    let result = drive_inner(decoder, rx, table, stop);
+    let mut state = Driver {
+        decoder,
+        table,
+        recorder: ctx.recorder,
+        protocol: ctx.protocol,
+        live: ctx.live,
+        clock: None,
+        bytes: 0,
+        first_byte: None,
+        hinted: false,
+        down_at: None,
+    };
+    let result = state.run(rx, ctx.stop);
+    let Driver {
+        decoder,
+        table,
+        recorder,
+        ..
+    } = state;
     // Flush whatever is open, even after an error of the source.
-    let finish = match &result {
-        Err(Failure::Output(_)) | Err(Failure::BrokenPipe) => Ok(()),
-        _ => decoder.finish(table).map_err(|_| ()),
+    let output_gone = matches!(result, Err(Failure::Output(_) | Failure::BrokenPipe));
+    if !output_gone {
+        let _ = decoder.finish(table);
+    }
+    let recorded = match recorder {
+        Some(r) => r.flush(),
+        None => Ok(()),
     };
     let close = table.close();
-    match (result, finish, close) {
+    let result = match result {
+        Err(Failure::Disconnected { path, .. }) => Err(Failure::Disconnected {
+            path,
+            frames: decoder.valid_frames(),
+        }),
+        r => r,
+    };
+    match (result, recorded, close) {
         (Err(f @ (Failure::Output(_) | Failure::BrokenPipe)), _, _) => Err(f),
         (_, _, Err(e)) => Err(e.into()),
+        (Ok(()), Err(f), _) => Err(f),
         (r, _, Ok(())) => r,
     }
 }
 
-fn drive_inner(
-    decoder: &mut dyn Decoder,
-    rx: &Receiver<Message>,
-    table: &mut Table,
-    stop: &Stop,
-) -> Result<(), Failure> {
-    let mut last_time: Option<u64> = None;
-    loop {
-        if let Some(sig) = stop.signal() {
-            // Decode what was already received, then stop.
-            while let Ok(msg) = rx.try_recv() {
-                match msg {
-                    Message::Data(b) => feed(decoder, &b, table, &mut last_time)?,
-                    Message::Anchor(a) => table.set_anchor(Some(a)),
-                    _ => break,
-                }
-            }
-            return Err(Failure::Signal(sig));
-        }
-        match rx.recv_timeout(TICK) {
-            Ok(Message::Data(b)) => {
-                feed(decoder, &b, table, &mut last_time)?;
-                table.flush()?;
-            }
-            Ok(Message::Anchor(a)) => table.set_anchor(Some(a)),
-            Ok(Message::Warning(w)) => {
-                table.flush()?;
-                eprintln!("busnoop: warning: {w}");
-            }
-            Ok(Message::End) => return Ok(()),
-            Ok(Message::Failed(f)) => return Err(f),
-            Err(RecvTimeoutError::Timeout) => {
-                if let Some(t) = last_time {
-                    decoder.idle(t, table).map_err(|_| output_error(table))?;
-                }
-                table.flush()?;
-            }
-            Err(RecvTimeoutError::Disconnected) => {
-                return Err(Failure::Internal(
-                    "the reader thread stopped unexpectedly".into(),
-                ));
-            }
-        }
-    }
+struct Driver<'a> {
+    decoder: &'a mut dyn Decoder,
+    table: &'a mut Table,
+    recorder: Option<&'a mut Recorder>,
+    protocol: &'a str,
+    live: bool,
+    /// Maps capture time to this process's clock: the instant of capture time 0.
+    clock: Option<Instant>,
+    bytes: u64,
+    first_byte: Option<Instant>,
+    hinted: bool,
+    down_at: Option<u64>,
 }
 
-fn feed(
-    decoder: &mut dyn Decoder,
-    batch: &crate::source::Batch,
-    table: &mut Table,
-    last_time: &mut Option<u64>,
-) -> Result<(), Failure> {
-    for (bytes, time) in batch.segments() {
-        if time.is_some() {
-            *last_time = time;
+impl Driver<'_> {
+    fn run(&mut self, rx: &Receiver<Message>, stop: &Stop) -> Result<(), Failure> {
+        loop {
+            if let Some(sig) = stop.signal() {
+                // Decode what was already received, then stop.
+                while let Ok(msg) = rx.try_recv() {
+                    match msg {
+                        Message::Data(b) => self.feed(&b)?,
+                        Message::Anchor(a) => self.anchor(a)?,
+                        _ => break,
+                    }
+                }
+                return Err(Failure::Signal(sig));
+            }
+            match rx.recv_timeout(TICK) {
+                Ok(Message::Data(b)) => {
+                    self.feed(&b)?;
+                    self.flush()?;
+                }
+                Ok(Message::Anchor(a)) => self.anchor(a)?,
+                Ok(Message::Warning(w)) => {
+                    self.table.flush()?;
+                    eprintln!("busnoop: warning: {w}");
+                }
+                Ok(Message::LinkDown { micros }) => self.link_down(micros)?,
+                Ok(Message::LinkUp { micros, path }) => self.link_up(micros, &path)?,
+                Ok(Message::End) => return Ok(()),
+                Ok(Message::Failed(f)) => return Err(f),
+                Err(RecvTimeoutError::Timeout) => {
+                    if self.live
+                        && let Some(zero) = self.clock
+                    {
+                        let now = zero.elapsed().as_micros() as u64;
+                        self.decoder
+                            .idle(now, self.table)
+                            .map_err(|_| output_error(self.table))?;
+                    }
+                    self.watch();
+                    self.flush()?;
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(Failure::Internal(
+                        "the reader thread stopped unexpectedly".into(),
+                    ));
+                }
+            }
         }
-        decoder
-            .push(bytes, time, table)
-            .map_err(|_| output_error(table))?;
     }
-    Ok(())
+
+    fn anchor(&mut self, a: crate::sink::Anchor) -> Result<(), Failure> {
+        self.table.set_anchor(Some(a));
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.start(Some(a))?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.flush()?;
+        }
+        self.table.flush()?;
+        Ok(())
+    }
+
+    fn feed(&mut self, batch: &Batch) -> Result<(), Failure> {
+        let now = Instant::now();
+        for (bytes, time) in batch.segments() {
+            if let Some(r) = self.recorder.as_deref_mut() {
+                r.data(bytes, time)?;
+            }
+            if self.clock.is_none()
+                && let Some(t) = time
+            {
+                self.clock = now.checked_sub(Duration::from_micros(t));
+            }
+            self.decoder
+                .push(bytes, time, self.table)
+                .map_err(|_| output_error(self.table))?;
+        }
+        self.bytes += batch.bytes.len() as u64;
+        if !batch.bytes.is_empty() {
+            self.first_byte.get_or_insert(now);
+        }
+        self.watch();
+        Ok(())
+    }
+
+    /// Bytes keep arriving but nothing decodes: say so once, with the likely causes.
+    fn watch(&mut self) {
+        if self.hinted || self.bytes < NO_FRAMES_BYTES || self.decoder.valid_frames() > 0 {
+            return;
+        }
+        let Some(first) = self.first_byte else {
+            return;
+        };
+        let waited = first.elapsed();
+        if waited >= NO_FRAMES_AFTER {
+            self.hinted = true;
+            let _ = self.table.flush();
+            eprintln!(
+                "busnoop: {} bytes in {:.0} s but no valid {} frame: {}",
+                self.bytes,
+                waited.as_secs_f64(),
+                self.protocol,
+                self.decoder.no_frames_hint()
+            );
+        }
+    }
+
+    fn link_down(&mut self, micros: u64) -> Result<(), Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.link(false, micros)?;
+        }
+        // Close what the unplug cut off; the decoder goes on after the gap.
+        self.decoder
+            .finish(self.table)
+            .map_err(|_| output_error(self.table))?;
+        self.down_at = Some(micros);
+        let data = format!(
+            "adapter disconnected after {}; waiting for it",
+            crate::exit::count(self.decoder.valid_frames(), "frame", "frames")
+        );
+        self.info_row(micros, "LinkDown", &data)?;
+        self.flush()?;
+        eprintln!("busnoop: {data} (--reconnect)");
+        Ok(())
+    }
+
+    fn link_up(&mut self, micros: u64, path: &std::path::Path) -> Result<(), Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.link(true, micros)?;
+        }
+        let gap = self
+            .down_at
+            .take()
+            .map_or(0.0, |d| micros.saturating_sub(d) as f64 / 1e6);
+        let data = format!("adapter back at {} after {gap:.1} s", path.display());
+        self.info_row(micros, "LinkUp", &data)?;
+        self.flush()?;
+        eprintln!("busnoop: {data}");
+        Ok(())
+    }
+
+    /// A row busnoop itself adds to the log (gaps).
+    fn info_row(&mut self, micros: u64, kind: &str, data: &str) -> Result<(), Failure> {
+        let row = Row {
+            kind,
+            class: Class::Info,
+            data,
+            ..Row::empty(Some(micros))
+        };
+        self.table.row(&row).map_err(|_| output_error(self.table))
+    }
 }
 
 /// The error a table stored when a row could not be written.

@@ -26,6 +26,18 @@ use telegram::{BROADCAST, CrcBasis, ReqInfo};
 
 /// Default serial speed of S-Bus ports.
 pub const DEFAULT_BAUD: u32 = 9600;
+/// What the shared command-line code needs to know: name and serial line format (8N1; a
+/// parity-mode line has a 9th bit that a standard UART cannot follow, see docs/sbus.md).
+pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+    name: "S-Bus",
+    serial: crate::source::serial::SerialConfig {
+        baud: DEFAULT_BAUD,
+        data_bits: serialport::DataBits::Eight,
+        parity: serialport::Parity::None,
+        stop_bits: serialport::StopBits::One,
+    },
+};
+
 /// Ether-S-Bus server port.
 pub const DEFAULT_PORT: u16 = 5050;
 /// Default Ether-S-Bus timeout (ms): no standard value is documented; 1 s is our choice.
@@ -1374,15 +1386,6 @@ impl Decoder for SerialDecoder {
         result?;
         self.core.finish();
         Ok(())
-    }
-
-    fn reset(&mut self) {
-        let mut sink = |_: &Event<'_>| {};
-        match &mut self.framer {
-            Framer::Data(f) => f.reset(&mut sink),
-            Framer::Break(f) => f.reset(&mut sink),
-            Framer::Detect { .. } => {}
-        }
     }
 
     fn valid_frames(&self) -> u64 {

@@ -298,14 +298,6 @@ impl DataFramer {
         self.garbage.flush(emit);
     }
 
-    /// Forgets a partial telegram (a gap in a live capture) without reporting it.
-    pub fn reset(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
-        self.garbage.flush(emit);
-        self.phase = Phase::Outside;
-        self.dle = false;
-        self.expect = Expect::Nothing;
-    }
-
     fn start(&mut self, time: Option<u64>) {
         self.phase = Phase::At;
         self.dle = false;
@@ -685,15 +677,6 @@ impl BreakFramer {
     pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         self.resolve(true, emit);
         self.garbage.flush(emit);
-    }
-
-    pub fn reset(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
-        self.base += (self.buf.len() - self.head) as u64;
-        self.buf.clear();
-        self.times.clear();
-        self.head = 0;
-        self.garbage.flush(emit);
-        self.awaiting = Await::Request;
     }
 
     fn compact(&mut self) {

@@ -67,12 +67,15 @@ pub struct Table {
     opts: TableOptions,
     out: Output,
     columns: Vec<&'static str>,
+    /// Number of the decoder's extra columns.
+    n_extra: usize,
     counter: u64,
     anchor: Option<Anchor>,
     header_written: bool,
     csv: csv::Writer<SharedBuf>,
     csv_buf: SharedBuf,
     scratch: String,
+    hex: Vec<u8>,
     error: Option<WriteError>,
 }
 
@@ -109,6 +112,7 @@ impl Table {
             opts,
             out,
             columns,
+            n_extra: extra.len(),
             counter: 0,
             anchor: None,
             header_written: false,
@@ -117,6 +121,7 @@ impl Table {
                 .from_writer(csv_buf.clone()),
             csv_buf,
             scratch: String::new(),
+            hex: Vec::new(),
             error: None,
         }
     }
@@ -247,6 +252,7 @@ impl Table {
             None
         };
         let raw = self.opts.raw;
+        let n_extra = self.n_extra;
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
         buf.extend_from_slice(ib.format(counter).as_bytes());
@@ -262,9 +268,9 @@ impl Table {
             buf.push(b'\t');
             push_tsv_field(buf, field);
         }
-        for field in row.extra {
+        for i in 0..n_extra {
             buf.push(b'\t');
-            push_tsv_field(buf, field);
+            push_tsv_field(buf, row.extra.get(i).copied().unwrap_or(""));
         }
         if raw {
             buf.push(b'\t');
@@ -280,23 +286,28 @@ impl Table {
     fn csv_row(&mut self, row: &Row<'_>) {
         let mut ib = itoa::Buffer::new();
         let _ = self.csv.write_field(ib.format(self.counter));
-        let millis = row.micros.map(|us| us / 1000);
-        let _ = self
-            .csv
-            .write_field(millis.map_or(String::new(), |m| m.to_string()));
-        let _ = self
-            .csv
-            .write_field(row.id.map_or(String::new(), |i| i.to_string()));
+        match row.micros {
+            Some(us) => self.csv.write_field(ib.format(us / 1000)),
+            None => self.csv.write_field(""),
+        }
+        .ok();
+        match row.id {
+            Some(id) => self.csv.write_field(ib.format(id)),
+            None => self.csv.write_field(""),
+        }
+        .ok();
         for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
             let _ = self.csv.write_field(field);
         }
-        for field in row.extra {
-            let _ = self.csv.write_field(field);
+        for i in 0..self.n_extra {
+            let _ = self
+                .csv
+                .write_field(row.extra.get(i).copied().unwrap_or(""));
         }
         if self.opts.raw {
-            let mut hex = Vec::new();
-            push_hex_bytes(&mut hex, row.raw);
-            let _ = self.csv.write_field(&hex);
+            self.hex.clear();
+            push_hex_bytes(&mut self.hex, row.raw);
+            let _ = self.csv.write_field(&self.hex);
         }
         if self.opts.time_abs {
             let t = self.wall_time(row.micros).to_owned();
@@ -326,6 +337,7 @@ impl Table {
             None
         };
         let counter = self.counter;
+        let n_extra = self.n_extra;
         let columns = &self.columns;
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
@@ -351,9 +363,9 @@ impl Table {
         for (k, v) in base {
             push_json_pair(buf, k, v);
         }
-        for (name, v) in columns[BASE_COLUMNS.len()..].iter().zip(row.extra) {
+        for (i, name) in columns[BASE_COLUMNS.len()..][..n_extra].iter().enumerate() {
             push_json_key(buf, name);
-            push_json_str(buf, v);
+            push_json_str(buf, row.extra.get(i).copied().unwrap_or(""));
         }
         if self.opts.raw {
             buf.extend_from_slice(b",\"raw\":\"");
@@ -395,7 +407,9 @@ impl Table {
             row.sensor,
             row.data,
         ];
-        cells.extend_from_slice(row.extra);
+        for i in 0..self.n_extra {
+            cells.push(row.extra.get(i).copied().unwrap_or(""));
+        }
         if let Some(r) = &raw {
             cells.push(r);
         }

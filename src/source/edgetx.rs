@@ -71,8 +71,10 @@ pub fn parse_line(line: &[u8]) -> Option<Line> {
 pub struct EdgeTxReader {
     reader: Box<dyn Read + Send>,
     name: String,
+    /// Read buffer; `buf[pos..filled]` is unread.
     buf: Vec<u8>,
     pos: usize,
+    filled: usize,
     eof: bool,
     line: Vec<u8>,
     overlong: bool,
@@ -83,11 +85,13 @@ pub struct EdgeTxReader {
 
 impl EdgeTxReader {
     pub fn new(opened: Opened) -> Self {
+        let filled = opened.prefix.len();
         EdgeTxReader {
             reader: opened.reader,
             name: opened.name,
             buf: opened.prefix,
             pos: 0,
+            filled,
             eof: false,
             line: Vec::new(),
             overlong: false,
@@ -98,19 +102,19 @@ impl EdgeTxReader {
     }
 
     fn fill(&mut self) -> Result<(), Failure> {
-        self.buf.clear();
         self.pos = 0;
+        // Zeroed once; later reads reuse the buffer and only `filled` bytes count.
         self.buf.resize(super::READ_SIZE, 0);
         loop {
             match self.reader.read(&mut self.buf) {
                 Ok(n) => {
-                    self.buf.truncate(n);
+                    self.filled = n;
                     self.eof = n == 0;
                     return Ok(());
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(e) => {
-                    self.buf.clear();
+                    self.filled = 0;
                     return Err(Failure::Input(format!("cannot read {}: {e}", self.name)));
                 }
             }
@@ -156,7 +160,7 @@ impl ChunkReader for EdgeTxReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
         let mut batch = Batch::default();
         loop {
-            if self.pos >= self.buf.len() {
+            if self.pos >= self.filled {
                 // Send what we have before blocking on a slow pipe.
                 if !batch.bytes.is_empty() {
                     break;
@@ -181,7 +185,7 @@ impl ChunkReader for EdgeTxReader {
                 self.fill()?;
                 continue;
             }
-            let rest = &self.buf[self.pos..];
+            let rest = &self.buf[self.pos..self.filled];
             match rest.iter().position(|&b| b == b'\n') {
                 Some(i) => {
                     if self.line.len() + i <= MAX_LINE {
@@ -202,7 +206,7 @@ impl ChunkReader for EdgeTxReader {
                         self.overlong = true;
                         self.line.clear();
                     }
-                    self.pos = self.buf.len();
+                    self.pos = self.filled;
                 }
             }
         }

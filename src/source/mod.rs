@@ -5,6 +5,7 @@
 //! standard input are recognised by their content, not by their name ([`detect`]).
 
 pub mod edgetx;
+pub mod serial;
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -57,6 +58,15 @@ pub enum Message {
     Data(Batch),
     /// A note for the user (unreadable log lines and the like); printed on stderr.
     Warning(String),
+    /// The adapter disappeared (live capture with `--reconnect`, or a recording of one).
+    LinkDown {
+        micros: u64,
+    },
+    /// The adapter is back, at `path`.
+    LinkUp {
+        micros: u64,
+        path: PathBuf,
+    },
     /// The source ended normally.
     End,
     /// The source failed.
@@ -76,8 +86,12 @@ pub enum Kind {
     Raw,
     /// EdgeTX/OpenTX debug log: `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 …`.
     EdgeTxLog,
-    /// Classic pcap (by its magic number).
+    /// Classic pcap (by its magic number) of network traffic.
     Pcap,
+    /// A busnoop recording: classic pcap with link type RTAC serial (250) or USER0 (147).
+    Recording,
+    /// A live serial device.
+    Serial,
     /// pcapng (by its section header block).
     Pcapng,
 }
@@ -96,7 +110,15 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
     ];
     if prefix.len() >= 4 {
         if PCAP.iter().any(|m| prefix[..4] == m[..]) {
-            return Some(Kind::Pcap);
+            if prefix.len() < 24 && !complete {
+                return None;
+            }
+            return Some(match crate::record::pcap_link_type(prefix) {
+                Some(crate::record::LINKTYPE_RTAC_SERIAL | crate::record::LINKTYPE_USER0) => {
+                    Kind::Recording
+                }
+                _ => Kind::Pcap,
+            });
         }
         if prefix[..4] == [0x0A, 0x0D, 0x0D, 0x0A] {
             return Some(Kind::Pcapng);
@@ -115,21 +137,27 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
 pub enum Input {
     Stdin,
     File(PathBuf),
+    /// A serial device (a character device, or a path that looks like one).
+    Device(PathBuf),
 }
 
 impl Input {
     pub fn parse(arg: &str) -> Input {
         if arg == "-" {
-            Input::Stdin
+            return Input::Stdin;
+        }
+        let path = PathBuf::from(arg);
+        if serial::is_device_path(&path) {
+            Input::Device(path)
         } else {
-            Input::File(PathBuf::from(arg))
+            Input::File(path)
         }
     }
 
     pub fn name(&self) -> String {
         match self {
             Input::Stdin => "standard input".into(),
-            Input::File(p) => p.display().to_string(),
+            Input::File(p) | Input::Device(p) => p.display().to_string(),
         }
     }
 }
@@ -146,7 +174,7 @@ pub struct Opened {
 pub fn open(input: &Input) -> Result<Opened, Failure> {
     let (mut reader, name, path): (Box<dyn Read + Send>, String, Option<&Path>) = match input {
         Input::Stdin => (Box::new(io::stdin()), "standard input".into(), None),
-        Input::File(p) => {
+        Input::File(p) | Input::Device(p) => {
             let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
             if meta.is_dir() {
                 return Err(Failure::IsDirectory(p.clone()));
@@ -262,7 +290,14 @@ mod tests {
             Some(Kind::EdgeTxLog)
         );
         assert_eq!(detect(&[0x7E, 0x00, 0x7E, 0xA1], false), Some(Kind::Raw));
-        assert_eq!(detect(&[0xD4, 0xC3, 0xB2, 0xA1], false), Some(Kind::Pcap));
+        let mut pcap = vec![0xD4, 0xC3, 0xB2, 0xA1];
+        assert_eq!(detect(&pcap, false), None, "needs the link type");
+        assert_eq!(detect(&pcap, true), Some(Kind::Pcap));
+        pcap.extend_from_slice(&[0; 16]);
+        pcap.extend_from_slice(&1u32.to_le_bytes());
+        assert_eq!(detect(&pcap, false), Some(Kind::Pcap));
+        pcap[20] = 250;
+        assert_eq!(detect(&pcap, false), Some(Kind::Recording));
         assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], false), Some(Kind::Pcapng));
         assert_eq!(detect(b"2014-07", false), None);
         assert_eq!(detect(b"2014-07", true), Some(Kind::Raw));

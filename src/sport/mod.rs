@@ -18,8 +18,20 @@ use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
 /// Poll slot length used to reconstruct Millis for sources without time.
 pub const SLOT_MICROS: u64 = 12_000;
 
-/// Default serial settings.
+/// Default serial speed.
 pub const DEFAULT_BAUD: u32 = 57_600;
+
+/// What the command line needs to know: 57600 baud 8N1 (inverted on the wire: the adapter must
+/// invert, see docs/live.md).
+pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+    name: "S.Port",
+    serial: crate::source::serial::SerialConfig {
+        baud: DEFAULT_BAUD,
+        data_bits: serialport::DataBits::Eight,
+        parity: serialport::Parity::None,
+        stop_bits: serialport::StopBits::One,
+    },
+};
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
@@ -172,9 +184,10 @@ impl SportDecoder {
                 let app_id = u16::from_le_bytes([b[1], b[2]]);
                 let value = u32::from_le_bytes([b[3], b[4], b[5], b[6]]);
                 let ok = wire::crc_ok(&b);
-                let firmware = b[0] == 0x50;
+                // Firmware-update frames (`7E FF 50 …` from the radio, `7E 5E 50 …` from the
+                // device) carry their own checksum instead of the S.Port sum (wire reference §5.6).
+                let firmware = b[0] == 0x50 && matches!(s.header, 0xFF | 0x5E);
                 if firmware {
-                    // Firmware-update frames carry their own checksum (wire reference §5.6).
                     ps.other += 1;
                     st.valid_frames += 1;
                     push_hex(&mut sc.data, &b[1..]);
@@ -382,12 +395,6 @@ impl Decoder for SportDecoder {
         let events = &mut self.events;
         self.re.finish(&mut |e| events.push(*e));
         self.drain(out)
-    }
-
-    fn reset(&mut self) {
-        let events = &mut self.events;
-        self.re.reset(&mut |e| events.push(*e));
-        // Garbage flushed by a reset is still reported on the next push.
     }
 
     fn valid_frames(&self) -> u64 {

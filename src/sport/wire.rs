@@ -233,14 +233,6 @@ impl Reassembler {
         self.escaped = false;
     }
 
-    /// Forgets a partial slot without emitting it (a gap in a live capture).
-    pub fn reset(&mut self, emit: &mut impl FnMut(&Event)) {
-        self.flush_garbage(emit);
-        self.state = State::Outside;
-        self.escaped = false;
-        self.body_len = 0;
-    }
-
     /// Slots started so far.
     pub fn slots(&self) -> u64 {
         self.next_index

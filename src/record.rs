@@ -1,0 +1,496 @@
+//! Recordings: what came off the wire, kept while decoding (`--record FILE`), and replayed later.
+//!
+//! * `FILE.pcap`: classic pcap, link type `RTAC_SERIAL` (250), one record per read chunk with the
+//!   chunk's arrival time, so a replay feeds the decoder exactly the bytes and times the live run
+//!   saw and prints exactly the same rows. Each record carries the 12-byte RTAC serial header
+//!   (time, event type, control lines), which Wireshark shows as "RTAC Serial". The first record
+//!   (a status event, time 0 of the capture) marks the start; adapter unplug/replug are status
+//!   events too. Link type `USER0` (147, raw bytes per record) is read as well.
+//! * any other name (`FILE.bin` recommended): the raw bytes exactly as received, the same format
+//!   as a raw capture.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::SyncSender;
+
+use chrono::{DateTime, Utc};
+
+use crate::exit::Failure;
+use crate::sink::Anchor;
+use crate::source::{Batch, ChunkReader, Message, Opened};
+
+/// pcap link type of the RTAC serial encapsulation.
+pub const LINKTYPE_RTAC_SERIAL: u32 = 250;
+/// pcap link type USER0 (raw bytes per record).
+pub const LINKTYPE_USER0: u32 = 147;
+
+/// RTAC serial event types (Wireshark `packet-rtacser.c`).
+const EVENT_STATUS: u8 = 0x00;
+const EVENT_RX_DATA: u8 = 0x02;
+
+/// Payloads of the status records busnoop writes.
+const START: &[u8] = b"busnoop capture start";
+const START_UNTIMED: &[u8] = b"busnoop capture start (untimed)";
+const LINK_DOWN: &[u8] = b"busnoop link down";
+const LINK_UP: &[u8] = b"busnoop link up";
+
+/// Writes a recording while the capture is decoded.
+pub struct Recorder {
+    path: PathBuf,
+    out: BufWriter<File>,
+    format: RecordFormat,
+    timed: bool,
+    anchor: Option<DateTime<Utc>>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RecordFormat {
+    Raw,
+    Pcap,
+}
+
+impl Recorder {
+    /// Creates the recording; `timed` says whether the source has arrival times.
+    pub fn create(path: &Path, timed: bool) -> Result<Recorder, Failure> {
+        let format = match path.extension().and_then(|e| e.to_str()) {
+            Some(e) if e.eq_ignore_ascii_case("pcap") => RecordFormat::Pcap,
+            _ => RecordFormat::Raw,
+        };
+        let file = File::create(path).map_err(|e| {
+            Failure::Output(format!("cannot create recording {}: {e}", path.display()))
+        })?;
+        Ok(Recorder {
+            path: path.to_owned(),
+            out: BufWriter::with_capacity(64 * 1024, file),
+            format,
+            timed,
+            anchor: None,
+        })
+    }
+
+    fn fail(&self, e: io::Error) -> Failure {
+        Failure::Output(format!(
+            "cannot write recording {}: {e}",
+            self.path.display()
+        ))
+    }
+
+    /// The wall-clock time of the capture's start; writes the pcap headers.
+    pub fn start(&mut self, anchor: Option<Anchor>) -> Result<(), Failure> {
+        if self.anchor.is_some() {
+            return Ok(());
+        }
+        let t = match anchor {
+            Some(Anchor::Instant(t)) => t,
+            Some(Anchor::Naive(n)) => n.and_utc(),
+            None => Utc::now(),
+        };
+        self.anchor = Some(t);
+        if self.format == RecordFormat::Pcap {
+            let r = write_global_header(&mut self.out).and_then(|()| {
+                let start = if self.timed { START } else { START_UNTIMED };
+                write_record(&mut self.out, t, 0, EVENT_STATUS, start)
+            });
+            r.map_err(|e| self.fail(e))?;
+        }
+        Ok(())
+    }
+
+    /// Bytes that arrived at `micros`.
+    pub fn data(&mut self, bytes: &[u8], micros: Option<u64>) -> Result<(), Failure> {
+        self.start(None)?;
+        let r = match self.format {
+            RecordFormat::Raw => self.out.write_all(bytes),
+            RecordFormat::Pcap => {
+                let anchor = self.anchor.unwrap_or_else(Utc::now);
+                write_record(
+                    &mut self.out,
+                    anchor,
+                    micros.unwrap_or(0),
+                    EVENT_RX_DATA,
+                    bytes,
+                )
+            }
+        };
+        r.map_err(|e| self.fail(e))
+    }
+
+    /// The adapter went away (`up = false`) or came back.
+    pub fn link(&mut self, up: bool, micros: u64) -> Result<(), Failure> {
+        self.start(None)?;
+        if self.format == RecordFormat::Pcap {
+            let anchor = self.anchor.unwrap_or_else(Utc::now);
+            let payload = if up { LINK_UP } else { LINK_DOWN };
+            write_record(&mut self.out, anchor, micros, EVENT_STATUS, payload)
+                .map_err(|e| self.fail(e))?;
+        }
+        Ok(())
+    }
+
+    /// Writes everything buffered to the file.
+    pub fn flush(&mut self) -> Result<(), Failure> {
+        self.out.flush().map_err(|e| self.fail(e))
+    }
+}
+
+fn write_global_header(w: &mut impl Write) -> io::Result<()> {
+    let mut h = Vec::with_capacity(24);
+    h.extend_from_slice(&0xA1B2_C3D4u32.to_le_bytes()); // microsecond timestamps
+    h.extend_from_slice(&2u16.to_le_bytes());
+    h.extend_from_slice(&4u16.to_le_bytes());
+    h.extend_from_slice(&0i32.to_le_bytes());
+    h.extend_from_slice(&0u32.to_le_bytes());
+    h.extend_from_slice(&65_535u32.to_le_bytes());
+    h.extend_from_slice(&LINKTYPE_RTAC_SERIAL.to_le_bytes());
+    w.write_all(&h)
+}
+
+/// One pcap record: the RTAC serial header (time, event, control lines, footer) then `data`.
+fn write_record(
+    w: &mut impl Write,
+    anchor: DateTime<Utc>,
+    micros: u64,
+    event: u8,
+    data: &[u8],
+) -> io::Result<()> {
+    let t = anchor + chrono::Duration::microseconds(micros as i64);
+    let secs = t.timestamp() as u32;
+    let usecs = t.timestamp_subsec_micros();
+    let len = (12 + data.len()) as u32;
+    let mut rec = Vec::with_capacity(16 + 12 + data.len());
+    rec.extend_from_slice(&secs.to_le_bytes());
+    rec.extend_from_slice(&usecs.to_le_bytes());
+    rec.extend_from_slice(&len.to_le_bytes());
+    rec.extend_from_slice(&len.to_le_bytes());
+    rec.extend_from_slice(&secs.to_be_bytes());
+    rec.extend_from_slice(&usecs.to_be_bytes());
+    rec.push(event);
+    rec.push(0); // control lines unknown
+    rec.extend_from_slice(&[0, 0]); // footer
+    rec.extend_from_slice(data);
+    w.write_all(&rec)
+}
+
+/// The link type of a classic pcap file from its first 24 bytes.
+pub fn pcap_link_type(header: &[u8]) -> Option<u32> {
+    let magic: [u8; 4] = header.get(..4)?.try_into().ok()?;
+    let lt: [u8; 4] = header.get(20..24)?.try_into().ok()?;
+    match magic {
+        [0xD4, 0xC3, 0xB2, 0xA1] | [0x4D, 0x3C, 0xB2, 0xA1] => Some(u32::from_le_bytes(lt)),
+        [0xA1, 0xB2, 0xC3, 0xD4] | [0xA1, 0xB2, 0x3C, 0x4D] => Some(u32::from_be_bytes(lt)),
+        _ => None,
+    }
+}
+
+/// Replays a busnoop recording (pcap, RTAC serial or USER0) as timed batches.
+pub struct RecordingReader {
+    reader: Box<dyn Read + Send>,
+    name: String,
+    /// Unparsed input is `buf[pos..]`.
+    buf: Vec<u8>,
+    pos: usize,
+    /// Where reads land before they are appended to `buf`.
+    scratch: Vec<u8>,
+    eof: bool,
+    header: Option<Header>,
+    first: Option<i64>,
+    untimed: bool,
+    pending: Option<Message>,
+    /// A failure met after some records were read; reported on the next call.
+    failure: Option<Failure>,
+}
+
+#[derive(Clone, Copy)]
+struct Header {
+    little: bool,
+    nanos: bool,
+    link_type: u32,
+}
+
+/// Records larger than this are not busnoop recordings; stop instead of allocating.
+const MAX_RECORD: usize = 1 << 20;
+
+impl RecordingReader {
+    pub fn new(opened: Opened) -> Self {
+        RecordingReader {
+            reader: opened.reader,
+            name: opened.name,
+            buf: opened.prefix,
+            pos: 0,
+            scratch: vec![0; 64 * 1024],
+            eof: false,
+            header: None,
+            first: None,
+            untimed: false,
+            pending: None,
+            failure: None,
+        }
+    }
+
+    fn bad(&self, what: &str) -> Failure {
+        Failure::Input(format!("{}: {what}", self.name))
+    }
+
+    /// Makes at least `n` unread bytes available; false at the end of the input.
+    fn want(&mut self, n: usize) -> Result<bool, Failure> {
+        while self.buf.len() - self.pos < n {
+            if self.eof {
+                return Ok(false);
+            }
+            if self.pos > 0 {
+                self.buf.drain(..self.pos);
+                self.pos = 0;
+            }
+            match self.reader.read(&mut self.scratch) {
+                Ok(k) => {
+                    self.buf.extend_from_slice(&self.scratch[..k]);
+                    self.eof = k == 0;
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(self.bad(&format!("cannot read: {e}"))),
+            }
+        }
+        Ok(true)
+    }
+
+    fn u32_at(&self, at: usize, little: bool) -> u32 {
+        let b: [u8; 4] = self.buf[at..at + 4].try_into().unwrap();
+        if little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        }
+    }
+
+    /// Whether a read would block now (no unread bytes buffered).
+    fn drained(&self) -> bool {
+        self.pos >= self.buf.len()
+    }
+}
+
+impl ChunkReader for RecordingReader {
+    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+        if let Some(f) = self.failure.take() {
+            return Err(f);
+        }
+        if let Some(m) = self.pending.take() {
+            let _ = tx.send(m);
+        }
+        let mut batch = Batch::default();
+        match self.fill(tx, &mut batch) {
+            Ok(()) => Ok((!batch.bytes.is_empty()).then_some(batch)),
+            // Hand out what was read before the failure; report the failure next time.
+            Err(f) if !batch.bytes.is_empty() => {
+                self.failure = Some(f);
+                Ok(Some(batch))
+            }
+            Err(f) => Err(f),
+        }
+    }
+}
+
+impl RecordingReader {
+    /// Adds records to `batch` until it is worth sending, a status event must go out first, or
+    /// the input ends.
+    fn fill(&mut self, tx: &SyncSender<Message>, batch: &mut Batch) -> Result<(), Failure> {
+        if self.header.is_none() {
+            if !self.want(24)? {
+                return Err(self.bad("truncated pcap header"));
+            }
+            let h = &self.buf[self.pos..self.pos + 24];
+            let link_type = pcap_link_type(h).ok_or_else(|| self.bad("not a pcap file"))?;
+            let little = matches!(h[0], 0xD4 | 0x4D);
+            let nanos = matches!(h[..4], [0x4D, 0x3C, 0xB2, 0xA1] | [0xA1, 0xB2, 0x3C, 0x4D]);
+            self.header = Some(Header {
+                little,
+                nanos,
+                link_type,
+            });
+            self.pos += 24;
+        }
+        let h = self.header.unwrap();
+        loop {
+            if !batch.bytes.is_empty() && (self.drained() || batch.bytes.len() >= 64 * 1024) {
+                return Ok(());
+            }
+            if !self.want(16)? {
+                if self.buf.len() > self.pos {
+                    let _ = tx.send(Message::Warning(format!(
+                        "{}: the recording ends inside a record header ({} bytes ignored)",
+                        self.name,
+                        self.buf.len() - self.pos
+                    )));
+                    self.pos = self.buf.len();
+                }
+                return Ok(());
+            }
+            let secs = self.u32_at(self.pos, h.little) as i64;
+            let frac = self.u32_at(self.pos + 4, h.little) as i64;
+            let incl = self.u32_at(self.pos + 8, h.little) as usize;
+            if incl > MAX_RECORD {
+                return Err(self.bad(&format!("record of {incl} bytes: not a busnoop recording")));
+            }
+            if !self.want(16 + incl)? {
+                let _ = tx.send(Message::Warning(format!(
+                    "{}: the last record is cut short ({} of {incl} bytes), ignored",
+                    self.name,
+                    self.buf.len() - self.pos - 16
+                )));
+                self.pos = self.buf.len();
+                return Ok(());
+            }
+            let micros_abs = secs * 1_000_000 + if h.nanos { frac / 1000 } else { frac };
+            let start = self.pos + 16;
+            self.pos = start + incl;
+            let first = *self.first.get_or_insert_with(|| {
+                let t = DateTime::from_timestamp_micros(micros_abs).unwrap_or_default();
+                let _ = tx.send(Message::Anchor(Anchor::Instant(t)));
+                micros_abs
+            });
+            let micros = (micros_abs - first).max(0) as u64;
+            let record = &self.buf[start..start + incl];
+            let (event, payload) = match h.link_type {
+                LINKTYPE_RTAC_SERIAL if record.len() >= 12 => (record[8], &record[12..]),
+                LINKTYPE_RTAC_SERIAL => continue,
+                _ => (EVENT_RX_DATA, record),
+            };
+            match event {
+                0x01 | 0x02 => {
+                    let time = (!self.untimed).then_some(micros);
+                    if batch.marks.last().map(|m| m.1) != Some(time) {
+                        batch.marks.push((batch.bytes.len(), time));
+                    }
+                    batch.bytes.extend_from_slice(payload);
+                }
+                EVENT_STATUS => {
+                    let msg = match payload {
+                        START_UNTIMED => {
+                            self.untimed = true;
+                            None
+                        }
+                        LINK_DOWN => Some(Message::LinkDown { micros }),
+                        LINK_UP => Some(Message::LinkUp {
+                            micros,
+                            path: PathBuf::from(&self.name),
+                        }),
+                        _ => None,
+                    };
+                    if let Some(m) = msg {
+                        if batch.bytes.is_empty() {
+                            let _ = tx.send(m);
+                        } else {
+                            self.pending = Some(m);
+                            return Ok(());
+                        }
+                    }
+                }
+                // Line events (framing/parity errors, breaks) carry no data bytes.
+                _ => {}
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn link_type_from_header() {
+        let mut out = Vec::new();
+        write_global_header(&mut out).unwrap();
+        assert_eq!(pcap_link_type(&out), Some(LINKTYPE_RTAC_SERIAL));
+        let mut be = vec![0xA1, 0xB2, 0xC3, 0xD4];
+        be.extend_from_slice(&[0; 16]);
+        be.extend_from_slice(&1u32.to_be_bytes());
+        assert_eq!(pcap_link_type(&be), Some(1));
+        assert_eq!(pcap_link_type(b"hello"), None);
+    }
+
+    fn replay(bytes: Vec<u8>) -> Vec<Message> {
+        let opened = Opened {
+            kind: crate::source::Kind::Recording,
+            prefix: Vec::new(),
+            reader: Box::new(io::Cursor::new(bytes)),
+            name: "rec.pcap".into(),
+        };
+        let (tx, rx) = std::sync::mpsc::sync_channel(1000);
+        let mut r = RecordingReader::new(opened);
+        while let Some(b) = r.next_batch(&tx).unwrap() {
+            tx.send(Message::Data(b)).unwrap();
+        }
+        drop(tx);
+        rx.iter().collect()
+    }
+
+    #[test]
+    fn record_and_replay_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.pcap");
+        let anchor: DateTime<Utc> = "2026-01-02T03:04:05.678901Z".parse().unwrap();
+        let mut rec = Recorder::create(&path, true).unwrap();
+        rec.start(Some(Anchor::Instant(anchor))).unwrap();
+        rec.data(&[0x7E, 0x00], Some(1_000)).unwrap();
+        rec.data(&[0x7E, 0xA1], Some(13_000)).unwrap();
+        rec.link(false, 20_000).unwrap();
+        rec.link(true, 3_020_000).unwrap();
+        rec.data(&[0x7E, 0x22], Some(3_030_000)).unwrap();
+        rec.flush().unwrap();
+        let msgs = replay(std::fs::read(&path).unwrap());
+        let mut data = Vec::new();
+        let mut links = Vec::new();
+        for m in &msgs {
+            match m {
+                Message::Anchor(Anchor::Instant(t)) => assert_eq!(*t, anchor),
+                Message::Data(b) => {
+                    for (bytes, t) in b.segments() {
+                        data.push((bytes.to_vec(), t));
+                    }
+                }
+                Message::LinkDown { micros } => links.push((false, *micros, data.len())),
+                Message::LinkUp { micros, .. } => links.push((true, *micros, data.len())),
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(
+            data,
+            [
+                (vec![0x7E, 0x00], Some(1_000)),
+                (vec![0x7E, 0xA1], Some(13_000)),
+                (vec![0x7E, 0x22], Some(3_030_000))
+            ]
+        );
+        assert_eq!(links, [(false, 20_000, 2), (true, 3_020_000, 2)]);
+    }
+
+    #[test]
+    fn untimed_sources_replay_untimed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.pcap");
+        let mut rec = Recorder::create(&path, false).unwrap();
+        rec.data(&[0x7E, 0x00], None).unwrap();
+        rec.flush().unwrap();
+        let msgs = replay(std::fs::read(&path).unwrap());
+        let seg: Vec<_> = msgs
+            .iter()
+            .filter_map(|m| match m {
+                Message::Data(b) => Some(b.marks.clone()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(seg, [vec![(0, None)]]);
+    }
+
+    #[test]
+    fn raw_recording_is_the_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.bin");
+        let mut rec = Recorder::create(&path, true).unwrap();
+        rec.data(&[1, 2], Some(5)).unwrap();
+        rec.link(false, 6).unwrap();
+        rec.data(&[3], Some(7)).unwrap();
+        rec.flush().unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), [1, 2, 3]);
+    }
+}

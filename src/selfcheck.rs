@@ -1,0 +1,180 @@
+//! Invariant checks on arbitrary input, shared by the fuzz targets (`fuzz/`) and the test that
+//! replays their corpus (`tests/fuzz_corpus.rs`). Every function panics when an invariant is
+//! violated, and must not panic otherwise, whatever the input.
+
+use std::io::{self, Read};
+use std::sync::mpsc::sync_channel;
+
+use crate::decoder::{Collected, Decoder, OwnedRow};
+use crate::row::Class;
+use crate::source::{Batch, ChunkReader, Kind, Message, Opened};
+
+/// Split points derived from the data itself, so a fuzzer explores chunkings too.
+fn chunk_lengths(data: &[u8]) -> impl Iterator<Item = usize> + '_ {
+    data.iter().cycle().map(|b| 1 + (*b as usize % 7))
+}
+
+/// Decodes `data` (untimed) in one piece, byte by byte, and in data-driven chunks; the rows
+/// must be identical. Returns them.
+pub fn same_rows_however_chunked(new: &dyn Fn() -> Box<dyn Decoder>, data: &[u8]) -> Vec<OwnedRow> {
+    let run = |pieces: &mut dyn Iterator<Item = &[u8]>| {
+        let mut d = new();
+        let mut out = Collected::default();
+        for p in pieces {
+            d.push(p, None, &mut out).unwrap();
+        }
+        d.finish(&mut out).unwrap();
+        out.rows
+    };
+    let whole = run(&mut std::iter::once(data));
+    let bytes = run(&mut data.chunks(1));
+    assert_eq!(whole, bytes, "byte-by-byte input changed the rows");
+    let mut rest = data;
+    let mut lens = chunk_lengths(data);
+    let mut pieces = Vec::new();
+    while !rest.is_empty() {
+        let n = lens.next().unwrap().min(rest.len());
+        pieces.push(&rest[..n]);
+        rest = &rest[n..];
+    }
+    let chunked = run(&mut pieces.into_iter());
+    assert_eq!(whole, chunked, "chunked input changed the rows");
+    whole
+}
+
+/// S.Port: chunking invariance, every byte in exactly one row, and no row that is not flagged
+/// carries a frame failing its CRC.
+pub fn sport(data: &[u8]) {
+    use crate::sport::wire;
+    let rows = same_rows_however_chunked(&|| Box::new(crate::sport::SportDecoder::new()), data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert_eq!(total, data.len(), "bytes lost or duplicated");
+    for r in &rows {
+        let flagged = matches!(r.class, Class::Error);
+        if flagged || r.kind.is_empty() || r.kind == "FwUpdate" {
+            continue;
+        }
+        // An accepted frame: its wire bytes must unstuff to 8 bytes with a valid CRC.
+        let mut body = Vec::new();
+        let mut esc = false;
+        for &b in &r.raw[2..] {
+            if esc {
+                body.push(b ^ 0x20);
+                esc = false;
+            } else if b == wire::ESCAPE {
+                esc = true;
+            } else {
+                body.push(b);
+            }
+        }
+        let body: [u8; 8] = body
+            .try_into()
+            .unwrap_or_else(|b| panic!("accepted frame of wrong length {b:?} in {r:?}"));
+        assert!(
+            wire::crc_ok(&body),
+            "frame with a bad CRC not flagged: {r:?}"
+        );
+    }
+}
+
+/// A reader that returns a few bytes per read, as a slow pipe does (the sizes come from the
+/// data, to vary how a source sees its input).
+struct Trickle {
+    data: Vec<u8>,
+    pos: usize,
+}
+
+impl Read for Trickle {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let rest = &self.data[self.pos..];
+        let seed = rest.first().copied().unwrap_or(0) as usize;
+        let n = (1 + seed % 7).min(buf.len()).min(rest.len());
+        buf[..n].copy_from_slice(&rest[..n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// Runs a file reader over `data`, read whole or in small pieces; returns the bytes with their
+/// per-byte times and the other messages, which must not depend on the read sizes.
+fn read_all(
+    make: fn(Opened) -> Box<dyn ChunkReader>,
+    kind: Kind,
+    data: &[u8],
+) -> (Vec<(u8, Option<u64>)>, Vec<String>) {
+    let collect = |reader: Box<dyn Read + Send>| {
+        let opened = Opened {
+            kind,
+            prefix: Vec::new(),
+            reader,
+            name: "fuzz".into(),
+        };
+        let mut r = make(opened);
+        let (tx, rx) = sync_channel(1 << 16);
+        let mut bytes = Vec::new();
+        let mut failure = None;
+        loop {
+            match r.next_batch(&tx) {
+                Ok(Some(b)) => tx.send(Message::Data(b)).unwrap(),
+                Ok(None) => break,
+                Err(f) => {
+                    failure = Some(f.to_string());
+                    break;
+                }
+            }
+        }
+        drop(tx);
+        let mut other = Vec::new();
+        for m in rx.try_iter() {
+            match m {
+                Message::Data(b) => flatten(&b, &mut bytes),
+                m => other.push(format!("{m:?}")),
+            }
+        }
+        other.extend(failure);
+        (bytes, other)
+    };
+    let whole = collect(Box::new(io::Cursor::new(data.to_vec())));
+    let trickled = collect(Box::new(Trickle {
+        data: data.to_vec(),
+        pos: 0,
+    }));
+    assert_eq!(
+        whole, trickled,
+        "read sizes changed what the reader produced"
+    );
+    whole
+}
+
+fn flatten(b: &Batch, out: &mut Vec<(u8, Option<u64>)>) {
+    for (bytes, t) in b.segments() {
+        out.extend(bytes.iter().map(|&x| (x, t)));
+    }
+}
+
+/// EdgeTX log reader: never panics, read sizes do not matter, and the S.Port decoder accepts
+/// whatever it yields.
+pub fn edgetx_log(data: &[u8]) {
+    let (bytes, _) = read_all(
+        |o| Box::new(crate::source::edgetx::EdgeTxReader::new(o)),
+        Kind::EdgeTxLog,
+        data,
+    );
+    let raw: Vec<u8> = bytes.iter().map(|b| b.0).collect();
+    sport(&raw);
+}
+
+/// Recording (pcap) reader: never panics, read sizes do not matter.
+pub fn recording(data: &[u8]) {
+    let (bytes, _) = read_all(
+        |o| Box::new(crate::record::RecordingReader::new(o)),
+        Kind::Recording,
+        data,
+    );
+    let mut d = crate::sport::SportDecoder::new();
+    let mut out = Collected::default();
+    for (b, t) in bytes {
+        d.push(&[b], t, &mut out).unwrap();
+    }
+    d.finish(&mut out).unwrap();
+}

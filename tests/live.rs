@@ -1,0 +1,427 @@
+//! Live capture on pseudo-terminal pairs: rows appear while the bus is still talking, an
+//! unplugged adapter ends the run cleanly (or is waited for), recordings replay to the same rows,
+//! and busy / missing / forbidden ports get their messages.
+//!
+//! pty pairs are not thread-safe to create (serialport's own tests say so), so every test here
+//! holds one lock.
+
+mod common;
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use busnoop::sport::wire;
+use serialport::{SerialPort, TTYPort};
+
+static PTY: Mutex<()> = Mutex::new(());
+
+fn lock() -> std::sync::MutexGuard<'static, ()> {
+    PTY.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn bin() -> PathBuf {
+    assert_cmd::cargo::cargo_bin("busnoop")
+}
+
+/// A pty pair: `master` is the bus side the test writes to, `path` the device busnoop opens.
+struct Bus {
+    master: TTYPort,
+    /// Held open so the device stays usable until the test closes the master.
+    _slave: TTYPort,
+    path: PathBuf,
+}
+
+fn bus() -> Bus {
+    use std::os::fd::AsRawFd;
+    let (master, slave) = TTYPort::pair().expect("pty pair");
+    // The pair's descriptors are inheritable: keep them out of busnoop, or closing the bus side
+    // here would not close it.
+    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
+        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
+    }
+    let path = PathBuf::from(slave.name().expect("slave name"));
+    Bus {
+        master,
+        _slave: slave,
+        path,
+    }
+}
+
+/// Starts busnoop and collects its stdout lines with the time each one arrived.
+fn spawn(args: &[&str], device: &Path) -> (Child, Receiver<(Instant, String)>) {
+    let mut child = Command::new(bin())
+        .args(args)
+        .arg(device)
+        .env_remove("NO_COLOR")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            if tx.send((Instant::now(), line)).is_err() {
+                break;
+            }
+        }
+    });
+    (child, rx)
+}
+
+fn next_line(rx: &Receiver<(Instant, String)>) -> (Instant, String) {
+    rx.recv_timeout(Duration::from_secs(10))
+        .expect("busnoop printed nothing for 10 s")
+}
+
+/// S.Port traffic for `n` poll slots, one slot's bytes per element: polls of three devices, two
+/// of them answering with data.
+fn slots(n: usize) -> Vec<Vec<u8>> {
+    (0..n)
+        .map(|i| {
+            let mut b = Vec::new();
+            let phys = (i % 3) as u8;
+            if phys == 2 {
+                wire::encode_poll(&mut b, wire::header_for(phys));
+            } else {
+                wire::encode_frame(
+                    &mut b,
+                    wire::header_for(phys),
+                    0x10,
+                    0x0100,
+                    1000 + i as u32,
+                );
+            }
+            b
+        })
+        .collect()
+}
+
+fn wait_exit(child: &mut Child) -> std::process::ExitStatus {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        assert!(Instant::now() < deadline, "busnoop did not exit");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn stderr_of(child: &mut Child) -> String {
+    let mut s = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut s).unwrap();
+    s
+}
+
+#[test]
+fn rows_stream_live_and_unplug_ends_cleanly_and_the_recording_replays() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("live.pcap");
+    let raw = dir.path().join("live.bin");
+    let mut b = bus();
+    let (mut child, rx) = spawn(
+        &[
+            "sport",
+            "-f",
+            "tsv",
+            "--record",
+            rec.to_str().unwrap(),
+            "--stats",
+        ],
+        &b.path,
+    );
+    let (_, header) = next_line(&rx);
+    assert!(header.starts_with("Counter\tMillis\tID"));
+
+    // Write 40 slots at the bus's pace (12 ms per slot).
+    let traffic = slots(40);
+    let mut first_row_at = None;
+    let mut live = vec![header];
+    let mut all = Vec::new();
+    for s in &traffic {
+        b.master.write_all(s).unwrap();
+        b.master.flush().unwrap();
+        all.extend_from_slice(s);
+        std::thread::sleep(Duration::from_millis(12));
+        if first_row_at.is_none()
+            && let Ok((t, line)) = rx.try_recv()
+        {
+            assert!(line.starts_with("1\t"), "{line}");
+            first_row_at = Some(t);
+            live.push(line);
+        }
+    }
+    let writer_done = Instant::now();
+    let first_row_at = first_row_at.expect("no row appeared while the writer was writing");
+    assert!(first_row_at < writer_done);
+
+    // Unplug: close the bus side.
+    std::thread::sleep(Duration::from_millis(100));
+    drop(b.master);
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(7), "adapter disconnected");
+    let err = stderr_of(&mut child);
+    assert!(
+        err.contains("adapter disconnected after 27 frames"),
+        "stderr: {err}"
+    );
+    assert!(err.contains("S.Port statistics (40 rows)"), "{err}");
+    while let Ok((_, l)) = rx.recv_timeout(Duration::from_secs(2)) {
+        live.push(l);
+    }
+    assert_eq!(live.len(), 41, "every slot is a row: {live:?}");
+    // Millis are real arrival times: about 12 ms apart.
+    let millis: Vec<u64> = live[1..]
+        .iter()
+        .map(|l| l.split('\t').nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert!(millis.windows(2).all(|w| w[0] <= w[1]));
+    assert!(millis[39] - millis[0] >= 39 * 10, "{millis:?}");
+
+    // The recording replays to exactly the rows the live run printed.
+    let replay = Command::new(bin())
+        .args(["sport", "-f", "tsv"])
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert!(replay.status.success());
+    let replayed: Vec<String> = String::from_utf8(replay.stdout)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    assert_eq!(replayed, live);
+
+    // A raw recording keeps exactly the bytes.
+    let mut b = bus();
+    let (mut child, rx) = spawn(&["sport", "--record", raw.to_str().unwrap()], &b.path);
+    next_line(&rx);
+    b.master.write_all(&all).unwrap();
+    b.master.flush().unwrap();
+    for _ in 0..40 {
+        next_line(&rx);
+    }
+    drop(b.master);
+    wait_exit(&mut child);
+    assert_eq!(std::fs::read(&raw).unwrap(), all);
+}
+
+#[test]
+fn sigterm_flushes_the_output_file() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("out.csv");
+    let mut b = bus();
+    let (mut child, rx) = spawn(
+        &[
+            "sport",
+            "-o",
+            csv.to_str().unwrap(),
+            "--time",
+            "abs",
+            "--utc",
+        ],
+        &b.path,
+    );
+    for s in slots(10) {
+        b.master.write_all(&s).unwrap();
+    }
+    b.master.flush().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while std::fs::read_to_string(&csv)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < 11
+    {
+        assert!(Instant::now() < deadline);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    assert_eq!(wait_exit(&mut child).code(), Some(143));
+    drop(rx);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 11);
+    assert!(text.ends_with("\r\n"));
+    // --time abs --utc: RFC 3339 wall-clock times with milliseconds, close to now.
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    assert_eq!(r.headers().unwrap().iter().next_back(), Some("Time"));
+    let first = r.records().next().unwrap().unwrap();
+    let t = first.iter().next_back().unwrap();
+    assert_eq!(t.len(), "2026-01-02T03:04:05.678Z".len(), "{t}");
+    let t: chrono::DateTime<chrono::Utc> = t.parse().unwrap();
+    assert!((chrono::Utc::now() - t).num_seconds().abs() < 60, "{t}");
+}
+
+#[test]
+fn reconnect_waits_for_the_adapter_and_marks_the_gap() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("adapter");
+    let b = bus();
+    std::os::unix::fs::symlink(&b.path, &link).unwrap();
+    let (mut child, rx) = spawn(&["sport", "-f", "tsv", "--reconnect"], &link);
+    next_line(&rx);
+    let Bus {
+        mut master, _slave, ..
+    } = b;
+    master.write_all(&slots(3).concat()).unwrap();
+    master.flush().unwrap();
+    // Two data rows; the third slot is a poll that stays open until something follows it.
+    for _ in 0..2 {
+        next_line(&rx);
+    }
+    // Unplug: the device disappears. The open poll is closed, then the gap is marked.
+    drop(master);
+    drop(_slave);
+    let (_, poll) = next_line(&rx);
+    assert!(
+        poll.starts_with("3\t") && poll.contains("\tFAS-40S\t"),
+        "{poll}"
+    );
+    let (_, down) = next_line(&rx);
+    assert!(down.contains("\tLinkDown\t"), "{down}");
+    assert!(
+        down.contains("adapter disconnected after 2 frames"),
+        "{down}"
+    );
+    // Plug in again: the stable name now points to a new device node.
+    std::thread::sleep(Duration::from_millis(300));
+    let mut b2 = bus();
+    let tmp = dir.path().join("adapter.new");
+    std::os::unix::fs::symlink(&b2.path, &tmp).unwrap();
+    std::fs::rename(&tmp, &link).unwrap();
+    let (_, up) = next_line(&rx);
+    assert!(up.contains("\tLinkUp\t"), "{up}");
+    assert!(up.contains("adapter back at"), "{up}");
+    b2.master.write_all(&slots(3).concat()).unwrap();
+    b2.master.flush().unwrap();
+    for i in 0..2 {
+        let (_, row) = next_line(&rx);
+        assert!(row.starts_with(&format!("{}\t", 6 + i)), "{row}");
+        assert!(row.contains("\tData\t"), "{row}");
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert_eq!(wait_exit(&mut child).code(), Some(130));
+    let err = stderr_of(&mut child);
+    assert!(err.contains("waiting for it"), "{err}");
+}
+
+#[test]
+fn a_busy_port_is_reported() {
+    let _g = lock();
+    let b = bus();
+    // Another program holds the port (serialport opens exclusively, as most tools do).
+    let _holder = serialport::new(b.path.to_string_lossy(), 57_600)
+        .timeout(Duration::from_millis(50))
+        .open_native()
+        .unwrap();
+    let out = Command::new(bin())
+        .arg("sport")
+        .arg(&b.path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(5));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(
+        err,
+        format!(
+            "busnoop: {} is in use by another program (close it, or find it with `fuser {}`)\n",
+            b.path.display(),
+            b.path.display()
+        )
+    );
+}
+
+#[test]
+fn a_missing_port_lists_the_ports_that_exist() {
+    let _g = lock();
+    let out = Command::new(bin())
+        .args(["sport", "/dev/ttyBUSNOOP_MISSING"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.starts_with("busnoop: /dev/ttyBUSNOOP_MISSING: no such file or device (")
+            && (err.contains("available ports: ") || err.contains("no serial ports found")),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1);
+}
+
+#[test]
+fn a_forbidden_port_gets_the_group_hint() {
+    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::process::CommandExt;
+    let _g = lock();
+    let b = bus();
+    let root = unsafe { libc::geteuid() } == 0;
+    let mode = if root { 0o600 } else { 0o000 };
+    std::fs::set_permissions(&b.path, std::fs::Permissions::from_mode(mode)).unwrap();
+    let mut cmd = Command::new(bin());
+    cmd.arg("sport").arg(&b.path);
+    if root {
+        // Root may open anything: run busnoop as an unprivileged user.
+        unsafe {
+            cmd.pre_exec(|| {
+                if libc::setgid(65534) != 0 || libc::setuid(65534) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    let out = cmd.output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(4),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.starts_with(&format!(
+            "busnoop: {}: permission denied (",
+            b.path.display()
+        )),
+        "{err}"
+    );
+    assert!(err.contains("group"), "{err}");
+    assert_eq!(err.lines().count(), 1);
+}
+
+#[test]
+fn a_silent_line_with_noise_gets_the_wiring_hint() {
+    let _g = lock();
+    let mut b = bus();
+    let (mut child, rx) = spawn(&["sport", "-f", "tsv"], &b.path);
+    next_line(&rx);
+    // What a non-inverted S.Port line looks like: bytes, but never a frame.
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(3500) {
+        b.master
+            .write_all(&[0xA0, 0xA0, 0xE6, 0x57, 0x7F, 0x81])
+            .unwrap();
+        b.master.flush().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    drop(b.master);
+    wait_exit(&mut child);
+    let err = stderr_of(&mut child);
+    let hints: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("no valid S.Port frame"))
+        .collect();
+    assert_eq!(hints.len(), 1, "{err}");
+    assert!(hints[0].contains("not inverted"), "{err}");
+    assert!(hints[0].contains("57600"), "{err}");
+}

@@ -1,0 +1,347 @@
+//! The bad-input matrix of docs/robustness.md: every case gives a clear message, no panic, its
+//! own exit code, and keeps the rows decoded so far.
+
+mod common;
+
+use std::os::unix::process::CommandExt;
+use std::process::{Command, Output, Stdio};
+
+use busnoop::sport::wire;
+use common::fixture;
+
+fn busnoop() -> Command {
+    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
+    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
+    c
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// No panic message, whatever happened.
+fn no_panic(out: &Output) {
+    let err = text(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!err.contains("RUST_BACKTRACE"), "{err}");
+}
+
+const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote";
+
+#[test]
+fn empty_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("empty.bin");
+    std::fs::write(&p, b"").unwrap();
+    let out = busnoop().arg("sport").arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(text(&out.stdout), format!("{HEADER}\n"));
+    assert_eq!(text(&out.stderr), "");
+    // Empty standard input too.
+    let out = busnoop()
+        .args(["sport", "-"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(text(&out.stdout), format!("{HEADER}\n"));
+}
+
+#[test]
+fn truncated_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    // Cut inside the last data frame (Alt 65.43 is frame 23 of 30 rows; cut 4 bytes into it).
+    let alt = sample
+        .windows(4)
+        .position(|w| w == [0x7E, 0x00, 0x10, 0x00])
+        .unwrap();
+    let cut = &sample[..alt + 5];
+    let p = dir.path().join("cut.bin");
+    std::fs::write(&p, cut).unwrap();
+    let out = busnoop().arg("sport").arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    let last = stdout.lines().last().unwrap();
+    assert!(last.contains("\tTruncated\t"), "{last}");
+    assert!(last.contains("3 of 8 bytes"), "{last}");
+    assert_eq!(
+        stdout.lines().count(),
+        1 + 23,
+        "every row before the cut is kept"
+    );
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: S.Port: 1 truncated frame in 14 valid frames\n"
+    );
+}
+
+#[test]
+fn random_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    let bytes: Vec<u8> = (0..200_000)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as u8
+        })
+        .collect();
+    let p = dir.path().join("noise.bin");
+    std::fs::write(&p, &bytes).unwrap();
+    let out = busnoop().args(["sport", "--raw"]).arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    let err = text(&out.stderr);
+    assert!(err.starts_with("busnoop: S.Port: "), "{err}");
+    assert!(err.contains("garbage bytes skipped"), "{err}");
+    assert_eq!(err.lines().count(), 1);
+    // Every input byte is in the Raw column of exactly one row.
+    let stdout = text(&out.stdout);
+    let raw_bytes: usize = stdout
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.rsplit('\t')
+                .next()
+                .unwrap()
+                .split(' ')
+                .filter(|s| !s.is_empty())
+                .count()
+        })
+        .sum();
+    assert_eq!(raw_bytes, bytes.len());
+}
+
+#[test]
+fn wrong_protocol_for_the_file() {
+    // A Saia S-Bus data-mode session is not S.Port: no valid frame, shown as garbage, one line.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("sbus.bin");
+    let telegram = [0xB5, 0x00, 0x01, 0x06, 0x00, 0x00, 0x0A, 0x12, 0x34];
+    std::fs::write(&p, telegram.repeat(50)).unwrap();
+    let out = busnoop().arg("sport").arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    let err = text(&out.stderr);
+    assert!(err.contains("in 0 valid frames"), "{err}");
+    // A pcap of network traffic given to the S.Port decoder is refused with a reason.
+    let mut pcap = vec![0xD4, 0xC3, 0xB2, 0xA1, 2, 0, 4, 0];
+    pcap.extend_from_slice(&[0; 8]);
+    pcap.extend_from_slice(&65535u32.to_le_bytes());
+    pcap.extend_from_slice(&1u32.to_le_bytes()); // Ethernet
+    let p = dir.path().join("net.pcap");
+    std::fs::write(&p, &pcap).unwrap();
+    let out = busnoop().arg("sport").arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(9));
+    assert!(
+        text(&out.stderr).contains("pcap of network traffic"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(
+        text(&out.stdout),
+        "",
+        "nothing written before the input is known to be usable"
+    );
+}
+
+#[test]
+fn recording_cut_short() {
+    // A recording whose records are cut short is replayed up to the cut, with a warning.
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("r.pcap");
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("edgetx-MODELE24-2014-07-11-sport.log"))
+        .arg("--record")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let full = std::fs::read(&rec).unwrap();
+    std::fs::write(&rec, &full[..full.len() - 5]).unwrap();
+    let out = busnoop().arg("sport").arg(&rec).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(
+        text(&out.stderr).contains("the last record is cut short"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(
+        text(&out.stdout).lines().count(),
+        592,
+        "all but the cut record"
+    );
+}
+
+#[test]
+fn directory_as_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = busnoop().arg("sport").arg(dir.path()).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "busnoop: {} is a directory; give a capture file, a serial device or - for standard input\n",
+            dir.path().display()
+        )
+    );
+}
+
+#[test]
+fn missing_file() {
+    let out = busnoop()
+        .args(["sport", "no/such/capture.bin"])
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: no/such/capture.bin: no such file or device\n"
+    );
+}
+
+#[test]
+fn unreadable_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+    let p = dir.path().join("secret.bin");
+    std::fs::copy(fixture("sport-sample.bin"), &p).unwrap();
+    std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o000)).unwrap();
+    let mut cmd = busnoop();
+    cmd.arg("sport").arg(&p);
+    if unsafe { libc::geteuid() } == 0 {
+        // Root reads anything: run as an unprivileged user.
+        unsafe {
+            cmd.pre_exec(|| {
+                if libc::setgid(65534) != 0 || libc::setuid(65534) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    let out = cmd.output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(4));
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "busnoop: {}: permission denied (check the file's permissions)\n",
+            p.display()
+        )
+    );
+}
+
+#[test]
+fn output_to_a_full_disk() {
+    // /dev/full: every write fails with ENOSPC.
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["-o", "/dev/full"])
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(8));
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: cannot write to /dev/full: No space left on device (os error 28)\n"
+    );
+    // Standard output on a full disk.
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .stdout(full)
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(8));
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: cannot write to standard output: No space left on device (os error 28)\n"
+    );
+}
+
+#[test]
+fn output_file_that_fills_up_ends_with_a_whole_row() {
+    // A file size limit makes the disk "full" after 100 kB: the file is cut back to the last
+    // whole row, and the exit code says so.
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..20_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0300,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    let csv = dir.path().join("out.csv");
+    let mut cmd = busnoop();
+    cmd.arg("sport").arg(&big).arg("-o").arg(&csv);
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let lim = libc::rlimit {
+                rlim_cur: 100_000,
+                rlim_max: 100_000,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let out = cmd.output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(8));
+    assert!(
+        text(&out.stderr).starts_with(&format!("busnoop: cannot write to {}: ", csv.display())),
+        "{}",
+        text(&out.stderr)
+    );
+    let written = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        written.len() <= 100_000 && written.len() > 50_000,
+        "{}",
+        written.len()
+    );
+    assert!(written.ends_with("\r\n"), "the file ends with a whole row");
+    let mut r = csv::Reader::from_reader(written.as_bytes());
+    let n = r.records().inspect(|rec| assert!(rec.is_ok())).count();
+    assert!(n > 500, "rows decoded so far are kept: {n}");
+}
+
+#[test]
+fn recording_to_a_full_disk() {
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["--record", "/dev/full", "-o", "/dev/null"])
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(8));
+    assert!(
+        text(&out.stderr).starts_with("busnoop: cannot write recording /dev/full: No space left"),
+        "{}",
+        text(&out.stderr)
+    );
+}
