@@ -797,9 +797,13 @@ proptest! {
         // biased garbage: frame bytes, DLE, ACK/NAK and break characters
         let biased: Vec<u8> = data.iter().map(|b| match b % 6 {
             0 => FS, 1 => DLE, 2 => 0x06, 3 => 0x00, _ => *b }).collect();
-        run(&mut decoder(mode), &[(biased, None)]);
+        run(&mut decoder(mode), &[(biased.clone(), None)]);
         let mut e = EtherDecoder::new(&Options::default());
-        run(&mut e, &[(data, None)]);
+        run(&mut e, &[(data.clone(), None)]);
+        // the fuzz targets' invariants: every byte in exactly one row, chunking does not matter
+        crate::selfcheck::sbus_serial(&data);
+        crate::selfcheck::sbus_serial(&biased);
+        crate::selfcheck::sbus_ether(&data);
     }
 }
 
