@@ -315,6 +315,31 @@ mod tests {
             }
         ));
         assert_eq!(extract(linktype::ETHERNET, &eth[..20]), Extract::Malformed);
+        // IPv6 (raw IP link type)
+        let mut v6 = vec![0x60, 0, 0, 0];
+        v6.extend_from_slice(&(8u16 + 2).to_be_bytes());
+        v6.push(17);
+        v6.push(64);
+        let mut src = [0u8; 16];
+        src[15] = 1;
+        let mut dst = [0u8; 16];
+        dst[0] = 0xFD;
+        dst[15] = 5;
+        v6.extend_from_slice(&src);
+        v6.extend_from_slice(&dst);
+        v6.extend_from_slice(&40000u16.to_be_bytes());
+        v6.extend_from_slice(&5050u16.to_be_bytes());
+        v6.extend_from_slice(&10u16.to_be_bytes());
+        v6.extend_from_slice(&[0, 0]);
+        v6.extend_from_slice(b"hi");
+        let Extract::Udp(u) = extract(linktype::RAW, &v6) else {
+            panic!("{:?}", extract(linktype::RAW, &v6))
+        };
+        assert_eq!(u.dst.to_string(), "[fd00::5]:5050");
+        assert_eq!(u.payload, b"hi");
+        let mut lo6 = 30u32.to_le_bytes().to_vec();
+        lo6.extend_from_slice(&v6);
+        assert!(matches!(extract(linktype::NULL, &lo6), Extract::Udp(_)));
         assert_eq!(extract(147, &eth), Extract::UnsupportedLink(147));
     }
 }

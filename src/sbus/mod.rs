@@ -862,7 +862,9 @@ impl SerialCore {
         }
         match f.crc {
             CrcCheck::Ok(basis) => {
-                self.totals.valid += 1;
+                if !matches!(f.tele, Tele::Broken) {
+                    self.totals.valid += 1;
+                }
                 if f.wire.first() == Some(&telegram::FS) {
                     let i = match basis {
                         CrcBasis::Escaped => 0,
@@ -1550,7 +1552,7 @@ impl EtherCore {
                 if u.src.port() != self.port && u.dst.port() != self.port {
                     return Ok(());
                 }
-                self.datagram(u, t, p.data, out)
+                self.datagram(u, t, out)
             }
             ether::Extract::Fragment { src, dst, ports } => {
                 self.totals.fragments += 1;
@@ -1663,14 +1665,7 @@ impl EtherCore {
         )
     }
 
-    fn datagram(
-        &mut self,
-        u: ether::Udp<'_>,
-        t: u64,
-        raw: &[u8],
-        out: &mut dyn RowOut,
-    ) -> io::Result<()> {
-        let _ = raw;
+    fn datagram(&mut self, u: ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> io::Result<()> {
         self.sc.clear();
         let tele = match ether::parse(u.payload) {
             Ok(tele) => tele,
@@ -1760,7 +1755,14 @@ impl EtherCore {
                 u.payload,
             );
         }
-        self.totals.valid += 1;
+        let broken = match tele.at {
+            telegram::AT_REQUEST => tele.telegram.len() < 2,
+            telegram::AT_ACKNAK => tele.telegram.len() != 2,
+            _ => false,
+        };
+        if !broken {
+            self.totals.valid += 1;
+        }
         match tele.at {
             telegram::AT_REQUEST => {
                 if tele.telegram.len() < 2 {
