@@ -1324,6 +1324,39 @@ impl Decoder for SerialDecoder {
     }
 
     fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
+        // Auto mode on a live line that went quiet after a few telegrams: decide with what was
+        // seen rather than wait for more.
+        if let Framer::Detect {
+            trial,
+            trial_break,
+            counts,
+            ..
+        } = &mut self.framer
+        {
+            let mut hit = [0u32; 2];
+            trial.idle(now, &mut |ev| {
+                if let Event::Frame(f) = ev
+                    && f.crc.ok()
+                {
+                    hit[0] += 1;
+                }
+            });
+            trial_break.idle(now, &mut |ev| {
+                if let Event::Frame(f) = ev
+                    && f.crc.ok()
+                    && matches!(f.tele, Tele::Request { .. } | Tele::Response { .. })
+                {
+                    hit[1] += 1;
+                }
+            });
+            counts[0] += hit[0];
+            counts[1] += hit[1];
+            if counts[0] + counts[1] == 0 {
+                return Ok(());
+            }
+            let d = late_decision(*counts);
+            self.settle(d, out)?;
+        }
         let core = &mut self.core;
         let mut result = Ok(());
         let mut emit = |ev: &Event<'_>| {

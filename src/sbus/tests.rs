@@ -547,6 +547,24 @@ fn auto_mode_finds_data_and_break_mode() {
 }
 
 #[test]
+fn auto_mode_on_a_quiet_live_line_decides_when_idle() {
+    let mut d = SerialDecoder::new(Options::default());
+    let mut out = Collected::default();
+    let mut v = Vec::new();
+    encode_data(&mut v, 0, &[3, 6, 0, 0, 5], CrcBasis::Both);
+    d.push(&v, Some(1_000), &mut out).unwrap();
+    assert!(out.rows.is_empty(), "still looking at the mode");
+    // the line is idle: the complete request decides the mode
+    d.idle(10_000, &mut out).unwrap();
+    assert_eq!(out.rows.len(), 1);
+    // after the timeout (375 ms) the request timed out
+    d.idle(500_000, &mut out).unwrap();
+    assert_eq!(d.resolved(), Some(Resolved::Data));
+    let kinds: Vec<&str> = out.rows.iter().map(|r| r.kind.as_str()).collect();
+    assert_eq!(kinds, ["Request", "Timeout"]);
+}
+
+#[test]
 fn session_statistics_count_what_happened() {
     let g = session(SMode::Data, true, 99, 80);
     let mut d = decoder(SMode::Data);
