@@ -551,6 +551,32 @@ fn pcapng_gives_the_same_rows() {
 }
 
 #[test]
+fn another_port() {
+    let mut f = Vec::new();
+    pw::header(&mut f, 1);
+    let mut frame = Vec::new();
+    let mut p = Vec::new();
+    encode_ether(&mut p, 1, 0, &[9, 6, 0, 0, 1]);
+    pw::udp4_frame(
+        &mut frame,
+        ([10, 0, 0, 1], 40000),
+        ([10, 0, 0, 9], 6060),
+        &p,
+    );
+    pw::record(&mut f, 0, &frame);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.pcap");
+    std::fs::write(&path, &f).unwrap();
+    assert!(busnoop_rows(&path, &[]).is_empty());
+    let rows = busnoop_rows(&path, &["--port", "6060"]);
+    assert_eq!(rows.len(), 1);
+    assert_eq!(
+        (rows[0][2].as_str(), rows[0][3].as_str()),
+        ("9", "10.0.0.9:6060")
+    );
+}
+
+#[test]
 fn absolute_time_from_the_capture() {
     let rows = busnoop_rows(
         &fixture("sbus_seeds_ether.pcap"),
@@ -676,12 +702,29 @@ fn broken_captures_are_reported_not_fatal() {
             .chain([0; 28])
             .collect::<Vec<u8>>(),
     );
+    // the first fragment of a fragmented datagram to the port: skipped with a row
+    let mut good = Vec::new();
+    encode_ether(&mut good, 8, 0, &[1, 6, 0, 0, 0]);
+    frame.clear();
+    pw::udp4_frame(
+        &mut frame,
+        ([10, 0, 0, 1], 1234),
+        ([10, 0, 0, 5], 5050),
+        &good,
+    );
+    frame[14 + 6] = 0x20; // more fragments
+    pw::record(&mut f, 30, &frame);
     let path = dir.path().join("odd.pcap");
     std::fs::write(&path, &f).unwrap();
     let rows = busnoop_rows(&path, &[]);
-    assert_eq!(rows.len(), 2);
+    assert_eq!(rows.len(), 3, "{rows:?}");
     assert_eq!(rows[0][4], "Garbage");
     assert_eq!(rows[1][4], "Truncated");
+    assert_eq!(rows[2][4], "Fragment");
+    assert!(
+        rows[2][10].contains("10.0.0.1:1234 -> 10.0.0.5:5050"),
+        "{rows:?}"
+    );
     // not a capture at all is a raw serial file; an EdgeTX log is refused
     let log = dir.path().join("x.log");
     std::fs::write(&log, "2014-07-11,22:41:01.340: 7E A1 10 00\n").unwrap();
