@@ -44,3 +44,13 @@ fn edgetx_log_corpus() {
 fn recording_corpus() {
     replay("recording", busnoop::selfcheck::recording);
 }
+
+#[test]
+fn sbus_serial_corpus() {
+    replay("sbus_serial", busnoop::selfcheck::sbus_serial);
+}
+
+#[test]
+fn sbus_ether_corpus() {
+    replay("sbus_ether", busnoop::selfcheck::sbus_ether);
+}
