@@ -38,12 +38,46 @@ pub struct Cli {
 pub enum Command {
     /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC (57600 baud).
     Sport(SportArgs),
+    /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
+    /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
+    Sbus(SbusArgs),
     /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
     /// requests paired with responses.
     #[command(alias = "sab")]
     Sab2(crate::sab::SabArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
+}
+
+#[derive(Args, Debug)]
+pub struct SbusArgs {
+    /// SOURCE may also be a pcap/pcapng capture of Ether-S-Bus traffic (or a `tcpdump -U -w -`
+    /// pipe on standard input); `--baud` also sets the byte times of raw files.
+    #[command(flatten)]
+    pub capture: CaptureArgs,
+
+    /// Serial mode; auto picks data/secure mode when the stream uses 0xB5 framing, break mode
+    /// otherwise.
+    #[arg(long, value_enum, default_value_t = crate::sbus::Mode::Auto)]
+    pub mode: crate::sbus::Mode,
+
+    /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
+    /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
+    #[arg(long, value_name = "MS")]
+    pub timeout_ms: Option<u64>,
+
+    /// Serial sources with time: a silence longer than this ends a telegram [default: 20
+    /// character times, at least 20 ms].
+    #[arg(long, value_name = "MS")]
+    pub gap_ms: Option<u64>,
+
+    /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`.
+    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = crate::sbus::parse_station)]
+    pub stations: Vec<(String, u8)>,
+
+    /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
+    #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT)]
+    pub port: u16,
 }
 
 #[derive(Args, Debug)]
@@ -70,8 +104,8 @@ pub struct CaptureArgs {
 /// Options for live capture.
 #[derive(Args, Debug, Clone, Default)]
 pub struct LiveArgs {
-    /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600,
-    /// sab2 115200]
+    /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600, sbus
+    /// 9600, sab2 115200]
     #[arg(long, value_name = "BAUD")]
     pub baud: Option<u32>,
 
@@ -220,6 +254,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 },
             )
         }
+        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, cfg| {
+            sbus_decoder(&args, kind, cfg)
+        }),
         Command::Sab2(args) => {
             run_capture(
                 &args.capture,
@@ -242,6 +279,34 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             )
         }
         Command::Ports => list_ports(),
+    }
+}
+
+/// The S-Bus decoder for an input kind: serial bytes (raw files, devices, busnoop recordings)
+/// or Ether-S-Bus captures.
+fn sbus_decoder(
+    args: &SbusArgs,
+    kind: Kind,
+    cfg: &SerialConfig,
+) -> Result<Box<dyn Decoder>, Failure> {
+    let opts = crate::sbus::Options {
+        mode: args.mode,
+        baud: cfg.baud,
+        timeout_ms: args.timeout_ms,
+        gap_ms: args.gap_ms,
+        stations: args.stations.clone(),
+        port: args.port,
+    };
+    match kind {
+        Kind::Raw | Kind::Serial | Kind::Recording => {
+            Ok(Box::new(crate::sbus::SerialDecoder::new(opts)))
+        }
+        Kind::Pcap | Kind::Pcapng => Ok(Box::new(crate::sbus::EtherDecoder::new(&opts))),
+        Kind::EdgeTxLog => Err(Failure::Input(
+            "this is an EdgeTX/OpenTX S.Port log; S-Bus captures are raw serial bytes, busnoop \
+             recordings or pcap/pcapng files of Ether-S-Bus traffic"
+                .into(),
+        )),
     }
 }
 

@@ -9,10 +9,12 @@ pub mod cli;
 pub mod decoder;
 pub mod exit;
 pub mod fmt;
+pub mod pcap;
 pub mod record;
 pub mod row;
 pub mod run;
 pub mod sab;
+pub mod sbus;
 #[doc(hidden)]
 pub mod selfcheck;
 pub mod sink;

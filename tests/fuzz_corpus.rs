@@ -46,6 +46,16 @@ fn recording_corpus() {
 }
 
 #[test]
+fn sbus_serial_corpus() {
+    replay("sbus_serial", busnoop::selfcheck::sbus_serial);
+}
+
+#[test]
+fn sbus_ether_corpus() {
+    replay("sbus_ether", busnoop::selfcheck::sbus_ether);
+}
+
+#[test]
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }

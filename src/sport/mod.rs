@@ -112,7 +112,12 @@ impl Scratch {
 #[derive(Default)]
 pub struct SportDecoder {
     re: Reassembler,
-    events: Vec<Event>,
+    table: Mapper,
+}
+
+/// Maps reassembled slots onto rows and keeps the statistics.
+#[derive(Default)]
+struct Mapper {
     scratch: Scratch,
     stats: Stats,
 }
@@ -123,25 +128,21 @@ impl SportDecoder {
     }
 
     pub fn stats_counters(&self) -> &Stats {
-        &self.stats
+        &self.table.stats
     }
+}
 
-    fn drain(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        let mut events = std::mem::take(&mut self.events);
-        let mut result = Ok(());
-        for ev in &events {
-            let r = match ev {
-                Event::Slot(s) => self.slot_row(s, out),
-                Event::Garbage(g) => self.garbage_row(g, out),
-            };
-            if let Err(e) = r {
-                result = Err(e);
-                break;
-            }
+impl Mapper {
+    /// Writes the row of one event; after a write error, later events are dropped and the
+    /// first error is kept in `result`.
+    fn event(&mut self, ev: Event<'_>, out: &mut dyn RowOut, result: &mut io::Result<()>) {
+        if result.is_err() {
+            return;
         }
-        events.clear();
-        self.events = events;
-        result
+        *result = match ev {
+            Event::Slot(s) => self.slot_row(s, out),
+            Event::Garbage(g) => self.garbage_row(g, out),
+        };
     }
 
     fn slot_row(&mut self, s: &Slot, out: &mut dyn RowOut) -> io::Result<()> {
@@ -386,23 +387,26 @@ impl Decoder for SportDecoder {
     }
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
-        let events = &mut self.events;
-        self.re.push(data, time, &mut |e| events.push(*e));
-        self.drain(out)
+        let mut result = Ok(());
+        let table = &mut self.table;
+        self.re
+            .push(data, time, &mut |e| table.event(e, out, &mut result));
+        result
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        let events = &mut self.events;
-        self.re.finish(&mut |e| events.push(*e));
-        self.drain(out)
+        let mut result = Ok(());
+        let table = &mut self.table;
+        self.re.finish(&mut |e| table.event(e, out, &mut result));
+        result
     }
 
     fn valid_frames(&self) -> u64 {
-        self.stats.valid_frames
+        self.table.stats.valid_frames
     }
 
     fn stats(&self) -> String {
-        let st = &self.stats;
+        let st = &self.table.stats;
         let mut s = String::new();
         let _ = writeln!(
             s,
@@ -482,7 +486,7 @@ impl Decoder for SportDecoder {
     }
 
     fn problems(&self) -> Option<String> {
-        let st = &self.stats;
+        let st = &self.table.stats;
         let mut parts = Vec::new();
         let plural =
             |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });

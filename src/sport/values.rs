@@ -150,14 +150,25 @@ fn hub_name(id: u8) -> Option<&'static str> {
     })
 }
 
+const HEX_DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+
 /// Upper-case 4-digit hex label of an unknown app ID (`5100`), as EdgeTX names them.
 pub fn push_hex_id(out: &mut String, app_id: u16) {
-    let _ = write!(out, "{app_id:04X}");
+    for shift in [12, 8, 4, 0] {
+        out.push(HEX_DIGITS[(app_id >> shift) as usize & 0xF] as char);
+    }
 }
 
 /// The `Sensor #` column: the app ID in hex without leading zeros (0x0210 → `210`).
 pub fn push_sensor_no(out: &mut String, app_id: u16) {
-    let _ = write!(out, "{app_id:X}");
+    let mut started = false;
+    for shift in [12, 8, 4, 0] {
+        let d = (app_id >> shift) as usize & 0xF;
+        if d != 0 || started || shift == 0 {
+            started = true;
+            out.push(HEX_DIGITS[d] as char);
+        }
+    }
 }
 
 /// Sensor label of an app ID without decoding a value (for config frames and notes).
@@ -470,6 +481,17 @@ mod tests {
         let (mut s, mut v) = (String::new(), String::new());
         let unit = decode(app_id, value, &mut s, &mut v);
         (s, v, unit)
+    }
+
+    #[test]
+    fn hex_ids() {
+        for id in [0u16, 1, 0x10, 0x0210, 0x5100, 0xF101, 0xFFFF] {
+            let (mut a, mut b) = (String::new(), String::new());
+            push_sensor_no(&mut a, id);
+            push_hex_id(&mut b, id);
+            assert_eq!(a, format!("{id:X}"));
+            assert_eq!(b, format!("{id:04X}"));
+        }
     }
 
     #[test]

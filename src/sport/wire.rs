@@ -146,11 +146,11 @@ impl Garbage {
     }
 }
 
-/// What the reassembler emits.
+/// What the reassembler emits: borrowed from the reassembler, so nothing is copied per frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Event {
-    Slot(Slot),
-    Garbage(Garbage),
+pub enum Event<'a> {
+    Slot(&'a Slot),
+    Garbage(&'a Garbage),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -215,14 +215,14 @@ impl Reassembler {
     }
 
     /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
-    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(Event<'_>)) {
         for &b in data {
             self.byte(b, time, emit);
         }
     }
 
     /// End of input: emits an open slot (as unanswered or truncated) and pending garbage.
-    pub fn finish(&mut self, emit: &mut impl FnMut(&Event)) {
+    pub fn finish(&mut self, emit: &mut impl FnMut(Event<'_>)) {
         match self.state {
             State::Outside => {}
             State::Header => self.lone_start(emit),
@@ -239,7 +239,7 @@ impl Reassembler {
     }
 
     #[inline]
-    fn byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+    fn byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(Event<'_>)) {
         if b == START {
             match self.state {
                 State::Outside => {}
@@ -286,18 +286,18 @@ impl Reassembler {
     }
 
     #[inline]
-    fn body_byte(&mut self, b: u8, emit: &mut impl FnMut(&Event)) {
+    fn body_byte(&mut self, b: u8, emit: &mut impl FnMut(Event<'_>)) {
         self.body[self.body_len] = b;
         self.body_len += 1;
         if self.body_len == BODY_LEN {
             self.cur.body = Body::Complete(self.body);
-            emit(&Event::Slot(self.cur));
+            emit(Event::Slot(&self.cur));
             self.state = State::Outside;
         }
     }
 
     /// The open slot ends before its 8 bytes arrived.
-    fn close_slot(&mut self, emit: &mut impl FnMut(&Event)) {
+    fn close_slot(&mut self, emit: &mut impl FnMut(Event<'_>)) {
         self.cur.body = if self.body_len == 0 && !self.escaped {
             Body::None
         } else {
@@ -306,17 +306,17 @@ impl Reassembler {
                 len: self.body_len as u8,
             }
         };
-        emit(&Event::Slot(self.cur));
+        emit(Event::Slot(&self.cur));
         self.state = State::Outside;
     }
 
     /// A 0x7E that was not followed by a header byte.
-    fn lone_start(&mut self, emit: &mut impl FnMut(&Event)) {
+    fn lone_start(&mut self, emit: &mut impl FnMut(Event<'_>)) {
         self.state = State::Outside;
         self.garbage_byte(START, self.cur.time, emit);
     }
 
-    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event)) {
+    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(Event<'_>)) {
         if self.garbage.len == 0 {
             self.garbage.time = time;
             self.garbage.after_slot = self.last_slot;
@@ -328,9 +328,9 @@ impl Reassembler {
         }
     }
 
-    fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event)) {
+    fn flush_garbage(&mut self, emit: &mut impl FnMut(Event<'_>)) {
         if self.garbage.len > 0 {
-            emit(&Event::Garbage(self.garbage));
+            emit(Event::Garbage(&self.garbage));
             self.garbage.len = 0;
         }
     }
@@ -341,11 +341,24 @@ mod tests {
     use super::*;
     use crate::fmt::parse_hex;
 
-    fn events(data: &[u8]) -> Vec<Event> {
+    /// Owned copies of the events, for assertions.
+    #[derive(Debug)]
+    enum Owned {
+        Slot(Slot),
+        Garbage(Garbage),
+    }
+
+    fn events(data: &[u8]) -> Vec<Owned> {
         let mut r = Reassembler::new();
         let mut out = Vec::new();
-        r.push(data, None, &mut |e| out.push(*e));
-        r.finish(&mut |e| out.push(*e));
+        let mut keep = |e: Event<'_>| {
+            out.push(match e {
+                Event::Slot(s) => Owned::Slot(*s),
+                Event::Garbage(g) => Owned::Garbage(*g),
+            })
+        };
+        r.push(data, None, &mut keep);
+        r.finish(&mut keep);
         out
     }
 
@@ -380,7 +393,7 @@ mod tests {
         let wire = parse_hex("7E A1 10 00 03 32 34 08 00 7D 5E").unwrap();
         let ev = events(&wire);
         assert_eq!(ev.len(), 1);
-        let Event::Slot(s) = ev[0] else { panic!() };
+        let Owned::Slot(s) = &ev[0] else { panic!() };
         assert_eq!(s.body, Body::Complete([0x10, 0, 3, 0x32, 0x34, 8, 0, 0x7E]));
         assert_eq!(s.wire(), &wire[..]);
         assert!(!s.unusual_escape);
@@ -395,8 +408,8 @@ mod tests {
         let kinds: Vec<String> = ev
             .iter()
             .map(|e| match e {
-                Event::Garbage(g) => format!("garbage {}", crate::fmt::hex(g.bytes())),
-                Event::Slot(s) => match s.body {
+                Owned::Garbage(g) => format!("garbage {}", crate::fmt::hex(g.bytes())),
+                Owned::Slot(s) => match s.body {
                     Body::None => format!("poll {}", s.phys()),
                     Body::Complete(_) => format!("frame {}", s.phys()),
                     Body::Truncated { len, .. } => format!("trunc {} {len}", s.phys()),
@@ -422,7 +435,7 @@ mod tests {
         let mut wire = Vec::new();
         encode_frame(&mut wire, 0x1B, 0x10, 0x7D7E, 0x7E7D_7E7D);
         let ev = events(&wire);
-        let Event::Slot(s) = ev[0] else { panic!() };
+        let Owned::Slot(s) = &ev[0] else { panic!() };
         let Body::Complete(b) = s.body else { panic!() };
         assert!(crc_ok(&b));
         assert_eq!(u16::from_le_bytes([b[1], b[2]]), 0x7D7E);

@@ -1,0 +1,232 @@
+//! Ether-S-Bus throughput: busnoop against `tshark -r` on the same generated capture.
+//!
+//! ```sh
+//! cargo bench --bench sbus_ether                                # 1 000 000 packets
+//! BUSNOOP_BENCH_PACKETS=4000000 cargo bench --bench sbus_ether  # more
+//! ```
+//!
+//! Generates `target/bench-data/sbus-ether-<N>.pcap` (Ethernet/IPv4/UDP, 4 clients polling 8
+//! PLCs: register reads of 1-16 registers, flag reads, register and flag writes answered by
+//! ACK, 2 % NAKs), then measures in one run: busnoop decoding in process (rows rendered and
+//! discarded), the release binary writing TSV to /dev/null, and `tshark -r FILE` writing its
+//! summary lines to /dev/null (skipped with a message when tshark is not installed), all pinned
+//! to CPU 0.
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use busnoop::decoder::{Decoder, Discard};
+use busnoop::pcap::write as pw;
+use busnoop::sbus::telegram::encode_ether;
+
+fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"))
+}
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+}
+
+/// Writes the capture; returns the number of packets.
+fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
+    let mut out = BufWriter::with_capacity(1 << 20, File::create(path)?);
+    let mut buf = Vec::with_capacity(1 << 16);
+    pw::header(&mut buf, 1);
+    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    let mut t: i64 = 1_750_000_000_000_000;
+    let mut seq = [[0u16; 8]; 4];
+    let mut payload = Vec::with_capacity(256);
+    let mut frame = Vec::with_capacity(512);
+    let mut n = 0;
+    while n < packets {
+        let c = (rng.next() % 4) as usize;
+        let p = (rng.next() % 8) as usize;
+        let client = ([192, 168, 1, 10 + c as u8], 40_000 + c as u16);
+        let plc = ([192, 168, 1, 100 + p as u8], 5050);
+        let station = 1 + p as u8;
+        seq[c][p] = seq[c][p].wrapping_add(1);
+        let s = seq[c][p];
+        let addr = (rng.next() % 2000) as u16;
+        let [ah, al] = addr.to_be_bytes();
+        let kind = rng.next() % 100;
+        let mut req = vec![station];
+        let (at, resp): (u8, Vec<u8>) = if kind < 2 {
+            req.extend_from_slice(&[0x06, 0, ah, al]);
+            (2, vec![0, 1])
+        } else if kind < 60 {
+            let cnt = 1 + (rng.next() % 16) as u8;
+            req.extend_from_slice(&[0x06, cnt - 1, ah, al]);
+            (1, (0..4 * cnt as usize).map(|_| rng.next() as u8).collect())
+        } else if kind < 80 {
+            let bits = 1 + (rng.next() % 32) as u8;
+            req.extend_from_slice(&[0x02, bits - 1, ah, al]);
+            (
+                1,
+                (0..(bits as usize).div_ceil(8))
+                    .map(|_| rng.next() as u8)
+                    .collect(),
+            )
+        } else if kind < 92 {
+            req.extend_from_slice(&[0x0E, 9, ah, al]);
+            req.extend((0..8).map(|_| rng.next() as u8));
+            (2, vec![0, 0])
+        } else {
+            req.extend_from_slice(&[0x0B, 3, ah, al, 7, rng.next() as u8]);
+            (2, vec![0, 0])
+        };
+        payload.clear();
+        encode_ether(&mut payload, s, 0, &req);
+        frame.clear();
+        pw::udp4_frame(&mut frame, client, plc, &payload);
+        pw::record(&mut buf, t, &frame);
+        t += 300 + (rng.next() % 2000) as i64;
+        payload.clear();
+        encode_ether(&mut payload, s, at, &resp);
+        frame.clear();
+        pw::udp4_frame(&mut frame, plc, client, &payload);
+        pw::record(&mut buf, t, &frame);
+        t += 100 + (rng.next() % 500) as i64;
+        n += 2;
+        if buf.len() > 1 << 20 {
+            out.write_all(&buf)?;
+            buf.clear();
+        }
+    }
+    out.write_all(&buf)?;
+    out.flush()?;
+    Ok(n)
+}
+
+fn decode_in_process(path: &Path) -> (Duration, u64) {
+    let mut f = File::open(path).unwrap();
+    let mut dec = busnoop::sbus::EtherDecoder::new(&busnoop::sbus::Options::default());
+    let mut out = Discard::default();
+    let mut buf = vec![0u8; 64 * 1024];
+    let start = Instant::now();
+    loop {
+        let n = f.read(&mut buf).unwrap();
+        if n == 0 {
+            break;
+        }
+        dec.push(&buf[..n], None, &mut out).unwrap();
+    }
+    dec.finish(&mut out).unwrap();
+    (start.elapsed(), out.rows)
+}
+
+/// Pins the current thread (and threads it spawns later) to CPU 0.
+fn pin_to_core0() {
+    unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        libc::CPU_SET(0, &mut set);
+        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
+    }
+}
+
+/// Runs `cmd` pinned to CPU 0 (like the in-process measurement), output to /dev/null.
+fn time_command(cmd: &mut Command) -> Option<Duration> {
+    use std::os::unix::process::CommandExt;
+    unsafe {
+        cmd.pre_exec(|| {
+            pin_to_core0();
+            Ok(())
+        });
+    }
+    let start = Instant::now();
+    let status = cmd
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .ok()?;
+    let d = start.elapsed();
+    status.success().then_some(d)
+}
+
+fn rate(packets: u64, d: Duration) -> f64 {
+    packets as f64 / d.as_secs_f64()
+}
+
+fn main() {
+    let packets: u64 = std::env::var("BUSNOOP_BENCH_PACKETS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_000_000);
+    let dir = target_dir().join("bench-data");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("sbus-ether-{packets}.pcap"));
+    let packets = if path.exists() {
+        packets.div_ceil(2) * 2
+    } else {
+        eprintln!("generating {} ...", path.display());
+        generate(&path, packets).unwrap()
+    };
+    let size = std::fs::metadata(&path).unwrap().len();
+    println!(
+        "capture: {} ({} packets, {:.1} MiB)",
+        path.display(),
+        packets,
+        size as f64 / (1 << 20) as f64
+    );
+
+    // busnoop in process, best of three
+    pin_to_core0();
+    let mut best = Duration::MAX;
+    let mut rows = 0;
+    for _ in 0..3 {
+        let (d, r) = decode_in_process(&path);
+        best = best.min(d);
+        rows = r;
+    }
+    assert_eq!(rows, packets, "one row per packet");
+    let decode = rate(packets, best);
+    println!(
+        "busnoop decode only:        {:>8.3} s  {:>12.0} packets/s",
+        best.as_secs_f64(),
+        decode
+    );
+
+    // the release binary to TSV, best of three
+    let exe = env!("CARGO_BIN_EXE_busnoop");
+    let mut best = Duration::MAX;
+    for _ in 0..3 {
+        let d = time_command(Command::new(exe).args(["sbus", "-f", "tsv"]).arg(&path))
+            .expect("busnoop failed");
+        best = best.min(d);
+    }
+    let binary = rate(packets, best);
+    println!(
+        "busnoop sbus -f tsv FILE:   {:>8.3} s  {:>12.0} packets/s",
+        best.as_secs_f64(),
+        binary
+    );
+
+    // tshark, once (it is slow)
+    match time_command(Command::new("tshark").arg("-r").arg(&path)) {
+        Some(d) => {
+            let ts = rate(packets, d);
+            println!(
+                "tshark -r FILE:             {:>8.3} s  {:>12.0} packets/s",
+                d.as_secs_f64(),
+                ts
+            );
+            println!(
+                "busnoop / tshark: {:.1}× (binary to TSV), {:.1}× (decode only)",
+                binary / ts,
+                decode / ts
+            );
+        }
+        None => println!("tshark is not installed (or failed): skipping the comparison"),
+    }
+}

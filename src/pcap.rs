@@ -1,0 +1,856 @@
+//! Incremental pcap and pcapng packet parser, independent of any protocol.
+//!
+//! [`PcapStream`] is pure: bytes in (any chunking), [`Packet`]s out, so a `tcpdump -U -w -` pipe
+//! yields each packet as soon as its record is complete. It reads classic pcap (both byte
+//! orders, microsecond and nanosecond magics) and pcapng (section header blocks in both byte
+//! orders, several sections, interface description blocks with their link type, `if_tsresol`
+//! and `if_tsoffset`, enhanced, simple and the obsolete packet blocks; other blocks are
+//! skipped). Memory stays bounded: a record or block longer than [`MAX_RECORD`] is an error,
+//! never an allocation.
+
+use std::fmt;
+
+/// Longest record or block accepted (Wireshark's limit for pcapng blocks is 16 MiB too).
+pub const MAX_RECORD: usize = 16 * 1024 * 1024;
+
+/// Well-known link types (LINKTYPE_* values).
+pub mod linktype {
+    pub const NULL: u32 = 0;
+    pub const ETHERNET: u32 = 1;
+    pub const RAW_OLD: u32 = 12;
+    pub const RAW_OLD_OPENBSD: u32 = 14;
+    pub const RAW: u32 = 101;
+    pub const LOOP: u32 = 108;
+    pub const LINUX_SLL: u32 = 113;
+    pub const USER0: u32 = 147;
+    pub const IPV4: u32 = 228;
+    pub const IPV6: u32 = 229;
+    pub const RTAC_SERIAL: u32 = 250;
+    pub const LINUX_SLL2: u32 = 276;
+}
+
+/// One captured packet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Packet<'a> {
+    /// Capture time in µs since the Unix epoch.
+    pub ts_micros: i64,
+    /// LINKTYPE_* of the interface that captured it.
+    pub link_type: u32,
+    /// The captured bytes (possibly fewer than `orig_len`).
+    pub data: &'a [u8],
+    /// Length of the packet on the wire.
+    pub orig_len: u32,
+    /// pcapng interface ID within its section (0 for classic pcap).
+    pub interface: u32,
+}
+
+/// Why a stream cannot be read on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PcapError {
+    /// Neither a pcap magic nor a pcapng section header.
+    BadMagic([u8; 4]),
+    /// A record or block length that cannot be right.
+    BadLength { offset: u64, len: u64 },
+    /// A pcapng block whose trailing length differs from its leading one.
+    LengthMismatch { offset: u64 },
+    /// A pcapng packet for an interface no IDB described.
+    UnknownInterface { offset: u64, interface: u32 },
+    /// A pcapng block before the first section header.
+    NoSection { offset: u64 },
+    /// The input ended inside a record.
+    Truncated { offset: u64, missing: u64 },
+}
+
+impl fmt::Display for PcapError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PcapError::BadMagic(m) => write!(
+                f,
+                "not a pcap or pcapng file (starts with {:02X} {:02X} {:02X} {:02X})",
+                m[0], m[1], m[2], m[3]
+            ),
+            PcapError::BadLength { offset, len } => {
+                write!(f, "impossible record length {len} at byte {offset}")
+            }
+            PcapError::LengthMismatch { offset } => write!(
+                f,
+                "pcapng block at byte {offset} has different leading and trailing lengths"
+            ),
+            PcapError::UnknownInterface { offset, interface } => write!(
+                f,
+                "pcapng packet at byte {offset} names interface {interface}, which no interface description block defined"
+            ),
+            PcapError::NoSection { offset } => {
+                write!(f, "pcapng block at byte {offset} before any section header")
+            }
+            PcapError::Truncated { offset, missing } => write!(
+                f,
+                "the capture ends inside the record at byte {offset} ({missing} bytes missing)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PcapError {}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Iface {
+    link_type: u32,
+    snaplen: u32,
+    /// Timestamp units per second: 10^n or 2^n.
+    units: Resolution,
+    offset_secs: i64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Resolution {
+    Pow10(u8),
+    Pow2(u8),
+}
+
+impl Resolution {
+    fn to_micros(self, ts: u64) -> i64 {
+        let ts = ts as i128;
+        let v = match self {
+            Resolution::Pow10(6) => ts,
+            Resolution::Pow10(n) if n < 6 => ts * 10i128.pow(6 - n as u32),
+            Resolution::Pow10(n) => ts / 10i128.pow((n as u32 - 6).min(38)),
+            Resolution::Pow2(n) => (ts * 1_000_000) >> n.min(127),
+        };
+        v.clamp(i64::MIN as i128, i64::MAX as i128) as i64
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Format {
+    /// Not yet known (fewer than 4 bytes seen).
+    Unknown,
+    Pcap {
+        big: bool,
+        nanos: bool,
+        link_type: u32,
+        header_done: bool,
+    },
+    Pcapng {
+        big: bool,
+        ifaces: Vec<Iface>,
+        in_section: bool,
+    },
+    /// A previous error: nothing more is read.
+    Failed,
+}
+
+/// Pure incremental pcap/pcapng reader.
+#[derive(Clone, Debug)]
+pub struct PcapStream {
+    format: Format,
+    /// Bytes of an incomplete record carried over between pushes.
+    pending: Vec<u8>,
+    /// Stream offset of the first byte not yet consumed.
+    offset: u64,
+    /// Last packet time (for simple packet blocks, which carry none).
+    last_ts: i64,
+    packets: u64,
+}
+
+impl Default for PcapStream {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn rd16(b: &[u8], big: bool) -> u16 {
+    let a = [b[0], b[1]];
+    if big {
+        u16::from_be_bytes(a)
+    } else {
+        u16::from_le_bytes(a)
+    }
+}
+
+fn rd32(b: &[u8], big: bool) -> u32 {
+    let a = [b[0], b[1], b[2], b[3]];
+    if big {
+        u32::from_be_bytes(a)
+    } else {
+        u32::from_le_bytes(a)
+    }
+}
+
+/// Outcome of parsing at the start of a buffer.
+enum Step {
+    /// Consumed this many bytes.
+    Took(usize),
+    /// Needs at least this many bytes in total.
+    Need(usize),
+}
+
+impl PcapStream {
+    pub fn new() -> Self {
+        PcapStream {
+            format: Format::Unknown,
+            pending: Vec::new(),
+            offset: 0,
+            last_ts: 0,
+            packets: 0,
+        }
+    }
+
+    /// Packets emitted so far.
+    pub fn packets(&self) -> u64 {
+        self.packets
+    }
+
+    /// Stream position of the first byte not yet consumed.
+    pub fn offset(&self) -> u64 {
+        self.offset
+    }
+
+    /// Feeds bytes; `emit` is called for every packet completed by them. After an error the
+    /// stream stays failed and ignores further input.
+    pub fn push(
+        &mut self,
+        bytes: &[u8],
+        emit: &mut impl FnMut(Packet<'_>),
+    ) -> Result<(), PcapError> {
+        if self.format == Format::Failed {
+            return Ok(());
+        }
+        let r = self.push_inner(bytes, emit);
+        if r.is_err() {
+            self.format = Format::Failed;
+            self.pending = Vec::new();
+        }
+        r
+    }
+
+    fn push_inner(
+        &mut self,
+        mut bytes: &[u8],
+        emit: &mut impl FnMut(Packet<'_>),
+    ) -> Result<(), PcapError> {
+        // Complete a carried-over unit first, taking only the bytes it needs.
+        while !self.pending.is_empty() {
+            let mut pending = std::mem::take(&mut self.pending);
+            match self.step(&pending, emit)? {
+                Step::Took(n) => {
+                    if n < pending.len() {
+                        pending.drain(..n);
+                        self.pending = pending;
+                    }
+                }
+                Step::Need(need) => {
+                    if bytes.is_empty() {
+                        self.pending = pending;
+                        return Ok(());
+                    }
+                    let take = need.saturating_sub(pending.len()).min(bytes.len());
+                    pending.extend_from_slice(&bytes[..take]);
+                    bytes = &bytes[take..];
+                    self.pending = pending;
+                }
+            }
+        }
+        // Parse straight from the input; keep the incomplete tail.
+        while !bytes.is_empty() {
+            match self.step(bytes, emit)? {
+                Step::Took(n) => bytes = &bytes[n..],
+                Step::Need(_) => {
+                    self.pending.extend_from_slice(bytes);
+                    break;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// End of input: an error when the input stopped inside a record (or was not a capture).
+    pub fn finish(&mut self) -> Result<(), PcapError> {
+        if self.format == Format::Failed {
+            return Ok(());
+        }
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let have = self.pending.len();
+        let need = match self.step(&self.pending.clone(), &mut |_| {}) {
+            Ok(Step::Need(n)) => n,
+            _ => have,
+        };
+        if self.format == Format::Unknown {
+            let mut m = [0u8; 4];
+            m[..have.min(4)].copy_from_slice(&self.pending[..have.min(4)]);
+            self.format = Format::Failed;
+            return Err(PcapError::BadMagic(m));
+        }
+        self.format = Format::Failed;
+        Err(PcapError::Truncated {
+            offset: self.offset,
+            missing: need.saturating_sub(have) as u64,
+        })
+    }
+
+    /// Parses one unit (file header, record or block) at the start of `b`.
+    fn step(&mut self, b: &[u8], emit: &mut impl FnMut(Packet<'_>)) -> Result<Step, PcapError> {
+        let r = match &self.format {
+            Format::Unknown => self.detect(b),
+            Format::Pcap { header_done, .. } => {
+                if *header_done {
+                    self.pcap_record(b, emit)
+                } else {
+                    self.pcap_header(b)
+                }
+            }
+            Format::Pcapng { .. } => self.pcapng_block(b, emit),
+            Format::Failed => Ok(Step::Took(b.len())),
+        }?;
+        if let Step::Took(n) = r {
+            self.offset += n as u64;
+        }
+        Ok(r)
+    }
+
+    fn detect(&mut self, b: &[u8]) -> Result<Step, PcapError> {
+        if b.len() < 4 {
+            return Ok(Step::Need(4));
+        }
+        let m = [b[0], b[1], b[2], b[3]];
+        let (big, nanos) = match m {
+            [0xD4, 0xC3, 0xB2, 0xA1] => (false, false),
+            [0xA1, 0xB2, 0xC3, 0xD4] => (true, false),
+            [0x4D, 0x3C, 0xB2, 0xA1] => (false, true),
+            [0xA1, 0xB2, 0x3C, 0x4D] => (true, true),
+            [0x0A, 0x0D, 0x0D, 0x0A] => {
+                self.format = Format::Pcapng {
+                    big: false,
+                    ifaces: Vec::new(),
+                    in_section: false,
+                };
+                return Ok(Step::Took(0));
+            }
+            _ => return Err(PcapError::BadMagic(m)),
+        };
+        self.format = Format::Pcap {
+            big,
+            nanos,
+            link_type: 0,
+            header_done: false,
+        };
+        Ok(Step::Took(0))
+    }
+
+    fn pcap_header(&mut self, b: &[u8]) -> Result<Step, PcapError> {
+        if b.len() < 24 {
+            return Ok(Step::Need(24));
+        }
+        if let Format::Pcap {
+            big,
+            link_type,
+            header_done,
+            ..
+        } = &mut self.format
+        {
+            // The upper bits may carry FCS information; the link type is the low 16 bits.
+            *link_type = rd32(&b[20..], *big) & 0xFFFF;
+            *header_done = true;
+        }
+        Ok(Step::Took(24))
+    }
+
+    fn pcap_record(
+        &mut self,
+        b: &[u8],
+        emit: &mut impl FnMut(Packet<'_>),
+    ) -> Result<Step, PcapError> {
+        let Format::Pcap {
+            big,
+            nanos,
+            link_type,
+            ..
+        } = self.format
+        else {
+            unreachable!("pcap_record on a pcap stream")
+        };
+        if b.len() < 16 {
+            return Ok(Step::Need(16));
+        }
+        let secs = rd32(b, big) as i64;
+        let frac = rd32(&b[4..], big) as i64;
+        let incl = rd32(&b[8..], big) as usize;
+        let orig = rd32(&b[12..], big);
+        if incl > MAX_RECORD {
+            return Err(PcapError::BadLength {
+                offset: self.offset,
+                len: incl as u64,
+            });
+        }
+        if b.len() < 16 + incl {
+            return Ok(Step::Need(16 + incl));
+        }
+        let ts = secs * 1_000_000 + if nanos { frac / 1000 } else { frac };
+        self.last_ts = ts;
+        self.packets += 1;
+        emit(Packet {
+            ts_micros: ts,
+            link_type,
+            data: &b[16..16 + incl],
+            orig_len: orig,
+            interface: 0,
+        });
+        Ok(Step::Took(16 + incl))
+    }
+
+    fn pcapng_block(
+        &mut self,
+        b: &[u8],
+        emit: &mut impl FnMut(Packet<'_>),
+    ) -> Result<Step, PcapError> {
+        if b.len() < 12 {
+            return Ok(Step::Need(12));
+        }
+        let is_shb = b[..4] == [0x0A, 0x0D, 0x0D, 0x0A];
+        let big = if is_shb {
+            match b[8..12] {
+                [0x1A, 0x2B, 0x3C, 0x4D] => true,
+                [0x4D, 0x3C, 0x2B, 0x1A] => false,
+                _ => {
+                    return Err(PcapError::BadMagic([b[8], b[9], b[10], b[11]]));
+                }
+            }
+        } else {
+            match &self.format {
+                Format::Pcapng { big, .. } => *big,
+                _ => false,
+            }
+        };
+        let block_type = rd32(b, big);
+        let len = rd32(&b[4..], big) as usize;
+        if len < 12 || !len.is_multiple_of(4) || len > MAX_RECORD {
+            return Err(PcapError::BadLength {
+                offset: self.offset,
+                len: len as u64,
+            });
+        }
+        if b.len() < len {
+            return Ok(Step::Need(len));
+        }
+        if rd32(&b[len - 4..], big) as usize != len {
+            return Err(PcapError::LengthMismatch {
+                offset: self.offset,
+            });
+        }
+        let body = &b[8..len - 4];
+        let offset = self.offset;
+        let Format::Pcapng {
+            big: fbig,
+            ifaces,
+            in_section,
+        } = &mut self.format
+        else {
+            unreachable!("pcapng_block on a pcapng stream")
+        };
+        if is_shb {
+            *fbig = big;
+            ifaces.clear();
+            *in_section = true;
+            return Ok(Step::Took(len));
+        }
+        if !*in_section {
+            return Err(PcapError::NoSection { offset });
+        }
+        match block_type {
+            // Interface description block.
+            1 => {
+                if body.len() < 8 {
+                    return Err(PcapError::BadLength {
+                        offset,
+                        len: len as u64,
+                    });
+                }
+                let mut iface = Iface {
+                    link_type: rd16(body, big) as u32,
+                    snaplen: rd32(&body[4..], big),
+                    units: Resolution::Pow10(6),
+                    offset_secs: 0,
+                };
+                let mut opts = &body[8..];
+                while opts.len() >= 4 {
+                    let code = rd16(opts, big);
+                    let olen = rd16(&opts[2..], big) as usize;
+                    let padded = olen.div_ceil(4) * 4;
+                    if code == 0 || opts.len() < 4 + olen {
+                        break;
+                    }
+                    let v = &opts[4..4 + olen];
+                    match (code, olen) {
+                        (9, 1) => {
+                            iface.units = if v[0] & 0x80 != 0 {
+                                Resolution::Pow2(v[0] & 0x7F)
+                            } else {
+                                Resolution::Pow10(v[0])
+                            }
+                        }
+                        (14, 8) => {
+                            let a = [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]];
+                            iface.offset_secs = if big {
+                                i64::from_be_bytes(a)
+                            } else {
+                                i64::from_le_bytes(a)
+                            };
+                        }
+                        _ => {}
+                    }
+                    opts = opts.get(4 + padded..).unwrap_or(&[]);
+                }
+                ifaces.push(iface);
+            }
+            // Enhanced packet block and the obsolete packet block.
+            6 | 2 => {
+                if body.len() < 20 {
+                    return Err(PcapError::BadLength {
+                        offset,
+                        len: len as u64,
+                    });
+                }
+                let interface = if block_type == 6 {
+                    rd32(body, big)
+                } else {
+                    rd16(body, big) as u32
+                };
+                let ts = (rd32(&body[4..], big) as u64) << 32 | rd32(&body[8..], big) as u64;
+                let cap = rd32(&body[12..], big) as usize;
+                let orig = rd32(&body[16..], big);
+                if cap > body.len() - 20 {
+                    return Err(PcapError::BadLength {
+                        offset,
+                        len: cap as u64,
+                    });
+                }
+                let Some(iface) = ifaces.get(interface as usize) else {
+                    return Err(PcapError::UnknownInterface { offset, interface });
+                };
+                let ts_micros = iface
+                    .units
+                    .to_micros(ts)
+                    .saturating_add(iface.offset_secs.saturating_mul(1_000_000));
+                let link_type = iface.link_type;
+                self.last_ts = ts_micros;
+                self.packets += 1;
+                emit(Packet {
+                    ts_micros,
+                    link_type,
+                    data: &body[20..20 + cap],
+                    orig_len: orig,
+                    interface,
+                });
+            }
+            // Simple packet block: interface 0, no time.
+            3 => {
+                if body.len() < 4 {
+                    return Err(PcapError::BadLength {
+                        offset,
+                        len: len as u64,
+                    });
+                }
+                let Some(iface) = ifaces.first() else {
+                    return Err(PcapError::UnknownInterface {
+                        offset,
+                        interface: 0,
+                    });
+                };
+                let orig = rd32(body, big);
+                let mut cap = (orig as usize).min(body.len() - 4);
+                if iface.snaplen > 0 {
+                    cap = cap.min(iface.snaplen as usize);
+                }
+                let link_type = iface.link_type;
+                self.packets += 1;
+                emit(Packet {
+                    ts_micros: self.last_ts,
+                    link_type,
+                    data: &body[4..4 + cap],
+                    orig_len: orig,
+                    interface: 0,
+                });
+            }
+            _ => {}
+        }
+        Ok(Step::Took(len))
+    }
+}
+
+/// Writes classic pcap (microseconds, little endian): for tests, benchmarks and tools.
+pub mod write {
+    /// The 24-byte file header.
+    pub fn header(out: &mut Vec<u8>, link_type: u32) {
+        out.extend_from_slice(&0xA1B2_C3D4u32.to_le_bytes());
+        out.extend_from_slice(&2u16.to_le_bytes());
+        out.extend_from_slice(&4u16.to_le_bytes());
+        out.extend_from_slice(&0i32.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&262_144u32.to_le_bytes());
+        out.extend_from_slice(&link_type.to_le_bytes());
+    }
+
+    /// One record.
+    pub fn record(out: &mut Vec<u8>, ts_micros: i64, data: &[u8]) {
+        let secs = ts_micros.div_euclid(1_000_000) as u32;
+        let us = ts_micros.rem_euclid(1_000_000) as u32;
+        out.extend_from_slice(&secs.to_le_bytes());
+        out.extend_from_slice(&us.to_le_bytes());
+        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        out.extend_from_slice(data);
+    }
+
+    /// An Ethernet/IPv4/UDP frame around `payload` (checksum 0 = none).
+    pub fn udp4_frame(out: &mut Vec<u8>, src: ([u8; 4], u16), dst: ([u8; 4], u16), payload: &[u8]) {
+        out.extend_from_slice(&[0x02, 0, 0, 0, 0, 2, 0x02, 0, 0, 0, 0, 1, 0x08, 0x00]);
+        let total = 20 + 8 + payload.len();
+        let mut ip = [0u8; 20];
+        ip[0] = 0x45;
+        ip[2..4].copy_from_slice(&(total as u16).to_be_bytes());
+        ip[8] = 64;
+        ip[9] = 17;
+        ip[12..16].copy_from_slice(&src.0);
+        ip[16..20].copy_from_slice(&dst.0);
+        let mut sum: u32 = 0;
+        for c in ip.chunks(2) {
+            sum += u16::from_be_bytes([c[0], c[1]]) as u32;
+        }
+        while sum > 0xFFFF {
+            sum = (sum & 0xFFFF) + (sum >> 16);
+        }
+        ip[10..12].copy_from_slice(&(!(sum as u16)).to_be_bytes());
+        out.extend_from_slice(&ip);
+        out.extend_from_slice(&src.1.to_be_bytes());
+        out.extend_from_slice(&dst.1.to_be_bytes());
+        out.extend_from_slice(&((8 + payload.len()) as u16).to_be_bytes());
+        out.extend_from_slice(&[0, 0]);
+        out.extend_from_slice(payload);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Got = Vec<(i64, u32, Vec<u8>, u32)>;
+
+    fn collect(chunks: &[&[u8]]) -> (Got, Result<(), PcapError>) {
+        let mut s = PcapStream::new();
+        let mut out = Vec::new();
+        for c in chunks {
+            if let Err(e) = s.push(c, &mut |p| {
+                out.push((p.ts_micros, p.link_type, p.data.to_vec(), p.interface))
+            }) {
+                return (out, Err(e));
+            }
+        }
+        let r = s.finish();
+        (out, r)
+    }
+
+    fn le_block(kind: u32, body: &[u8]) -> Vec<u8> {
+        let padded = body.len().div_ceil(4) * 4;
+        let len = (12 + padded) as u32;
+        let mut v = Vec::new();
+        v.extend_from_slice(&kind.to_le_bytes());
+        v.extend_from_slice(&len.to_le_bytes());
+        v.extend_from_slice(body);
+        v.resize(8 + padded, 0);
+        v.extend_from_slice(&len.to_le_bytes());
+        v
+    }
+
+    fn be_block(kind: u32, body: &[u8]) -> Vec<u8> {
+        let padded = body.len().div_ceil(4) * 4;
+        let len = (12 + padded) as u32;
+        let mut v = Vec::new();
+        v.extend_from_slice(&kind.to_be_bytes());
+        v.extend_from_slice(&len.to_be_bytes());
+        v.extend_from_slice(body);
+        v.resize(8 + padded, 0);
+        v.extend_from_slice(&len.to_be_bytes());
+        v
+    }
+
+    fn shb_le() -> Vec<u8> {
+        let mut body = Vec::new();
+        body.extend_from_slice(&0x1A2B_3C4Du32.to_le_bytes());
+        body.extend_from_slice(&1u16.to_le_bytes());
+        body.extend_from_slice(&0u16.to_le_bytes());
+        body.extend_from_slice(&(-1i64).to_le_bytes());
+        le_block(0x0A0D_0D0A, &body)
+    }
+
+    fn shb_be() -> Vec<u8> {
+        let mut body = Vec::new();
+        body.extend_from_slice(&0x1A2B_3C4Du32.to_be_bytes());
+        body.extend_from_slice(&1u16.to_be_bytes());
+        body.extend_from_slice(&0u16.to_be_bytes());
+        body.extend_from_slice(&(-1i64).to_be_bytes());
+        be_block(0x0A0D_0D0A, &body)
+    }
+
+    fn idb_le(link: u16, tsresol: Option<u8>) -> Vec<u8> {
+        let mut body = Vec::new();
+        body.extend_from_slice(&link.to_le_bytes());
+        body.extend_from_slice(&0u16.to_le_bytes());
+        body.extend_from_slice(&0u32.to_le_bytes());
+        if let Some(r) = tsresol {
+            body.extend_from_slice(&9u16.to_le_bytes());
+            body.extend_from_slice(&1u16.to_le_bytes());
+            body.extend_from_slice(&[r, 0, 0, 0]);
+            body.extend_from_slice(&[0, 0, 0, 0]);
+        }
+        le_block(1, &body)
+    }
+
+    fn epb_le(iface: u32, ts: u64, data: &[u8]) -> Vec<u8> {
+        let mut body = Vec::new();
+        body.extend_from_slice(&iface.to_le_bytes());
+        body.extend_from_slice(&((ts >> 32) as u32).to_le_bytes());
+        body.extend_from_slice(&(ts as u32).to_le_bytes());
+        body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        body.extend_from_slice(data);
+        le_block(6, &body)
+    }
+
+    #[test]
+    fn classic_pcap_both_orders_and_nanos() {
+        let mut f = Vec::new();
+        write::header(&mut f, 1);
+        write::record(&mut f, 1_500_000_123_456, b"abc");
+        write::record(&mut f, 1_500_000_123_457, b"");
+        let (p, r) = collect(&[&f]);
+        r.unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0], (1_500_000_123_456, 1, b"abc".to_vec(), 0));
+        // big endian, nanoseconds
+        let mut g = Vec::new();
+        g.extend_from_slice(&0xA1B2_3C4Du32.to_be_bytes());
+        g.extend_from_slice(&[0, 2, 0, 4]);
+        g.extend_from_slice(&[0; 8]);
+        g.extend_from_slice(&65535u32.to_be_bytes());
+        g.extend_from_slice(&101u32.to_be_bytes());
+        g.extend_from_slice(&10u32.to_be_bytes());
+        g.extend_from_slice(&999_999_999u32.to_be_bytes());
+        g.extend_from_slice(&2u32.to_be_bytes());
+        g.extend_from_slice(&2u32.to_be_bytes());
+        g.extend_from_slice(&[7, 8]);
+        let (p, r) = collect(&[&g]);
+        r.unwrap();
+        assert_eq!(p, vec![(10_999_999, 101, vec![7, 8], 0)]);
+    }
+
+    #[test]
+    fn pcapng_sections_resolutions_and_blocks() {
+        let mut f = shb_le();
+        f.extend(idb_le(1, None));
+        f.extend(idb_le(113, Some(9)));
+        f.extend(le_block(0x0000_0BAD, &[1, 2, 3, 4])); // unknown block: skipped
+        f.extend(epb_le(0, 5_000_001, b"one"));
+        f.extend(epb_le(1, 7_000_000_123, b"two"));
+        // simple packet block: interface 0, time of the last packet
+        let mut spb = Vec::new();
+        spb.extend_from_slice(&5u32.to_le_bytes());
+        spb.extend_from_slice(b"three");
+        f.extend(le_block(3, &spb));
+        // obsolete packet block
+        let mut pb = Vec::new();
+        pb.extend_from_slice(&0u16.to_le_bytes());
+        pb.extend_from_slice(&0u16.to_le_bytes());
+        pb.extend_from_slice(&0u32.to_le_bytes());
+        pb.extend_from_slice(&9u32.to_le_bytes());
+        pb.extend_from_slice(&1u32.to_le_bytes());
+        pb.extend_from_slice(&1u32.to_le_bytes());
+        pb.push(b'4');
+        f.extend(le_block(2, &pb));
+        // a second, big-endian section with 2^-10 resolution
+        f.extend(shb_be());
+        let mut idb = Vec::new();
+        idb.extend_from_slice(&101u16.to_be_bytes());
+        idb.extend_from_slice(&[0, 0, 0, 0, 0, 0]);
+        idb.extend_from_slice(&9u16.to_be_bytes());
+        idb.extend_from_slice(&1u16.to_be_bytes());
+        idb.extend_from_slice(&[0x8A, 0, 0, 0]);
+        f.extend(be_block(1, &idb));
+        let mut epb = Vec::new();
+        epb.extend_from_slice(&0u32.to_be_bytes());
+        epb.extend_from_slice(&0u32.to_be_bytes());
+        epb.extend_from_slice(&2048u32.to_be_bytes());
+        epb.extend_from_slice(&1u32.to_be_bytes());
+        epb.extend_from_slice(&1u32.to_be_bytes());
+        epb.push(b'5');
+        f.extend(be_block(6, &epb));
+        let want = vec![
+            (5_000_001, 1, b"one".to_vec(), 0),
+            (7_000_000, 113, b"two".to_vec(), 1),
+            (7_000_000, 1, b"three".to_vec(), 0),
+            (9, 1, b"4".to_vec(), 0),
+            (2_000_000, 101, b"5".to_vec(), 0),
+        ];
+        let (p, r) = collect(&[&f]);
+        r.unwrap();
+        assert_eq!(p, want);
+        // any chunking gives the same packets
+        for size in [1, 2, 3, 5, 7, 13, 64] {
+            let chunks: Vec<&[u8]> = f.chunks(size).collect();
+            let (p, r) = collect(&chunks);
+            r.unwrap();
+            assert_eq!(p, want, "chunk size {size}");
+        }
+    }
+
+    #[test]
+    fn errors_are_reported_not_allocated() {
+        let (_, r) = collect(&[b"hello world"]);
+        assert!(matches!(r, Err(PcapError::BadMagic(_))));
+        let mut f = Vec::new();
+        write::header(&mut f, 1);
+        f.extend_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0]);
+        f.extend_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+        f.extend_from_slice(&[0, 0, 0, 0]);
+        let (_, r) = collect(&[&f]);
+        assert!(matches!(r, Err(PcapError::BadLength { .. })));
+        let mut f = Vec::new();
+        write::header(&mut f, 1);
+        write::record(&mut f, 0, b"abcdef");
+        f.truncate(f.len() - 2);
+        let (p, r) = collect(&[&f]);
+        assert!(p.is_empty());
+        assert_eq!(
+            r,
+            Err(PcapError::Truncated {
+                offset: 24,
+                missing: 2
+            })
+        );
+        let mut f = shb_le();
+        f.extend(epb_le(3, 0, b"x"));
+        let (_, r) = collect(&[&f]);
+        assert!(matches!(
+            r,
+            Err(PcapError::UnknownInterface { interface: 3, .. })
+        ));
+        let mut f = shb_le();
+        let n = f.len();
+        f[n - 4] ^= 0x10;
+        let (_, r) = collect(&[&f]);
+        assert!(matches!(r, Err(PcapError::LengthMismatch { .. })));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn garbage_never_panics(data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..600), cut in 1usize..50) {
+            for prefix in [&[0xD4u8, 0xC3, 0xB2, 0xA1][..], &[0x0A, 0x0D, 0x0D, 0x0A], &[]] {
+                let mut input = prefix.to_vec();
+                input.extend_from_slice(&data);
+                let chunks: Vec<&[u8]> = input.chunks(cut).collect();
+                let _ = collect(&chunks);
+            }
+        }
+    }
+}
