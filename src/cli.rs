@@ -41,6 +41,10 @@ pub enum Command {
     /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
     /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
     Sbus(SbusArgs),
+    /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
+    /// requests paired with responses.
+    #[command(alias = "sab")]
+    Sab2(crate::sab::SabArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
 }
@@ -101,7 +105,7 @@ pub struct CaptureArgs {
 #[derive(Args, Debug, Clone, Default)]
 pub struct LiveArgs {
     /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600, sbus
-    /// 9600]
+    /// 9600, sab2 115200]
     #[arg(long, value_name = "BAUD")]
     pub baud: Option<u32>,
 
@@ -253,6 +257,27 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, cfg| {
             sbus_decoder(&args, kind, cfg)
         }),
+        Command::Sab2(args) => {
+            run_capture(
+                &args.capture,
+                &crate::sab::PROTOCOL,
+                |kind, cfg| match kind {
+                    Kind::Pcap | Kind::Pcapng => Err(Failure::Input(
+                        "this is a pcap of network traffic; SAB captures are raw wire bytes or \
+                     busnoop recordings"
+                            .into(),
+                    )),
+                    Kind::EdgeTxLog => Err(Failure::Input(
+                        "this is an EdgeTX/OpenTX S.Port log; SAB captures are raw wire bytes or \
+                     busnoop recordings"
+                            .into(),
+                    )),
+                    _ => Ok(Box::new(crate::sab::SabDecoder::new(
+                        args.options(cfg.baud),
+                    ))),
+                },
+            )
+        }
         Command::Ports => list_ports(),
     }
 }

@@ -13,6 +13,7 @@ pub mod pcap;
 pub mod record;
 pub mod row;
 pub mod run;
+pub mod sab;
 pub mod sbus;
 #[doc(hidden)]
 pub mod selfcheck;

@@ -54,3 +54,8 @@ fn sbus_serial_corpus() {
 fn sbus_ether_corpus() {
     replay("sbus_ether", busnoop::selfcheck::sbus_ether);
 }
+
+#[test]
+fn sab_corpus() {
+    replay("sab", busnoop::selfcheck::sab);
+}

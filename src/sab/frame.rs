@@ -1,0 +1,249 @@
+//! What the two reassemblers emit: one [`Event`] type for both framings.
+
+use super::header::{self, Flags};
+
+/// The two SAB framings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Framing {
+    /// SAB v1 (`modm:communication:sab`, and modm's documentation page of SAB2):
+    /// `54 LEN HDR CMD DATA CRC8`.
+    Sync,
+    /// SAB2 as modm's code sends it (`modm:communication:sab2`):
+    /// `7E HDR CMD DATA CRClo CRChi 7E`, byte-stuffed.
+    Hdlc,
+}
+
+impl Framing {
+    /// The value of the `Framing` column and of `--framing`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Framing::Sync => "sync",
+            Framing::Hdlc => "hdlc",
+        }
+    }
+
+    /// A description for notes and statistics.
+    pub const fn long_name(self) -> &'static str {
+        match self {
+            Framing::Sync => "SAB v1 framing (0x54 SYNC, LENGTH, CRC-8/MAXIM-DOW)",
+            Framing::Hdlc => "SAB2 framing (0x7E flags, byte stuffing, CRC-16/MODBUS)",
+        }
+    }
+
+    /// The short protocol name.
+    pub const fn protocol(self) -> &'static str {
+        match self {
+            Framing::Sync => "SAB v1",
+            Framing::Hdlc => "SAB2",
+        }
+    }
+
+    pub const fn other(self) -> Framing {
+        match self {
+            Framing::Sync => Framing::Hdlc,
+            Framing::Hdlc => Framing::Sync,
+        }
+    }
+}
+
+/// What an event is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EventKind {
+    /// A complete frame with a valid check.
+    Frame,
+    /// A complete frame whose check fails.
+    BadCrc,
+    /// A frame cut by the end of the input.
+    Truncated,
+    /// Bytes that belong to no frame.
+    Garbage,
+    /// SAB2: 1 to 3 bytes between two flags (a frame has at least 4).
+    Runt,
+    /// SAB2: `7D 7E`, an escape followed by a flag.
+    Abort,
+    /// SAB2: more bytes between two flags than a frame can have, with a failing check (or too
+    /// long to check).
+    Overlong,
+}
+
+/// One event of a reassembler. Slices borrow the reassembler's buffers: handle the event in
+/// the callback and copy what must be kept.
+#[derive(Clone, Copy, Debug)]
+pub struct Event<'a> {
+    pub kind: EventKind,
+    pub framing: Framing,
+    /// The bytes as they were on the wire, delimiters and escapes included. For a very long
+    /// SAB2 run only the first bytes are kept: see `wire_len`.
+    pub wire: &'a [u8],
+    /// Length on the wire.
+    pub wire_len: u64,
+    /// Unescaped `HEADER COMMAND DATA` of a frame (`Frame`, `BadCrc`, SAB2 `Overlong`); for
+    /// other kinds the unescaped bytes that were received after the start (may be empty).
+    pub body: &'a [u8],
+    /// `(received, computed)` check values of `Frame` and `BadCrc` (CRC-8 in the low byte for
+    /// SAB v1; CRC-16 for SAB2).
+    pub crc: Option<(u16, u16)>,
+    /// Stream offsets of the first byte and one past the last byte (bytes since the start).
+    pub start_pos: u64,
+    pub end_pos: u64,
+    /// Source times of the first and the last byte.
+    pub start_time: Option<u64>,
+    pub end_time: Option<u64>,
+    /// SAB v1: the LENGTH byte of a frame, bad frame or truncated frame.
+    pub length_byte: Option<u8>,
+    /// SAB v1 garbage: 0x54 bytes whose candidate frame overlapped a valid frame (rescanned).
+    pub false_syncs: u32,
+    /// SAB v1 garbage: 0x54 bytes followed by a LENGTH above 32.
+    pub bad_lengths: u32,
+    /// Garbage that came before the first frame (or flag) of the capture.
+    pub before_first: bool,
+    /// SAB2: escapes that were not `7D 5E` / `7D 5D` (accepted as modm does).
+    pub odd_escapes: u32,
+    /// SAB2: unescaped bytes between the flags (counted beyond what is kept in `body`).
+    pub body_len: u64,
+    /// SAB v1 bad CRC: the check would pass if SYNC were covered too (not modm's rule).
+    pub crc_with_sync: bool,
+}
+
+impl<'a> Event<'a> {
+    /// An event with every optional field empty.
+    pub fn new(kind: EventKind, framing: Framing, wire: &'a [u8]) -> Event<'a> {
+        Event {
+            kind,
+            framing,
+            wire,
+            wire_len: wire.len() as u64,
+            body: &[],
+            crc: None,
+            start_pos: 0,
+            end_pos: 0,
+            start_time: None,
+            end_time: None,
+            length_byte: None,
+            false_syncs: 0,
+            bad_lengths: 0,
+            before_first: false,
+            odd_escapes: 0,
+            body_len: 0,
+            crc_with_sync: false,
+        }
+    }
+
+    /// The header byte, when the body has one.
+    pub fn header(&self) -> Option<u8> {
+        self.body.first().copied()
+    }
+
+    /// The command byte, when the body has one.
+    pub fn command(&self) -> Option<u8> {
+        self.body.get(1).copied()
+    }
+
+    /// The payload (body after header and command).
+    pub fn payload(&self) -> &'a [u8] {
+        self.body.get(2..).unwrap_or(&[])
+    }
+
+    pub fn flags(&self) -> Option<Flags> {
+        self.header().map(Flags::of)
+    }
+
+    pub fn address(&self) -> Option<u8> {
+        self.header().map(header::address)
+    }
+
+    /// True for a frame whose check passed.
+    pub fn is_valid(&self) -> bool {
+        self.kind == EventKind::Frame
+    }
+}
+
+/// An owned copy of an [`Event`] (tests, tools, events kept across calls).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OwnedEvent {
+    pub kind: EventKind,
+    pub framing: Framing,
+    pub wire: Vec<u8>,
+    pub wire_len: u64,
+    pub body: Vec<u8>,
+    pub crc: Option<(u16, u16)>,
+    pub start_pos: u64,
+    pub end_pos: u64,
+    pub start_time: Option<u64>,
+    pub end_time: Option<u64>,
+    pub length_byte: Option<u8>,
+    pub false_syncs: u32,
+    pub bad_lengths: u32,
+    pub before_first: bool,
+    pub odd_escapes: u32,
+    pub body_len: u64,
+    pub crc_with_sync: bool,
+}
+
+impl OwnedEvent {
+    /// Overwrites this copy with `e`, reusing its buffers.
+    pub fn set_from(&mut self, e: &Event<'_>) {
+        let mut wire = std::mem::take(&mut self.wire);
+        let mut body = std::mem::take(&mut self.body);
+        wire.clear();
+        wire.extend_from_slice(e.wire);
+        body.clear();
+        body.extend_from_slice(e.body);
+        *self = OwnedEvent {
+            wire,
+            body,
+            ..OwnedEvent::from(&Event {
+                wire: &[],
+                body: &[],
+                ..*e
+            })
+        };
+    }
+
+    /// The event again, borrowing from this copy.
+    pub fn as_event(&self) -> Event<'_> {
+        Event {
+            kind: self.kind,
+            framing: self.framing,
+            wire: &self.wire,
+            wire_len: self.wire_len,
+            body: &self.body,
+            crc: self.crc,
+            start_pos: self.start_pos,
+            end_pos: self.end_pos,
+            start_time: self.start_time,
+            end_time: self.end_time,
+            length_byte: self.length_byte,
+            false_syncs: self.false_syncs,
+            bad_lengths: self.bad_lengths,
+            before_first: self.before_first,
+            odd_escapes: self.odd_escapes,
+            body_len: self.body_len,
+            crc_with_sync: self.crc_with_sync,
+        }
+    }
+}
+
+impl From<&Event<'_>> for OwnedEvent {
+    fn from(e: &Event<'_>) -> Self {
+        OwnedEvent {
+            kind: e.kind,
+            framing: e.framing,
+            wire: e.wire.to_vec(),
+            wire_len: e.wire_len,
+            body: e.body.to_vec(),
+            crc: e.crc,
+            start_pos: e.start_pos,
+            end_pos: e.end_pos,
+            start_time: e.start_time,
+            end_time: e.end_time,
+            length_byte: e.length_byte,
+            false_syncs: e.false_syncs,
+            bad_lengths: e.bad_lengths,
+            before_first: e.before_first,
+            odd_escapes: e.odd_escapes,
+            body_len: e.body_len,
+            crc_with_sync: e.crc_with_sync,
+        }
+    }
+}

@@ -1,0 +1,453 @@
+//! SAB2 framing as modm's code sends it: `7E HDR CMD DATA CRClo CRChi 7E`, the pure
+//! reassembler and an encoder.
+//!
+//! * Every 0x7E or 0x7D between the flags is sent as `7D, byte ^ 0x20`.
+//! * The CRC is CRC-16/MODBUS (AVR `_crc16_update`, init 0xFFFF, no final XOR) over the
+//!   unescaped HEADER, COMMAND and DATA, sent low byte first.
+//! * A frame has at least 4 unescaped bytes; the payload has at most `N` bytes, `N` being a
+//!   template parameter of `modm::sab2::Interface` (32 unless the application changes it).
+//!
+//! The receiver follows modm's rules: **every 0x7E ends the current frame and starts a new
+//! one**; `7D 7E` aborts the frame; nothing between two flags is normal (back-to-back frames
+//! look like `7E … 7E 7E … 7E`); 1 to 3 bytes between flags are a runt. Unlike modm it reports
+//! runts, aborts and overlong frames instead of dropping them silently, and it decodes a frame
+//! longer than the configured maximum when its CRC is valid (a device built with a larger `N`).
+
+use crc::{CRC_16_MODBUS, Crc};
+
+use super::frame::{Event, EventKind, Framing};
+
+/// Frame delimiter.
+pub const FLAG: u8 = 0x7E;
+/// Escape byte.
+pub const ESCAPE: u8 = 0x7D;
+/// HEADER, COMMAND and the two CRC bytes.
+pub const OVERHEAD: usize = 4;
+/// modm's default payload limit (`Interface<Device, N = 32>`).
+pub const DEFAULT_MAX_PAYLOAD: usize = 32;
+/// Unescaped bytes kept whole at most (a payload of up to 255 bytes). Longer runs between
+/// flags are reported as overlong without a CRC check.
+pub const STORE_MAX: usize = OVERHEAD + 255;
+/// Wire bytes kept at most for a row.
+pub const WIRE_MAX: usize = 2 + 2 * STORE_MAX;
+/// Garbage (bytes before the first flag) is reported in rows of at most this many bytes.
+pub const GARBAGE_ROW_MAX: usize = 64;
+
+const CRC16: Crc<u16> = Crc::<u16>::new(&CRC_16_MODBUS);
+
+/// CRC-16/MODBUS of `bytes` (HEADER … DATA of a frame).
+pub fn crc16(bytes: &[u8]) -> u16 {
+    CRC16.checksum(bytes)
+}
+
+/// Appends `byte`, escaped if it is a flag or an escape.
+pub fn push_escaped(out: &mut Vec<u8>, byte: u8) {
+    if byte == FLAG || byte == ESCAPE {
+        out.push(ESCAPE);
+        out.push(byte ^ 0x20);
+    } else {
+        out.push(byte);
+    }
+}
+
+/// Appends a frame as modm sends it: opening flag, escaped body and CRC, closing flag.
+pub fn encode(out: &mut Vec<u8>, header: u8, command: u8, payload: &[u8]) {
+    let mut crc = CRC16.digest();
+    crc.update(&[header, command]);
+    crc.update(payload);
+    let crc = crc.finalize();
+    out.push(FLAG);
+    push_escaped(out, header);
+    push_escaped(out, command);
+    for &b in payload {
+        push_escaped(out, b);
+    }
+    let [lo, hi] = crc.to_le_bytes();
+    push_escaped(out, lo);
+    push_escaped(out, hi);
+    out.push(FLAG);
+}
+
+/// Pure SAB2 reassembler: bytes and times in, [`Event`]s out. The output does not depend on
+/// how the input is split into chunks.
+#[derive(Clone, Debug)]
+pub struct Reassembler {
+    max_payload: usize,
+    /// A flag was seen: bytes belong to a frame.
+    in_frame: bool,
+    escaped: bool,
+    body: Box<[u8; STORE_MAX]>,
+    body_len: u64,
+    wire: Box<[u8; WIRE_MAX]>,
+    wire_len: u64,
+    odd_escapes: u32,
+    start_pos: u64,
+    start_time: Option<u64>,
+    pos: u64,
+    /// Time of the last byte pushed.
+    last_time: Option<u64>,
+    garbage: [u8; GARBAGE_ROW_MAX],
+    garbage_len: usize,
+    garbage_pos: u64,
+    garbage_start: Option<u64>,
+    garbage_end: Option<u64>,
+    frames: u64,
+}
+
+impl Default for Reassembler {
+    fn default() -> Self {
+        Self::new(DEFAULT_MAX_PAYLOAD)
+    }
+}
+
+impl Reassembler {
+    /// A reassembler for payloads of up to `max_payload` bytes (modm's `N`). Longer frames are
+    /// still decoded when their CRC passes, and reported as overlong.
+    pub fn new(max_payload: usize) -> Self {
+        Reassembler {
+            max_payload,
+            in_frame: false,
+            escaped: false,
+            body: Box::new([0; STORE_MAX]),
+            body_len: 0,
+            wire: Box::new([0; WIRE_MAX]),
+            wire_len: 0,
+            odd_escapes: 0,
+            start_pos: 0,
+            start_time: None,
+            pos: 0,
+            last_time: None,
+            garbage: [0; GARBAGE_ROW_MAX],
+            garbage_len: 0,
+            garbage_pos: 0,
+            garbage_start: None,
+            garbage_end: None,
+            frames: 0,
+        }
+    }
+
+    /// The configured payload limit.
+    pub fn max_payload(&self) -> usize {
+        self.max_payload
+    }
+
+    /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        for &b in data {
+            self.step(b, time, emit);
+        }
+    }
+
+    /// Feeds one byte.
+    #[inline]
+    pub fn step(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if b == FLAG {
+            self.flush_garbage(emit);
+            if self.in_frame {
+                self.keep_wire(b);
+                self.close(true, time, emit);
+            }
+            self.open(time);
+        } else if !self.in_frame {
+            self.garbage_byte(b, time, emit);
+        } else {
+            self.keep_wire(b);
+            if b == ESCAPE {
+                // modm: an escape after an escape only re-arms the escape.
+                if self.escaped {
+                    self.odd_escapes += 1;
+                }
+                self.escaped = true;
+            } else if self.escaped {
+                self.escaped = false;
+                if b != 0x5E && b != 0x5D {
+                    self.odd_escapes += 1;
+                }
+                self.keep_body(b ^ 0x20);
+            } else {
+                self.keep_body(b);
+            }
+        }
+        self.pos += 1;
+        self.last_time = time;
+    }
+
+    /// End of input: a frame still open is reported as truncated (unless nothing followed its
+    /// flag), garbage is flushed.
+    pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        if self.in_frame {
+            self.close(false, None, emit);
+        }
+        self.in_frame = false;
+    }
+
+    /// A gap in the capture: forgets an open frame without reporting it and waits for the
+    /// next flag.
+    pub fn reset(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        self.in_frame = false;
+        self.escaped = false;
+    }
+
+    /// Emits the garbage collected so far as a row (a live source went quiet).
+    pub fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.garbage_len == 0 {
+            return;
+        }
+        let mut ev = Event::new(
+            EventKind::Garbage,
+            Framing::Hdlc,
+            &self.garbage[..self.garbage_len],
+        );
+        ev.start_pos = self.garbage_pos;
+        ev.end_pos = self.garbage_pos + self.garbage_len as u64;
+        ev.start_time = self.garbage_start;
+        ev.end_time = self.garbage_end;
+        ev.before_first = self.frames == 0;
+        emit(&ev);
+        self.garbage_len = 0;
+    }
+
+    /// Bytes consumed so far.
+    pub fn position(&self) -> u64 {
+        self.pos
+    }
+
+    /// Valid frames emitted so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    fn open(&mut self, time: Option<u64>) {
+        self.in_frame = true;
+        self.escaped = false;
+        self.body_len = 0;
+        self.odd_escapes = 0;
+        self.wire[0] = FLAG;
+        self.wire_len = 1;
+        self.start_pos = self.pos;
+        self.start_time = time;
+    }
+
+    #[inline]
+    fn keep_wire(&mut self, b: u8) {
+        if let Some(slot) = self.wire.get_mut(self.wire_len as usize) {
+            *slot = b;
+        }
+        self.wire_len += 1;
+    }
+
+    #[inline]
+    fn keep_body(&mut self, b: u8) {
+        if let Some(slot) = self.body.get_mut(self.body_len as usize) {
+            *slot = b;
+        }
+        self.body_len += 1;
+    }
+
+    /// Ends the open frame. `closed` = at a flag (already in `wire`), otherwise at the end of
+    /// the input.
+    fn close(&mut self, closed: bool, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        let n = self.body_len;
+        let stored = (n as usize).min(STORE_MAX);
+        let kind = if !closed {
+            if n == 0 && !self.escaped {
+                // Only the closing flag of the last frame.
+                return;
+            }
+            EventKind::Truncated
+        } else if self.escaped {
+            EventKind::Abort
+        } else if n == 0 {
+            // Back-to-back flags: normal.
+            return;
+        } else if n < OVERHEAD as u64 {
+            EventKind::Runt
+        } else if n > STORE_MAX as u64 {
+            EventKind::Overlong
+        } else if crc16(&self.body[..stored]) == 0 {
+            EventKind::Frame
+        } else if n > (self.max_payload + OVERHEAD) as u64 {
+            EventKind::Overlong
+        } else {
+            EventKind::BadCrc
+        };
+        let wire_kept = (self.wire_len as usize).min(WIRE_MAX);
+        let mut ev = Event::new(kind, Framing::Hdlc, &self.wire[..wire_kept]);
+        ev.wire_len = self.wire_len;
+        ev.start_pos = self.start_pos;
+        ev.end_pos = if closed { self.pos + 1 } else { self.pos };
+        ev.start_time = self.start_time;
+        ev.end_time = if closed { time } else { self.last_time };
+        ev.odd_escapes = self.odd_escapes;
+        ev.body_len = n;
+        match kind {
+            EventKind::Frame | EventKind::BadCrc => {
+                let body = &self.body[..stored - 2];
+                let received = u16::from_le_bytes([self.body[stored - 2], self.body[stored - 1]]);
+                ev.body = body;
+                ev.crc = Some((received, crc16(body)));
+            }
+            _ => ev.body = &self.body[..stored],
+        }
+        emit(&ev);
+        if kind == EventKind::Frame {
+            self.frames += 1;
+        }
+        self.in_frame = false;
+    }
+
+    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.garbage_len == 0 {
+            self.garbage_pos = self.pos;
+            self.garbage_start = time;
+        }
+        self.garbage[self.garbage_len] = b;
+        self.garbage_len += 1;
+        self.garbage_end = time;
+        if self.garbage_len == GARBAGE_ROW_MAX {
+            self.flush_garbage(emit);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmt::{hex, parse_hex};
+    use crate::sab::frame::OwnedEvent;
+
+    fn events_with(max: usize, data: &[u8]) -> Vec<OwnedEvent> {
+        let mut r = Reassembler::new(max);
+        let mut out = Vec::new();
+        r.push(data, None, &mut |e| out.push(OwnedEvent::from(e)));
+        r.finish(&mut |e| out.push(OwnedEvent::from(e)));
+        out
+    }
+
+    fn events(data: &[u8]) -> Vec<OwnedEvent> {
+        events_with(DEFAULT_MAX_PAYLOAD, data)
+    }
+
+    fn kinds(evs: &[OwnedEvent]) -> Vec<(EventKind, String)> {
+        evs.iter().map(|e| (e.kind, hex(&e.wire))).collect()
+    }
+
+    #[test]
+    fn crc_catalogue_check_value() {
+        assert_eq!(crc16(b"123456789"), 0x4B37);
+    }
+
+    #[test]
+    fn modm_example_frame() {
+        // examples/stm32f4_discovery/sab2/main.cpp: address 1, REQUEST, command 2, payload 0x55.
+        let mut out = Vec::new();
+        encode(&mut out, 0x01, 0x02, &[0x55]);
+        assert_eq!(out, parse_hex("7E 01 02 55 E1 5F 7E").unwrap());
+        let ev = events(&out);
+        assert_eq!(ev.len(), 1);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        assert_eq!(ev[0].body, [0x01, 0x02, 0x55]);
+        assert_eq!(ev[0].crc, Some((0x5FE1, 0x5FE1)));
+        assert_eq!((ev[0].start_pos, ev[0].end_pos), (0, 7));
+    }
+
+    #[test]
+    fn escaping_round_trip() {
+        let mut out = Vec::new();
+        encode(&mut out, 0x02, 0x7E, &[0x7D, 0x7E, 0x20]);
+        assert_eq!(
+            out,
+            parse_hex("7E 02 7D 5E 7D 5D 7D 5E 20 F5 88 7E").unwrap()
+        );
+        let ev = events(&out);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        assert_eq!(ev[0].body, [0x02, 0x7E, 0x7D, 0x7E, 0x20]);
+        assert_eq!(ev[0].odd_escapes, 0);
+    }
+
+    #[test]
+    fn back_to_back_and_shared_flags() {
+        let mut wire = Vec::new();
+        encode(&mut wire, 0x01, 0x02, &[]);
+        encode(&mut wire, 0xC1, 0x02, &[9]);
+        // Shared flag: drop the second frame's opening flag.
+        let mut shared = wire.clone();
+        shared.remove(6);
+        for w in [&wire, &shared] {
+            let ev = events(w);
+            assert_eq!(ev.len(), 2, "{}", hex(w));
+            assert!(ev.iter().all(|e| e.kind == EventKind::Frame));
+        }
+    }
+
+    #[test]
+    fn runts_aborts_garbage_truncation() {
+        let wire = parse_hex("11 22 7E 7E 01 02 7E 01 7D 7E 01 02 81 E1 7E 05 06").unwrap();
+        let ev = events(&wire);
+        assert_eq!(
+            kinds(&ev),
+            [
+                (EventKind::Garbage, "11 22".into()),
+                (EventKind::Runt, "7E 01 02 7E".into()),
+                (EventKind::Abort, "7E 01 7D 7E".into()),
+                (EventKind::Frame, "7E 01 02 81 E1 7E".into()),
+                (EventKind::Truncated, "7E 05 06".into()),
+            ]
+        );
+        assert!(ev[0].before_first);
+    }
+
+    #[test]
+    fn bad_crc() {
+        let ev = events(&parse_hex("7E 01 02 81 E2 7E").unwrap());
+        assert_eq!(ev[0].kind, EventKind::BadCrc);
+        assert_eq!(ev[0].crc, Some((0xE281, 0xE181)));
+    }
+
+    #[test]
+    fn odd_escapes_follow_modm() {
+        // 7D 7D 5E: modm drops the first escape and reads 0x7E.
+        let mut body = vec![0x01, 0x7E];
+        let crc = crc16(&body);
+        body.extend_from_slice(&crc.to_le_bytes());
+        let mut wire = vec![FLAG, 0x01, ESCAPE, ESCAPE, 0x5E];
+        for &b in &body[2..] {
+            push_escaped(&mut wire, b);
+        }
+        wire.push(FLAG);
+        let ev = events(&wire);
+        assert_eq!(ev[0].kind, EventKind::Frame, "{}", hex(&wire));
+        assert_eq!(ev[0].body, [0x01, 0x7E]);
+        assert_eq!(ev[0].odd_escapes, 1);
+    }
+
+    #[test]
+    fn overlong_frames() {
+        // A valid 40-byte payload: decoded, but longer than modm's default N = 32.
+        let payload: Vec<u8> = (0..40).collect();
+        let mut wire = Vec::new();
+        encode(&mut wire, 0xC1, 0x02, &payload);
+        let ev = events(&wire);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        assert_eq!(ev[0].body.len(), 42);
+        let ev = events_with(64, &wire);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        // The same with a broken CRC is overlong, not a bad CRC.
+        let n = wire.len();
+        wire[n - 2] ^= 1;
+        assert_eq!(events(&wire)[0].kind, EventKind::Overlong);
+        assert_eq!(events_with(64, &wire)[0].kind, EventKind::BadCrc);
+        // Longer than anything kept: overlong, wire cut, length counted.
+        let mut long = vec![FLAG];
+        long.extend(std::iter::repeat_n(0x11, 1000));
+        long.push(FLAG);
+        let ev = events(&long);
+        assert_eq!(ev.len(), 1);
+        assert_eq!(ev[0].kind, EventKind::Overlong);
+        assert_eq!(ev[0].wire_len, 1002);
+        assert_eq!(ev[0].wire.len(), WIRE_MAX);
+        assert_eq!((ev[0].start_pos, ev[0].end_pos), (0, 1002));
+    }
+}

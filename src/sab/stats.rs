@@ -1,0 +1,458 @@
+//! Counters for `--stats` and the one-line problem summary.
+
+use std::fmt::Write as _;
+
+use super::detect::Reason;
+use super::frame::Framing;
+use super::header::{ADDRESSES, NackCode};
+
+/// Response times are kept exactly below this many µs …
+const EXACT: u64 = 1_000;
+/// … and with three significant digits up to this many µs (1000 s); above in one bucket.
+const TOP: u64 = 1_000_000_000;
+/// Buckets per decade above `EXACT`.
+const PER_DECADE: usize = 900;
+const DECADES: usize = 6; // 1e3 .. 1e9
+const BUCKETS: usize = EXACT as usize + DECADES * PER_DECADE + 1;
+
+fn bucket(v: u64) -> usize {
+    if v < EXACT {
+        return v as usize;
+    }
+    let mut low = EXACT;
+    let mut width = EXACT / 100;
+    let mut index = EXACT as usize;
+    while low < TOP {
+        if v < low * 10 {
+            return index + ((v - low) / width) as usize;
+        }
+        index += PER_DECADE;
+        low *= 10;
+        width *= 10;
+    }
+    BUCKETS - 1
+}
+
+/// Smallest value of a bucket.
+fn bucket_low(i: usize) -> u64 {
+    if i < EXACT as usize {
+        return i as u64;
+    }
+    let d = (i - EXACT as usize) / PER_DECADE;
+    if d >= DECADES {
+        return TOP;
+    }
+    let r = ((i - EXACT as usize) % PER_DECADE) as u64;
+    let low = EXACT * 10u64.pow(d as u32);
+    low + r * (low / 100)
+}
+
+/// Response times kept exactly per address; beyond this many the median comes from a
+/// histogram (three significant digits, exact below 1 ms).
+pub const EXACT_SAMPLES: usize = 65_536;
+
+/// Response times of one address: exact count, minimum and maximum; the median exactly for
+/// the first [`EXACT_SAMPLES`] responses, then from a histogram.
+#[derive(Clone, Debug, Default)]
+pub struct Times {
+    pub count: u64,
+    pub min: u64,
+    pub max: u64,
+    samples: Vec<u32>,
+    hist: Option<Box<[u32]>>,
+}
+
+impl Times {
+    pub fn add(&mut self, micros: u64) {
+        if self.count == 0 {
+            self.min = micros;
+            self.max = micros;
+        } else {
+            self.min = self.min.min(micros);
+            self.max = self.max.max(micros);
+        }
+        self.count += 1;
+        if self.hist.is_none() && self.samples.len() < EXACT_SAMPLES {
+            self.samples.push(micros.min(u32::MAX as u64) as u32);
+            return;
+        }
+        let samples = std::mem::take(&mut self.samples);
+        let hist = self
+            .hist
+            .get_or_insert_with(|| vec![0u32; BUCKETS].into_boxed_slice());
+        for v in samples.into_iter().map(u64::from).chain([micros]) {
+            let slot = &mut hist[bucket(v)];
+            *slot = slot.saturating_add(1);
+        }
+    }
+
+    /// The median (the lower one for an even count) and whether it is exact (otherwise it has
+    /// three significant digits).
+    pub fn median(&self) -> Option<(u64, bool)> {
+        if let Some(hist) = &self.hist {
+            let total: u64 = hist.iter().map(|&c| c as u64).sum();
+            let rank = total.div_ceil(2);
+            let mut seen = 0u64;
+            for (i, &c) in hist.iter().enumerate() {
+                seen += c as u64;
+                if seen >= rank && c > 0 {
+                    return Some((bucket_low(i).clamp(self.min, self.max), false));
+                }
+            }
+            return None;
+        }
+        if self.samples.is_empty() {
+            return None;
+        }
+        let mut v = self.samples.clone();
+        let mid = (v.len() - 1) / 2;
+        let (_, m, _) = v.select_nth_unstable(mid);
+        Some((*m as u64, true))
+    }
+}
+
+/// Counters of one address.
+#[derive(Clone, Debug, Default)]
+pub struct AddrStats {
+    pub requests: u64,
+    pub reserved: u64,
+    pub acks: u64,
+    pub nacks: u64,
+    /// `(code, count)`, sorted by code.
+    pub nack_codes: Vec<(u8, u64)>,
+    pub timeouts: u64,
+    pub late: u64,
+    pub unpaired: u64,
+    pub repeats: u64,
+    pub bad_crc: u64,
+    pub times: Times,
+}
+
+impl AddrStats {
+    fn used(&self) -> bool {
+        self.requests + self.reserved + self.acks + self.nacks + self.timeouts + self.bad_crc > 0
+    }
+
+    pub fn nack(&mut self, code: u8) {
+        self.nacks += 1;
+        match self.nack_codes.binary_search_by_key(&code, |e| e.0) {
+            Ok(i) => self.nack_codes[i].1 += 1,
+            Err(i) => self.nack_codes.insert(i, (code, 1)),
+        }
+    }
+}
+
+/// Everything `--stats` reports.
+#[derive(Clone, Debug)]
+pub struct Stats {
+    pub per: Vec<AddrStats>,
+    pub bytes: u64,
+    pub valid_frames: u64,
+    pub bad_crc: u64,
+    pub truncated: u64,
+    pub garbage_bytes: u64,
+    pub garbage_runs: u64,
+    pub false_syncs: u64,
+    pub bad_lengths: u64,
+    pub runts: u64,
+    pub aborts: u64,
+    pub overlong: u64,
+    pub odd_escapes: u64,
+    pub timeouts: u64,
+    pub late: u64,
+    pub unpaired: u64,
+    pub repeats: u64,
+    pub nacks: u64,
+    /// The framings chosen, in order (more than one after a switch).
+    pub framings: Vec<(Framing, Reason)>,
+}
+
+impl Default for Stats {
+    fn default() -> Self {
+        Stats {
+            per: vec![AddrStats::default(); ADDRESSES],
+            bytes: 0,
+            valid_frames: 0,
+            bad_crc: 0,
+            truncated: 0,
+            garbage_bytes: 0,
+            garbage_runs: 0,
+            false_syncs: 0,
+            bad_lengths: 0,
+            runts: 0,
+            aborts: 0,
+            overlong: 0,
+            odd_escapes: 0,
+            timeouts: 0,
+            late: 0,
+            unpaired: 0,
+            repeats: 0,
+            nacks: 0,
+            framings: Vec::new(),
+        }
+    }
+}
+
+fn ms(micros: u64) -> String {
+    let mut s = String::new();
+    crate::fmt::push_fixed(&mut s, micros.min(i64::MAX as u64) as i64, 3);
+    s
+}
+
+fn plural(n: u64, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+impl Stats {
+    /// The `--stats` report. `device` names an address (may be empty).
+    pub fn report(&self, device: impl Fn(u8) -> String) -> String {
+        let mut s = String::new();
+        if self.framings.is_empty() {
+            let _ = writeln!(s, "framing: not decided (no input)");
+        }
+        for (framing, reason) in &self.framings {
+            let mut line = String::new();
+            reason.describe(*framing, &mut line);
+            let _ = writeln!(s, "{line}");
+        }
+        let _ = writeln!(
+            s,
+            "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6} {:>9} {:>9} {:>9}  NACK codes",
+            "Addr",
+            "Device",
+            "Requests",
+            "ACK",
+            "NACK",
+            "Timeouts",
+            "Late",
+            "BadCRC",
+            "Resp min",
+            "median",
+            "max ms",
+        );
+        let mut total = AddrStats::default();
+        for (addr, a) in self.per.iter().enumerate() {
+            if !a.used() {
+                continue;
+            }
+            total.requests += a.requests + a.reserved;
+            total.acks += a.acks;
+            total.nacks += a.nacks;
+            total.timeouts += a.timeouts;
+            total.late += a.late;
+            total.bad_crc += a.bad_crc;
+            let (min, median, max) = if a.times.count > 0 {
+                (
+                    ms(a.times.min),
+                    a.times.median().map_or("-".into(), |(m, exact)| {
+                        if exact { ms(m) } else { format!("~{}", ms(m)) }
+                    }),
+                    ms(a.times.max),
+                )
+            } else {
+                ("-".into(), "-".into(), "-".into())
+            };
+            let mut codes = String::new();
+            for &(code, n) in &a.nack_codes {
+                if !codes.is_empty() {
+                    codes.push_str(", ");
+                }
+                NackCode::of(code).push_name(&mut codes);
+                let _ = write!(codes, " {n}");
+            }
+            let line = format!(
+                "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6} {:>9} {:>9} {:>9}  {}",
+                addr,
+                device(addr as u8),
+                a.requests + a.reserved,
+                a.acks,
+                a.nacks,
+                a.timeouts,
+                a.late,
+                a.bad_crc,
+                min,
+                median,
+                max,
+                codes
+            );
+            let _ = writeln!(s, "{}", line.trim_end());
+        }
+        let _ = writeln!(
+            s,
+            "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6}",
+            "all",
+            "",
+            total.requests,
+            total.acks,
+            total.nacks,
+            total.timeouts,
+            total.late,
+            total.bad_crc
+        );
+        let _ = writeln!(
+            s,
+            "bytes {}, valid frames {}, bad CRC {}, truncated {}, garbage {} bytes in {} runs",
+            self.bytes,
+            self.valid_frames,
+            self.bad_crc,
+            self.truncated,
+            self.garbage_bytes,
+            self.garbage_runs
+        );
+        let _ = writeln!(
+            s,
+            "SAB v1 resync: false 0x54 rescanned {}, 0x54 with LENGTH > 32 {}",
+            self.false_syncs, self.bad_lengths
+        );
+        let _ = writeln!(
+            s,
+            "SAB2: runts {}, aborts {}, overlong {}, unusual escapes {}",
+            self.runts, self.aborts, self.overlong, self.odd_escapes
+        );
+        let _ = write!(
+            s,
+            "pairing: timeouts {}, late responses {}, responses without request {}, repeated responses {}",
+            self.timeouts, self.late, self.unpaired, self.repeats
+        );
+        s
+    }
+
+    /// One line when anything went wrong, `None` when everything decoded cleanly.
+    pub fn problems(&self) -> Option<String> {
+        let mut parts = Vec::new();
+        let mut add = |n: u64, one: &str, many: &str| {
+            if n > 0 {
+                parts.push(plural(n, one, many));
+            }
+        };
+        add(self.bad_crc, "CRC error", "CRC errors");
+        add(self.truncated, "truncated frame", "truncated frames");
+        add(self.timeouts, "timeout", "timeouts");
+        add(self.late, "late response", "late responses");
+        add(
+            self.unpaired,
+            "response without request",
+            "responses without request",
+        );
+        add(self.repeats, "repeated response", "repeated responses");
+        add(self.nacks, "NACK", "NACKs");
+        add(self.runts, "runt", "runts");
+        add(self.aborts, "aborted frame", "aborted frames");
+        add(self.overlong, "overlong frame", "overlong frames");
+        if self.garbage_bytes > 0 {
+            parts.push(format!(
+                "{} skipped ({})",
+                plural(self.garbage_bytes, "garbage byte", "garbage bytes"),
+                plural(self.garbage_runs, "run", "runs")
+            ));
+        }
+        let framing = self
+            .framings
+            .last()
+            .map_or("no framing", |(f, _)| f.protocol());
+        if self.valid_frames == 0 && self.bytes > 0 {
+            parts.insert(0, "no valid frame".into());
+        }
+        if parts.is_empty() {
+            None
+        } else {
+            Some(format!(
+                "SAB: {} in {} ({framing})",
+                parts.join(", "),
+                plural(self.valid_frames, "valid frame", "valid frames")
+            ))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buckets_are_monotonic_and_tight() {
+        let mut last = 0;
+        for v in [
+            0,
+            1,
+            999,
+            1000,
+            1009,
+            1010,
+            9999,
+            10_000,
+            123_456,
+            999_999_999,
+            1 << 40,
+        ] {
+            let b = bucket(v);
+            assert!(b >= last, "{v}");
+            last = b;
+            let low = bucket_low(b);
+            assert!(low <= v, "{v}: {low}");
+            if v < TOP {
+                // three significant digits
+                assert!(v - low <= v / 100, "{v}: {low}");
+            }
+        }
+        assert_eq!(bucket(u64::MAX), BUCKETS - 1);
+        for i in 0..BUCKETS {
+            assert_eq!(bucket(bucket_low(i)), i, "{i}");
+        }
+    }
+
+    #[test]
+    fn median_min_max() {
+        let mut t = Times::default();
+        assert_eq!(t.median(), None);
+        for v in [500, 100, 300, 2_345, 12_345] {
+            t.add(v);
+        }
+        assert_eq!((t.min, t.max, t.count), (100, 12_345, 5));
+        assert_eq!(t.median(), Some((500, true)));
+        t.add(1_234);
+        // Lower median of 100 300 500 1234 2345 12345.
+        assert_eq!(t.median(), Some((500, true)));
+        t.add(1_215);
+        t.add(1_215);
+        assert_eq!(t.median(), Some((1_215, true)));
+    }
+
+    #[test]
+    fn median_beyond_the_exact_samples() {
+        let mut t = Times::default();
+        for i in 0..EXACT_SAMPLES as u64 + 1001 {
+            t.add(1_000 + i % 2_000);
+        }
+        let (m, exact) = t.median().unwrap();
+        assert!(!exact);
+        // True median 1999 or 2000; three significant digits.
+        assert!((1_980..=2_000).contains(&m), "{m}");
+        assert_eq!((t.min, t.max), (1_000, 2_999));
+    }
+
+    #[test]
+    fn nack_codes_sorted() {
+        let mut a = AddrStats::default();
+        for c in [3, 1, 3, 0x21] {
+            a.nack(c);
+        }
+        assert_eq!(a.nack_codes, [(1, 1), (3, 2), (0x21, 1)]);
+        assert_eq!(a.nacks, 4);
+    }
+
+    #[test]
+    fn problems_line() {
+        let mut s = Stats::default();
+        assert_eq!(s.problems(), None);
+        s.valid_frames = 10;
+        s.bytes = 100;
+        s.timeouts = 1;
+        s.bad_crc = 2;
+        s.framings.push((Framing::Hdlc, Reason::Forced));
+        assert_eq!(
+            s.problems().unwrap(),
+            "SAB: 2 CRC errors, 1 timeout in 10 valid frames (SAB2)"
+        );
+    }
+}

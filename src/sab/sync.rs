@@ -1,0 +1,545 @@
+//! SAB v1 framing: `54 LEN HDR CMD DATA[LEN] CRC8`, the pure reassembler and an encoder.
+//!
+//! * LENGTH is the payload length, 0..=32; a receiver rejects anything larger.
+//! * The CRC is CRC-8/MAXIM-DOW (AVR `_crc_ibutton_update`, init 0, no final XOR) over
+//!   LENGTH, HEADER, COMMAND and DATA; SYNC is not covered.
+//!
+//! # Resynchronisation
+//!
+//! modm's receiver hunts for 0x54, reads LENGTH + 3 more bytes and starts hunting again after
+//! them, so a stray 0x54 followed by a plausible length swallows up to 35 bytes and hides the
+//! real frame behind it. This reassembler backtracks instead: it keeps the bytes of a candidate
+//! and, when the candidate fails (bad LENGTH or bad CRC), rescans from the byte after its 0x54.
+//!
+//! The rule, which makes the output a function of the bytes alone:
+//!
+//! 1. A **frame** is accepted at the earliest position where a complete candidate passes its
+//!    CRC.
+//! 2. A failed candidate whose span contains no valid frame start is a **bad frame**
+//!    (`BadCrc`, or `Truncated` when the input ends inside it); its bytes are consumed.
+//! 3. A failed candidate whose span contains the start of a valid frame was a **false SYNC**:
+//!    only its 0x54 becomes garbage and scanning goes on with the next byte.
+//! 4. Every other byte is **garbage**.
+//!
+//! Memory is bounded: at most two frame lengths (74 bytes) are held while a rejected candidate
+//! waits for the candidates inside it to complete.
+
+use crc::{CRC_8_MAXIM_DOW, Crc};
+
+use super::frame::{Event, EventKind, Framing};
+
+/// The first byte of every frame.
+pub const SYNC: u8 = 0x54;
+/// Largest payload (modm `maxPayloadLength`); a larger LENGTH is rejected.
+pub const MAX_PAYLOAD: usize = 32;
+/// SYNC, LENGTH, HEADER, COMMAND and CRC.
+pub const OVERHEAD: usize = 5;
+/// Longest frame on the wire.
+pub const MAX_FRAME: usize = MAX_PAYLOAD + OVERHEAD;
+/// Bytes held at most (see the module documentation).
+pub const CAPACITY: usize = 2 * MAX_FRAME;
+/// Garbage is reported in rows of at most this many bytes.
+pub const GARBAGE_ROW_MAX: usize = 64;
+
+const CRC8: Crc<u8> = Crc::<u8>::new(&CRC_8_MAXIM_DOW);
+
+/// CRC-8/MAXIM-DOW of `bytes` (LENGTH … DATA of a frame).
+pub fn crc8(bytes: &[u8]) -> u8 {
+    CRC8.checksum(bytes)
+}
+
+/// Appends a frame with a correct LENGTH and CRC.
+///
+/// # Panics
+///
+/// If `payload` is longer than [`MAX_PAYLOAD`].
+pub fn encode(out: &mut Vec<u8>, header: u8, command: u8, payload: &[u8]) {
+    assert!(
+        payload.len() <= MAX_PAYLOAD,
+        "SAB v1 payloads have at most 32 bytes"
+    );
+    let start = out.len();
+    out.push(SYNC);
+    out.push(payload.len() as u8);
+    out.push(header);
+    out.push(command);
+    out.extend_from_slice(payload);
+    let crc = crc8(&out[start + 1..]);
+    out.push(crc);
+}
+
+enum Check {
+    /// The candidate is complete and valid; the frame ends here (exclusive).
+    Valid(usize),
+    /// Not a frame start: no 0x54, a LENGTH above 32, or a failing CRC.
+    Invalid,
+    /// More bytes are needed to decide.
+    Incomplete,
+}
+
+/// Garbage bytes collected for one row.
+#[derive(Clone, Debug)]
+struct Run {
+    bytes: [u8; GARBAGE_ROW_MAX],
+    len: usize,
+    start_pos: u64,
+    start_time: Option<u64>,
+    end_time: Option<u64>,
+    false_syncs: u32,
+    bad_lengths: u32,
+    before_first: bool,
+}
+
+/// Pure SAB v1 reassembler: bytes and times in, [`Event`]s out. The output does not depend on
+/// how the input is split into chunks.
+#[derive(Clone, Debug)]
+pub struct Reassembler {
+    buf: [u8; CAPACITY],
+    times: Box<[Option<u64>; CAPACITY]>,
+    len: usize,
+    /// Stream offset of `buf[0]`.
+    base: u64,
+    /// No position in `buf[..known]` starts a valid frame.
+    known: usize,
+    /// End of the valid frame that starts at `known`, once found.
+    valid: Option<usize>,
+    run: Run,
+    frames: u64,
+}
+
+impl Default for Reassembler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Reassembler {
+    pub fn new() -> Self {
+        Reassembler {
+            buf: [0; CAPACITY],
+            times: Box::new([None; CAPACITY]),
+            len: 0,
+            base: 0,
+            known: 0,
+            valid: None,
+            run: Run {
+                bytes: [0; GARBAGE_ROW_MAX],
+                len: 0,
+                start_pos: 0,
+                start_time: None,
+                end_time: None,
+                false_syncs: 0,
+                bad_lengths: 0,
+                before_first: true,
+            },
+            frames: 0,
+        }
+    }
+
+    /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        for &b in data {
+            self.step(b, time, emit);
+        }
+    }
+
+    /// Feeds one byte.
+    #[inline]
+    pub fn step(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.len == 0 && b != SYNC {
+            // Nothing held and no frame start: garbage, without going through the buffer.
+            self.garbage_byte(b, time, emit);
+            return;
+        }
+        if self.len == CAPACITY {
+            // Cannot happen (see the module documentation); never panic on input, though.
+            debug_assert!(false, "SAB v1 buffer overflow");
+            self.known = self.known.max(1);
+            self.garbage_front(emit);
+        }
+        self.buf[self.len] = b;
+        self.times[self.len] = time;
+        self.len += 1;
+        self.process(false, emit);
+    }
+
+    /// End of input: decides every held byte (truncated candidates, garbage) and emits it.
+    pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.process(true, emit);
+        self.flush_garbage(emit);
+    }
+
+    /// A gap in the capture: emits the garbage collected so far and forgets the bytes of an
+    /// unfinished candidate without reporting them.
+    pub fn reset(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        self.base += self.len as u64;
+        self.len = 0;
+        self.known = 0;
+        self.valid = None;
+    }
+
+    /// Emits the garbage collected so far as a row (a live source went quiet).
+    pub fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.run.len == 0 {
+            return;
+        }
+        let r = &self.run;
+        let mut ev = Event::new(EventKind::Garbage, Framing::Sync, &r.bytes[..r.len]);
+        ev.start_pos = r.start_pos;
+        ev.end_pos = r.start_pos + r.len as u64;
+        ev.start_time = r.start_time;
+        ev.end_time = r.end_time;
+        ev.false_syncs = r.false_syncs;
+        ev.bad_lengths = r.bad_lengths;
+        ev.before_first = r.before_first;
+        emit(&ev);
+        self.run.len = 0;
+        self.run.false_syncs = 0;
+        self.run.bad_lengths = 0;
+    }
+
+    /// Bytes consumed so far (the stream offset after the last byte pushed).
+    pub fn position(&self) -> u64 {
+        self.base + self.len as u64
+    }
+
+    /// Bytes held back while a candidate is undecided (for tests of the memory bound).
+    pub fn held(&self) -> usize {
+        self.len
+    }
+
+    /// Valid frames emitted so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    fn check(&self, q: usize) -> Check {
+        if self.buf[q] != SYNC {
+            return Check::Invalid;
+        }
+        let Some(&length) = self.buf[..self.len].get(q + 1) else {
+            return Check::Incomplete;
+        };
+        let length = length as usize;
+        if length > MAX_PAYLOAD {
+            return Check::Invalid;
+        }
+        let end = q + length + OVERHEAD;
+        if end > self.len {
+            return Check::Incomplete;
+        }
+        if crc8(&self.buf[q + 1..end - 1]) == self.buf[end - 1] {
+            Check::Valid(end)
+        } else {
+            Check::Invalid
+        }
+    }
+
+    fn process(&mut self, eof: bool, emit: &mut impl FnMut(&Event<'_>)) {
+        while self.len > 0 {
+            if self.known == 0 {
+                if let Some(end) = self.valid {
+                    self.emit_frame(end, emit);
+                    continue;
+                }
+                match self.check(0) {
+                    Check::Valid(end) => {
+                        self.valid = Some(end);
+                        continue;
+                    }
+                    Check::Incomplete if !eof => return,
+                    _ => self.known = 1,
+                }
+            }
+            // buf[0] does not start a valid frame.
+            if self.buf[0] != SYNC {
+                self.garbage_front(emit);
+                continue;
+            }
+            if self.len < 2 {
+                // Only at the end of the input: a lone 0x54.
+                self.emit_span(EventKind::Truncated, 1, emit);
+                continue;
+            }
+            let length = self.buf[1] as usize;
+            if length > MAX_PAYLOAD {
+                self.run_note(|r| r.bad_lengths += 1);
+                self.garbage_front(emit);
+                continue;
+            }
+            let full = length + OVERHEAD;
+            // Shorter than `full` only at the end of the input.
+            let span = full.min(self.len);
+            // Does a valid frame start inside the rejected candidate?
+            while self.valid.is_none() && self.known < span {
+                match self.check(self.known) {
+                    Check::Valid(end) => self.valid = Some(end),
+                    Check::Incomplete if !eof => return,
+                    _ => self.known += 1,
+                }
+            }
+            if self.valid.is_some() && self.known < span {
+                self.run_note(|r| r.false_syncs += 1);
+                self.garbage_front(emit);
+                continue;
+            }
+            let kind = if span < full {
+                EventKind::Truncated
+            } else {
+                EventKind::BadCrc
+            };
+            self.emit_span(kind, span, emit);
+        }
+    }
+
+    /// Notes something about the next garbage byte (the run may still be empty).
+    fn run_note(&mut self, f: impl FnOnce(&mut Run)) {
+        if self.run.len == 0 {
+            self.run.false_syncs = 0;
+            self.run.bad_lengths = 0;
+        }
+        f(&mut self.run);
+    }
+
+    /// Moves `buf[0]` into the garbage run.
+    fn garbage_front(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        let (b, time) = (self.buf[0], self.times[0]);
+        self.consume(1);
+        self.base -= 1;
+        self.garbage_byte(b, time, emit);
+    }
+
+    /// Appends the byte at stream offset `base` to the garbage run (and moves `base` past it).
+    #[inline]
+    fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        let r = &mut self.run;
+        if r.len == 0 {
+            r.start_pos = self.base;
+            r.start_time = time;
+            r.before_first = self.frames == 0;
+        }
+        r.bytes[r.len] = b;
+        r.end_time = time;
+        r.len += 1;
+        self.base += 1;
+        if r.len == GARBAGE_ROW_MAX {
+            self.flush_garbage(emit);
+        }
+    }
+
+    fn span_event(&self, kind: EventKind, n: usize) -> Event<'_> {
+        let mut ev = Event::new(kind, Framing::Sync, &self.buf[..n]);
+        ev.start_pos = self.base;
+        ev.end_pos = self.base + n as u64;
+        ev.start_time = self.times[0];
+        ev.end_time = self.times[n - 1];
+        ev.length_byte = self.buf[..n].get(1).copied();
+        ev
+    }
+
+    fn emit_frame(&mut self, end: usize, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        let mut ev = self.span_event(EventKind::Frame, end);
+        ev.body = &self.buf[2..end - 1];
+        ev.crc = Some((self.buf[end - 1] as u16, crc8(&self.buf[1..end - 1]) as u16));
+        emit(&ev);
+        self.frames += 1;
+        self.valid = None;
+        self.consume(end);
+    }
+
+    fn emit_span(&mut self, kind: EventKind, n: usize, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        let mut ev = self.span_event(kind, n);
+        if kind == EventKind::BadCrc {
+            ev.body = &self.buf[2..n - 1];
+            let computed = crc8(&self.buf[1..n - 1]);
+            ev.crc = Some((self.buf[n - 1] as u16, computed as u16));
+            ev.crc_with_sync = crc8(&self.buf[..n - 1]) == self.buf[n - 1];
+        } else {
+            ev.body = self.buf.get(2..n).unwrap_or(&[]);
+        }
+        emit(&ev);
+        self.consume(n);
+    }
+
+    fn consume(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.times.copy_within(n..self.len, 0);
+        self.len -= n;
+        self.base += n as u64;
+        self.known = self.known.saturating_sub(n);
+        self.valid = self.valid.and_then(|e| e.checked_sub(n)).filter(|&e| e > 0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmt::parse_hex;
+    use crate::sab::frame::OwnedEvent;
+
+    fn events(data: &[u8]) -> Vec<OwnedEvent> {
+        let mut r = Reassembler::new();
+        let mut out = Vec::new();
+        r.push(data, None, &mut |e| out.push(OwnedEvent::from(e)));
+        r.finish(&mut |e| out.push(OwnedEvent::from(e)));
+        out
+    }
+
+    fn kinds(evs: &[OwnedEvent]) -> Vec<(EventKind, String)> {
+        evs.iter()
+            .map(|e| (e.kind, crate::fmt::hex(&e.wire)))
+            .collect()
+    }
+
+    #[test]
+    fn crc_catalogue_check_value() {
+        assert_eq!(crc8(b"123456789"), 0xA1);
+    }
+
+    #[test]
+    fn modm_unit_test_frames() {
+        // sab.md §2: modm test/modm/communication/sab/interface_test.cpp.
+        let mut out = Vec::new();
+        encode(&mut out, 0x12, 0x34, &0xDEAD_BEEFu32.to_le_bytes());
+        assert_eq!(out, parse_hex("54 04 12 34 EF BE AD DE EE").unwrap());
+        out.clear();
+        encode(&mut out, 0xFF, 0x56, &0xBAAAu16.to_le_bytes());
+        assert_eq!(out, parse_hex("54 02 FF 56 AA BA 87").unwrap());
+        out.clear();
+        encode(
+            &mut out,
+            0x86,
+            0x78,
+            &parse_hex("FF FF 0C 78 56 34 12").unwrap(),
+        );
+        assert_eq!(
+            out,
+            parse_hex("54 07 86 78 FF FF 0C 78 56 34 12 C1").unwrap()
+        );
+        // SYNC is not covered: including it would give E6 / 75 / E4.
+        assert_eq!(crc8(&parse_hex("54 04 12 34 EF BE AD DE").unwrap()), 0xE6);
+    }
+
+    #[test]
+    fn decodes_a_frame() {
+        let ev = events(&parse_hex("54 04 12 34 EF BE AD DE EE").unwrap());
+        assert_eq!(ev.len(), 1);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        assert_eq!(ev[0].body, parse_hex("12 34 EF BE AD DE").unwrap());
+        assert_eq!(ev[0].crc, Some((0xEE, 0xEE)));
+        assert_eq!((ev[0].start_pos, ev[0].end_pos), (0, 9));
+    }
+
+    #[test]
+    fn false_sync_with_plausible_length_does_not_hide_the_frame() {
+        // modm would swallow 35 bytes after `54 20` and lose both frames.
+        let mut wire = parse_hex("54 20").unwrap();
+        encode(&mut wire, 0x05, 0x10, &[]);
+        encode(&mut wire, 0xC5, 0x10, &[1, 2]);
+        let ev = events(&wire);
+        assert_eq!(
+            kinds(&ev),
+            [
+                (EventKind::Garbage, "54 20".into()),
+                (EventKind::Frame, "54 00 05 10 62".into()),
+                (EventKind::Frame, crate::fmt::hex(&wire[7..])),
+            ]
+        );
+        assert_eq!(ev[0].false_syncs, 1);
+    }
+
+    #[test]
+    fn stray_sync_right_before_a_frame() {
+        let mut wire = vec![SYNC];
+        encode(&mut wire, 0x12, 0x34, &0xDEAD_BEEFu32.to_le_bytes());
+        let ev = events(&wire);
+        assert_eq!(ev.len(), 2);
+        assert_eq!(ev[0].kind, EventKind::Garbage);
+        assert_eq!(ev[0].wire, [SYNC]);
+        assert_eq!(ev[0].bad_lengths, 1);
+        assert_eq!(ev[1].kind, EventKind::Frame);
+        assert_eq!(ev[1].start_pos, 1);
+    }
+
+    #[test]
+    fn bad_crc_then_frame() {
+        let mut wire = parse_hex("54 00 05 10 63").unwrap();
+        encode(&mut wire, 0x85, 0x10, &[0x01]);
+        let ev = events(&wire);
+        assert_eq!(
+            kinds(&ev),
+            [
+                (EventKind::BadCrc, "54 00 05 10 63".into()),
+                (EventKind::Frame, "54 01 85 10 01 6A".into()),
+            ]
+        );
+        assert_eq!(ev[0].crc, Some((0x63, 0x62)));
+    }
+
+    #[test]
+    fn corrupt_frame_inside_a_false_candidate_is_still_a_bad_frame() {
+        // A false `54 10` whose span covers a corrupted frame and the start of a valid one.
+        let mut wire = parse_hex("54 10 54 00 05 10 63").unwrap();
+        encode(&mut wire, 0x12, 0x34, &0xDEAD_BEEFu32.to_le_bytes());
+        let ev = events(&wire);
+        assert_eq!(
+            kinds(&ev),
+            [
+                (EventKind::Garbage, "54 10".into()),
+                (EventKind::BadCrc, "54 00 05 10 63".into()),
+                (EventKind::Frame, "54 04 12 34 EF BE AD DE EE".into()),
+            ]
+        );
+    }
+
+    #[test]
+    fn truncated_at_the_end() {
+        let ev = events(&parse_hex("54 04 12 34 EF").unwrap());
+        assert_eq!(
+            kinds(&ev),
+            [(EventKind::Truncated, "54 04 12 34 EF".into())]
+        );
+        assert_eq!(
+            kinds(&events(&[SYNC])),
+            [(EventKind::Truncated, "54".into())]
+        );
+        // A frame inside a truncated candidate is still found.
+        let mut wire = parse_hex("54 20").unwrap();
+        encode(&mut wire, 0x01, 0x02, &[]);
+        let ev = events(&wire);
+        assert_eq!(ev[0].kind, EventKind::Garbage);
+        assert_eq!(ev[1].kind, EventKind::Frame);
+    }
+
+    #[test]
+    fn garbage_rows_are_bounded() {
+        let data = vec![0x11; 150];
+        let ev = events(&data);
+        let lens: Vec<usize> = ev.iter().map(|e| e.wire.len()).collect();
+        assert_eq!(lens, [64, 64, 22]);
+        assert!(ev.iter().all(|e| e.kind == EventKind::Garbage));
+        assert!(ev[0].wire.iter().all(|&b| b == 0x11));
+        assert_eq!(ev[2].start_pos, 128);
+    }
+
+    #[test]
+    fn worst_case_memory() {
+        // Back-to-back false candidates of the largest length.
+        let mut r = Reassembler::new();
+        let mut max = 0;
+        for i in 0..10_000u32 {
+            let b = if i % 2 == 0 { SYNC } else { 0x20 };
+            r.step(b, None, &mut |_| {});
+            max = max.max(r.held());
+        }
+        assert!(max <= CAPACITY, "{max}");
+        assert!(
+            max > MAX_FRAME,
+            "the test should exercise the nested case ({max})"
+        );
+    }
+}
