@@ -464,7 +464,10 @@ fn report(
         eprintln!("{protocol} statistics ({rows} rows)");
         eprintln!("{}", decoder.stats());
     }
-    if let Some(p) = decoder.problems() {
+    // When the output failed, the one line that matters is the write error (printed last).
+    if !matches!(result, Err(Failure::Output(_)))
+        && let Some(p) = decoder.problems()
+    {
         eprintln!("busnoop: {p}");
     }
     if let Err(Failure::Signal(_)) = result {

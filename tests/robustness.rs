@@ -345,3 +345,181 @@ fn recording_to_a_full_disk() {
         text(&out.stderr)
     );
 }
+
+/// The cases every protocol shares, for each of them.
+const PROTOCOLS: [&str; 3] = ["sport", "sbus", "sab2"];
+
+#[test]
+fn every_protocol_empty_random_missing_directory_full_disk() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+    let noise: Vec<u8> = (0..50_000)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 24) as u8
+        })
+        .collect();
+    let noisy = dir.path().join("noise.bin");
+    std::fs::write(&noisy, &noise).unwrap();
+    for p in PROTOCOLS {
+        // Empty: the header only, nothing on stderr.
+        let out = busnoop().arg(p).arg(&empty).output().unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(0), "{p}");
+        assert_eq!(text(&out.stdout).lines().count(), 1, "{p}");
+        assert!(
+            text(&out.stdout)
+                .starts_with("Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData")
+        );
+        assert_eq!(text(&out.stderr), "", "{p}");
+        // Random bytes: rows, exit 0, one summary line naming what went wrong.
+        let out = busnoop().arg(p).arg(&noisy).output().unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(0), "{p}");
+        let err = text(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{p}: {err}");
+        assert!(
+            err.starts_with("busnoop: ") && err.contains("garbage"),
+            "{p}: {err}"
+        );
+        assert!(text(&out.stdout).lines().count() > 10, "{p}");
+        // Missing file and directory.
+        let out = busnoop()
+            .arg(p)
+            .arg(dir.path().join("missing.bin"))
+            .output()
+            .unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(3), "{p}");
+        assert!(
+            text(&out.stderr).ends_with("missing.bin: no such file or device\n"),
+            "{p}"
+        );
+        let out = busnoop().arg(p).arg(dir.path()).output().unwrap();
+        assert_eq!(out.status.code(), Some(3), "{p}");
+        assert!(text(&out.stderr).contains("is a directory"), "{p}");
+        // Full disk.
+        let out = busnoop()
+            .arg(p)
+            .arg(&noisy)
+            .args(["-o", "/dev/full"])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(8), "{p}");
+        assert!(
+            text(&out.stderr).starts_with("busnoop: cannot write to /dev/full: No space left"),
+            "{p}"
+        );
+    }
+}
+
+#[test]
+fn every_protocol_closed_stdout_is_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    let noise: Vec<u8> = (0..400_000)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 24) as u8
+        })
+        .collect();
+    let noisy = dir.path().join("noise.bin");
+    std::fs::write(&noisy, &noise).unwrap();
+    for p in PROTOCOLS {
+        let mut child = busnoop()
+            .arg(p)
+            .arg(&noisy)
+            .arg("--raw")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(child.stdout.take().unwrap()),
+            &mut first,
+        )
+        .unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(141), "{p}");
+        assert_eq!(text(&out.stderr), "", "{p}");
+    }
+}
+
+#[test]
+fn pcap_with_a_link_type_that_is_not_network_traffic() {
+    // Link type 105 (802.11): S-Bus reports a Skipped row and counts the packets; the serial
+    // protocols refuse a pcap of network traffic.
+    let dir = tempfile::tempdir().unwrap();
+    let mut pcap = vec![0xD4, 0xC3, 0xB2, 0xA1, 2, 0, 4, 0];
+    pcap.extend_from_slice(&[0; 8]);
+    pcap.extend_from_slice(&65535u32.to_le_bytes());
+    pcap.extend_from_slice(&105u32.to_le_bytes());
+    for i in 0..3u32 {
+        pcap.extend_from_slice(&(1_700_000_000 + i).to_le_bytes());
+        pcap.extend_from_slice(&0u32.to_le_bytes());
+        pcap.extend_from_slice(&40u32.to_le_bytes());
+        pcap.extend_from_slice(&40u32.to_le_bytes());
+        pcap.extend_from_slice(&[0xAB; 40]);
+    }
+    let p = dir.path().join("wifi.pcap");
+    std::fs::write(&p, &pcap).unwrap();
+    let out = busnoop().arg("sbus").arg(&p).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    assert_eq!(stdout.lines().count(), 2, "{stdout}");
+    assert!(
+        stdout.lines().nth(1).unwrap().contains("\tSkipped\t"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("link type 105 are not network traffic"),
+        "{stdout}"
+    );
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: S-Bus: 3 packets of a link type that is not network traffic skipped in 0 valid telegrams\n"
+    );
+    for proto in ["sport", "sab2"] {
+        let out = busnoop().arg(proto).arg(&p).output().unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(9), "{proto}");
+        assert!(
+            text(&out.stderr).contains("pcap of network traffic"),
+            "{proto}"
+        );
+    }
+}
+
+#[test]
+fn wrong_protocol_for_every_decoder() {
+    // Each protocol's own sample given to the other decoders: no panic, exit 0, a summary line.
+    let samples = [
+        ("sport", fixture("sport-sample.bin")),
+        ("sab2", fixture("sab2-session.bin")),
+        ("sbus", fixture("sbus-digimat.pcap")),
+    ];
+    for (own, file) in &samples {
+        for p in PROTOCOLS.iter().filter(|p| *p != own) {
+            let out = busnoop().arg(p).arg(file).output().unwrap();
+            no_panic(&out);
+            let code = out.status.code();
+            let err = text(&out.stderr);
+            if file.extension().is_some_and(|e| e == "pcap") {
+                // A pcap of network traffic is refused by the serial-only decoders.
+                assert_eq!(code, Some(9), "{p} on {own}: {err}");
+            } else {
+                assert_eq!(code, Some(0), "{p} on {own}: {err}");
+                assert_eq!(err.lines().count(), 1, "{p} on {own}: {err}");
+            }
+        }
+    }
+}

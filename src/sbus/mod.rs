@@ -384,6 +384,13 @@ fn problems_line(t: &Totals) -> Option<String> {
             "unparsable packets",
         ));
     }
+    if t.other_links > 0 {
+        parts.push(plural(
+            t.other_links,
+            "packet of a link type that is not network traffic skipped",
+            "packets of a link type that is not network traffic skipped",
+        ));
+    }
     if let Some(e) = &t.pcap_error {
         parts.push(format!("capture error: {e}"));
     }
