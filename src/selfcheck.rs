@@ -213,13 +213,76 @@ pub fn sbus_serial(data: &[u8]) {
             if r.kind == "Timeout" {
                 assert!(r.raw.is_empty());
             }
+            if matches!(
+                r.kind.as_str(),
+                "Request" | "Response" | "ACK" | "NAK" | "Retry"
+            ) {
+                assert!(sbus_serial_crc_ok(&r.raw), "bad CRC accepted: {r:?}");
+            }
         }
     }
 }
 
-/// Ether-S-Bus decoder on arbitrary capture bytes: never panics, chunking does not matter.
+/// Whether the wire bytes of an accepted serial S-Bus telegram pass its CRC: data mode over the
+/// escaped or the unescaped bytes (either is accepted), secure telegrams over the inner
+/// telegram, break/parity mode over all bytes before the CRC; a lone ACK/NAK character has none.
+fn sbus_serial_crc_ok(raw: &[u8]) -> bool {
+    use crate::sbus::telegram::crc16;
+    if raw.first() != Some(&0xB5) {
+        // Break / parity mode.
+        if raw.len() <= 2 && matches!(raw.first(), Some(0x06 | 0x15)) {
+            return true;
+        }
+        let n = raw.len();
+        return n >= 3 && crc16(&raw[..n - 2]) == u16::from_be_bytes([raw[n - 2], raw[n - 1]]);
+    }
+    // Tokens: a byte, or a DLE pair standing for one byte; (wire bytes, value).
+    let mut tokens: Vec<(&[u8], u8)> = Vec::new();
+    let mut i = 0;
+    while i < raw.len() {
+        if raw[i] == 0xC5 && i + 1 < raw.len() && raw[i + 1] <= 1 {
+            tokens.push((&raw[i..i + 2], if raw[i + 1] == 0 { 0xB5 } else { 0xC5 }));
+            i += 2;
+        } else {
+            tokens.push((&raw[i..i + 1], raw[i]));
+            i += 1;
+        }
+    }
+    // A secure telegram carries a standard telegram after `B5 1x LEN SEQ`, with its own CRC
+    // (a malformed one may lack the inner B5; it is noted, and its CRC still has to check).
+    if tokens.len() > 4 && matches!(tokens[1].1, 0x10 | 0x11) {
+        tokens.drain(..4);
+    }
+    if tokens.len() < 3 {
+        return false;
+    }
+    let (body, crc) = tokens.split_at(tokens.len() - 2);
+    let want = u16::from_be_bytes([crc[0].1, crc[1].1]);
+    let escaped: Vec<u8> = body.iter().flat_map(|t| t.0.iter().copied()).collect();
+    let unescaped: Vec<u8> = body.iter().map(|t| t.1).collect();
+    crc16(&escaped) == want || crc16(&unescaped) == want
+}
+
+/// Ether-S-Bus decoder on arbitrary capture bytes: never panics, chunking does not matter, and
+/// every accepted telegram's UDP payload passes the CRC over the whole payload.
 pub fn sbus_ether(data: &[u8]) {
-    same_rows_however_chunked(
+    let check = |rows: &[OwnedRow]| {
+        for r in rows {
+            if matches!(
+                r.kind.as_str(),
+                "Request" | "Response" | "ACK" | "NAK" | "Retry"
+            ) {
+                let n = r.raw.len();
+                assert!(
+                    n >= 11
+                        && crate::sbus::telegram::crc16(&r.raw[..n - 2])
+                            == u16::from_be_bytes([r.raw[n - 2], r.raw[n - 1]]),
+                    "bad CRC accepted: {r:?}"
+                );
+            }
+        }
+    };
+    let rows = same_rows_however_chunked(
         &|| {
             Box::new(crate::sbus::EtherDecoder::new(
                 &crate::sbus::Options::default(),
@@ -227,11 +290,12 @@ pub fn sbus_ether(data: &[u8]) {
         },
         data,
     );
+    check(&rows);
     // The same bytes behind a pcap header (link type Ethernet) reach the packet parsers.
     let mut f = Vec::new();
     crate::pcap::write::header(&mut f, 1);
     f.extend_from_slice(data);
-    same_rows_however_chunked(
+    let rows = same_rows_however_chunked(
         &|| {
             Box::new(crate::sbus::EtherDecoder::new(
                 &crate::sbus::Options::default(),
@@ -239,6 +303,7 @@ pub fn sbus_ether(data: &[u8]) {
         },
         &f,
     );
+    check(&rows);
 }
 
 /// modm SAB / SAB2, detected and with each framing forced: chunking invariance, rows in time

@@ -417,7 +417,7 @@ impl DataFramer {
             Phase::InnerFs => {
                 // The secure header is not followed by a telegram: keep the bytes and report
                 // the frame as broken when it ends.
-                self.problem = Some("secure header not followed by a telegram (B5)");
+                self.problem = Some(NO_INNER_TELEGRAM);
                 self.phase = Phase::Body;
                 self.tele_fs = wire_at;
                 self.push_tele(v, wire_at, emit);
@@ -517,7 +517,12 @@ impl DataFramer {
                 });
             }
         }
-        let (tele, crc) = if self.phase == Phase::Body && self.tele.len() >= 3 {
+        // A secure header without the inner telegram's B5 is malformed, whatever a CRC over an
+        // assumed B5 would say: it is shown as broken, never as a telegram.
+        let (tele, crc) = if self.phase == Phase::Body
+            && self.tele.len() >= 3
+            && self.problem != Some(NO_INNER_TELEGRAM)
+        {
             let n = self.tele.len();
             let crc = self.crc_check();
             (classify(self.tele[0], &self.tele[1..n - 2]), crc)
@@ -549,6 +554,9 @@ impl DataFramer {
         self.dle = false;
     }
 }
+
+/// The problem noted when a secure header is not followed by a telegram.
+const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
 
 /// What the break/parity framer waits for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
