@@ -9,32 +9,17 @@
 //!
 //! The captures are written to `target/bench-data/` and reused while their size matches.
 
-use std::fs::File;
-use std::io::{BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::Instant;
+mod common;
 
-use busnoop::decoder::{Decoder, Discard};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+use std::time::Duration;
+
 use busnoop::sab::frame::Framing;
 use busnoop::sab::header::Flags;
 use busnoop::sab::{FramingChoice, Options, SabDecoder, sample};
-
-/// A tiny deterministic PRNG (xorshift), so the capture is the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
+use common::{Rng, best_of, busnoop, children_peak_kb, decode_file, pin_to_core0};
 
 /// Writes about `target` bytes of SAB traffic: a master polls five slaves with their commands;
 /// a slave answers with an ACK carrying 0 to 8 bytes (90 %), a NACK (6 %) or not at all (3 %),
@@ -89,88 +74,27 @@ fn generate(path: &Path, framing: Framing, target: u64) -> u64 {
     written
 }
 
-/// Pins the current thread (and threads it spawns later) to CPU 0.
-fn pin_to_core0() {
-    unsafe {
-        let mut set: libc::cpu_set_t = std::mem::zeroed();
-        libc::CPU_SET(0, &mut set);
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-    }
+fn decode_only(path: &Path, framing: FramingChoice) -> (Duration, u64) {
+    decode_file(
+        path,
+        &mut SabDecoder::new(Options {
+            framing,
+            ..Options::default()
+        }),
+    )
 }
 
-/// Peak resident memory of the largest waited-for child (kB).
-fn children_peak_kb() -> u64 {
-    unsafe {
-        let mut ru: libc::rusage = std::mem::zeroed();
-        libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru);
-        ru.ru_maxrss as u64
-    }
-}
-
-fn decode_only(path: &Path, framing: FramingChoice) -> (f64, u64) {
-    let mut f = File::open(path).unwrap();
-    let mut buf = vec![0u8; 64 * 1024];
-    let mut d = SabDecoder::new(Options {
-        framing,
-        ..Options::default()
-    });
-    let mut out = Discard::default();
-    let start = Instant::now();
-    loop {
-        let n = f.read(&mut buf).unwrap();
-        if n == 0 {
-            break;
-        }
-        d.push(&buf[..n], None, &mut out).unwrap();
-    }
-    d.finish(&mut out).unwrap();
-    (start.elapsed().as_secs_f64(), out.rows)
-}
-
-fn to_tsv(path: &Path) -> (f64, u64) {
-    use std::os::unix::process::CommandExt;
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_busnoop"));
-    cmd.args(["sab2", "-f", "tsv"])
-        .arg(path)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null());
-    unsafe {
-        cmd.pre_exec(|| {
-            pin_to_core0();
-            Ok(())
-        });
-    }
-    let start = Instant::now();
-    let status = cmd.status().unwrap();
-    let secs = start.elapsed().as_secs_f64();
-    assert!(status.success());
-    (secs, children_peak_kb())
-}
-
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> (f64, T)) -> (f64, T) {
-    let mut best = f();
-    for _ in 1..runs {
-        let r = f();
-        if r.0 < best.0 {
-            best = r;
-        }
-    }
-    best
+fn to_tsv(path: &Path) -> (Duration, u64) {
+    let t = common::time_command(busnoop().args(["sab2", "-f", "tsv"]).arg(path))
+        .expect("busnoop failed");
+    (t, children_peak_kb())
 }
 
 fn main() {
     // `cargo bench` passes `--bench`; ignore arguments.
-    let mb: u64 = std::env::var("BUSNOOP_BENCH_MB")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(128);
-    let runs: usize = std::env::var("BUSNOOP_BENCH_RUNS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(3)
-        .max(1);
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
-    std::fs::create_dir_all(&dir).unwrap();
+    let mb = common::env_u64("BUSNOOP_BENCH_MB", 128);
+    let runs = common::env_u64("BUSNOOP_BENCH_RUNS", 3).max(1);
+    let dir = common::data_dir();
     pin_to_core0();
     println!("modm SAB replay benchmark, pinned to CPU 0, best of {runs} runs");
     for (framing, forced) in [
@@ -194,14 +118,16 @@ fn main() {
         );
         let _ = decode_only(&path, forced); // warm the page cache
         for (label, choice) in [("forced", forced), ("detected", FramingChoice::Auto)] {
-            let (secs, rows) = best_of(runs, || decode_only(&path, choice));
+            let (t, rows) = best_of(runs, || decode_only(&path, choice));
+            let secs = t.as_secs_f64();
             println!(
                 "  decode only, framing {label}: {:.1} MiB/s, {:.2} M rows/s ({rows} rows in {secs:.2} s)",
                 mib / secs,
                 rows as f64 / secs / 1e6
             );
         }
-        let (secs, peak) = best_of(runs, || to_tsv(&path));
+        let (t, peak) = best_of(runs, || to_tsv(&path));
+        let secs = t.as_secs_f64();
         println!(
             "  busnoop sab2 -f tsv > /dev/null (detected): {:.1} MiB/s ({secs:.2} s), peak RSS {peak} kB",
             mib / secs

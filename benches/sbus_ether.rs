@@ -12,32 +12,17 @@
 //! summary lines to /dev/null (skipped with a message when tshark is not installed), all pinned
 //! to CPU 0.
 
-use std::fs::File;
-use std::io::{BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-use busnoop::decoder::{Decoder, Discard};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
 use busnoop::pcap::write as pw;
 use busnoop::sbus::telegram::encode_ether;
-
-fn target_dir() -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"))
-}
-
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-}
+use common::{Rng, decode_file, pin_to_core0, time_command};
 
 /// Writes the capture; returns the number of packets.
 fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
@@ -110,48 +95,10 @@ fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
 }
 
 fn decode_in_process(path: &Path) -> (Duration, u64) {
-    let mut f = File::open(path).unwrap();
-    let mut dec = busnoop::sbus::EtherDecoder::new(&busnoop::sbus::Options::default());
-    let mut out = Discard::default();
-    let mut buf = vec![0u8; 64 * 1024];
-    let start = Instant::now();
-    loop {
-        let n = f.read(&mut buf).unwrap();
-        if n == 0 {
-            break;
-        }
-        dec.push(&buf[..n], None, &mut out).unwrap();
-    }
-    dec.finish(&mut out).unwrap();
-    (start.elapsed(), out.rows)
-}
-
-/// Pins the current thread (and threads it spawns later) to CPU 0.
-fn pin_to_core0() {
-    unsafe {
-        let mut set: libc::cpu_set_t = std::mem::zeroed();
-        libc::CPU_SET(0, &mut set);
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-    }
-}
-
-/// Runs `cmd` pinned to CPU 0 (like the in-process measurement), output to /dev/null.
-fn time_command(cmd: &mut Command) -> Option<Duration> {
-    use std::os::unix::process::CommandExt;
-    unsafe {
-        cmd.pre_exec(|| {
-            pin_to_core0();
-            Ok(())
-        });
-    }
-    let start = Instant::now();
-    let status = cmd
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .ok()?;
-    let d = start.elapsed();
-    status.success().then_some(d)
+    decode_file(
+        path,
+        &mut busnoop::sbus::EtherDecoder::new(&busnoop::sbus::Options::default()),
+    )
 }
 
 fn rate(packets: u64, d: Duration) -> f64 {
@@ -159,13 +106,8 @@ fn rate(packets: u64, d: Duration) -> f64 {
 }
 
 fn main() {
-    let packets: u64 = std::env::var("BUSNOOP_BENCH_PACKETS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1_000_000);
-    let dir = target_dir().join("bench-data");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("sbus-ether-{packets}.pcap"));
+    let packets = common::env_u64("BUSNOOP_BENCH_PACKETS", 1_000_000);
+    let path = common::data_dir().join(format!("sbus-ether-{packets}.pcap"));
     let packets = if path.exists() {
         packets.div_ceil(2) * 2
     } else {

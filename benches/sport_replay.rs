@@ -9,30 +9,14 @@
 //!
 //! The capture is written to `target/bench-data/` and reused while its size matches.
 
+mod common;
+
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::Instant;
+use std::io::{BufWriter, Write};
+use std::path::Path;
 
-use busnoop::decoder::{Decoder, Discard};
 use busnoop::sport::{SportDecoder, wire};
-
-/// A tiny deterministic PRNG (xorshift), so the capture is the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
+use common::{Rng, best_of, busnoop, children_peak_kb, decode_file, pin_to_core0, self_peak_kb};
 
 /// Writes about `target` bytes of S.Port traffic: the receiver polls the present devices in turn
 /// and one absent ID after each round (as the S-Port_Snoop sample describes); present devices
@@ -86,80 +70,11 @@ fn generate(path: &Path, target: u64) -> u64 {
     written
 }
 
-/// Pins the current thread (and threads it spawns later) to CPU 0.
-fn pin_to_core0() {
-    unsafe {
-        let mut set: libc::cpu_set_t = std::mem::zeroed();
-        libc::CPU_SET(0, &mut set);
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-    }
-}
-
-/// Peak resident memory of this process so far (kB).
-fn self_peak_kb() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmHWM:"))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
-        .unwrap_or(0)
-}
-
-/// Peak resident memory of the largest waited-for child (kB).
-fn children_peak_kb() -> u64 {
-    unsafe {
-        let mut ru: libc::rusage = std::mem::zeroed();
-        libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru);
-        ru.ru_maxrss as u64
-    }
-}
-
-fn decode_only(path: &Path) -> (f64, u64) {
-    let mut f = File::open(path).unwrap();
-    let mut buf = vec![0u8; 64 * 1024];
-    let mut d = SportDecoder::new();
-    let mut out = Discard::default();
-    let start = Instant::now();
-    loop {
-        let n = f.read(&mut buf).unwrap();
-        if n == 0 {
-            break;
-        }
-        d.push(&buf[..n], None, &mut out).unwrap();
-    }
-    d.finish(&mut out).unwrap();
-    (start.elapsed().as_secs_f64(), out.rows)
-}
-
-fn to_tsv(path: &Path) -> (f64, u64) {
-    use std::os::unix::process::CommandExt;
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_busnoop"));
-    cmd.args(["sport", "-f", "tsv"])
-        .arg(path)
-        .stdout(Stdio::null())
-        .stderr(Stdio::inherit());
-    unsafe {
-        cmd.pre_exec(|| {
-            pin_to_core0();
-            Ok(())
-        });
-    }
-    let start = Instant::now();
-    let status = cmd.status().unwrap();
-    let secs = start.elapsed().as_secs_f64();
-    assert!(status.success());
-    (secs, children_peak_kb())
-}
-
 fn main() {
     // `cargo bench` passes `--bench`; ignore arguments.
-    let mb: u64 = std::env::var("BUSNOOP_BENCH_MB")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(128);
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("sport-{mb}mib.bin"));
+    let mb = common::env_u64("BUSNOOP_BENCH_MB", 128);
+    let runs = common::env_u64("BUSNOOP_BENCH_RUNS", 3);
+    let path = common::data_dir().join(format!("sport-{mb}mib.bin"));
     let target = mb << 20;
     let size = match std::fs::metadata(&path) {
         Ok(m) if m.len() >= target && m.len() < target + (1 << 20) => m.len(),
@@ -175,22 +90,13 @@ fn main() {
         path.display()
     );
 
-    // Warm the page cache, then take the best of three runs.
-    let runs: usize = std::env::var("BUSNOOP_BENCH_RUNS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(3);
+    // Warm the page cache, then take the best of the runs.
+    let decode = || decode_file(&path, &mut SportDecoder::new());
     if runs > 1 {
-        let _ = decode_only(&path);
+        decode();
     }
-    let mut best = (f64::MAX, 0);
-    for _ in 0..runs {
-        let r = decode_only(&path);
-        if r.0 < best.0 {
-            best = r;
-        }
-    }
-    let (secs, rows) = best;
+    let (t, rows) = best_of(runs, decode);
+    let secs = t.as_secs_f64();
     println!(
         "decode only: {:.1} MiB/s, {:.2} M rows/s ({rows} rows in {secs:.2} s), peak RSS {} kB",
         mib / secs,
@@ -198,17 +104,16 @@ fn main() {
         self_peak_kb()
     );
 
-    let mut best = (f64::MAX, 0);
-    for _ in 0..runs {
-        let r = to_tsv(&path);
-        if r.0 < best.0 {
-            best = r;
-        }
-    }
-    let (secs, peak) = best;
+    let (t, ()) = best_of(runs, || {
+        let t = common::time_command(busnoop().args(["sport", "-f", "tsv"]).arg(&path))
+            .expect("busnoop failed");
+        (t, ())
+    });
+    let secs = t.as_secs_f64();
     println!(
-        "busnoop sport -f tsv > /dev/null: {:.1} MiB/s, {:.2} M rows/s ({secs:.2} s), peak RSS {peak} kB",
+        "busnoop sport -f tsv > /dev/null: {:.1} MiB/s, {:.2} M rows/s ({secs:.2} s), peak RSS {} kB",
         mib / secs,
-        rows as f64 / secs / 1e6
+        rows as f64 / secs / 1e6,
+        children_peak_kb()
     );
 }

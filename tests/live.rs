@@ -1,83 +1,15 @@
 //! Live capture on pseudo-terminal pairs: rows appear while the bus is still talking, an
 //! unplugged adapter ends the run cleanly (or is waited for), recordings replay to the same rows,
 //! and busy / missing / forbidden ports get their messages.
-//!
-//! pty pairs are not thread-safe to create (serialport's own tests say so), so every test here
-//! holds one lock.
 
 mod common;
 
-use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::Mutex;
-use std::sync::mpsc::{Receiver, channel};
+use std::io::Write;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use busnoop::sport::wire;
-use serialport::{SerialPort, TTYPort};
-
-static PTY: Mutex<()> = Mutex::new(());
-
-fn lock() -> std::sync::MutexGuard<'static, ()> {
-    PTY.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-fn bin() -> PathBuf {
-    assert_cmd::cargo::cargo_bin("busnoop")
-}
-
-/// A pty pair: `master` is the bus side the test writes to, `path` the device busnoop opens.
-struct Bus {
-    master: TTYPort,
-    /// Held open so the device stays usable until the test closes the master.
-    _slave: TTYPort,
-    path: PathBuf,
-}
-
-fn bus() -> Bus {
-    use std::os::fd::AsRawFd;
-    let (master, slave) = TTYPort::pair().expect("pty pair");
-    // The pair's descriptors are inheritable: keep them out of busnoop, or closing the bus side
-    // here would not close it.
-    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
-        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
-    }
-    let path = PathBuf::from(slave.name().expect("slave name"));
-    Bus {
-        master,
-        _slave: slave,
-        path,
-    }
-}
-
-/// Starts busnoop and collects its stdout lines with the time each one arrived.
-fn spawn(args: &[&str], device: &Path) -> (Child, Receiver<(Instant, String)>) {
-    let mut child = Command::new(bin())
-        .args(args)
-        .arg(device)
-        .env_remove("NO_COLOR")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send((Instant::now(), line)).is_err() {
-                break;
-            }
-        }
-    });
-    (child, rx)
-}
-
-fn next_line(rx: &Receiver<(Instant, String)>) -> (Instant, String) {
-    rx.recv_timeout(Duration::from_secs(10))
-        .expect("busnoop printed nothing for 10 s")
-}
+use common::pty::{Bus, bin, bus, lock, next_line, spawn, stderr_of, wait_exit};
 
 /// S.Port traffic for `n` poll slots, one slot's bytes per element: polls of three devices, two
 /// of them answering with data.
@@ -100,23 +32,6 @@ fn slots(n: usize) -> Vec<Vec<u8>> {
             b
         })
         .collect()
-}
-
-fn wait_exit(child: &mut Child) -> std::process::ExitStatus {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            return s;
-        }
-        assert!(Instant::now() < deadline, "busnoop did not exit");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
-fn stderr_of(child: &mut Child) -> String {
-    let mut s = String::new();
-    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut s).unwrap();
-    s
 }
 
 #[test]
@@ -270,7 +185,7 @@ fn reconnect_waits_for_the_adapter_and_marks_the_gap() {
     let (mut child, rx) = spawn(&["sport", "-f", "tsv", "--reconnect"], &link);
     next_line(&rx);
     let Bus {
-        mut master, _slave, ..
+        mut master, slave, ..
     } = b;
     master.write_all(&slots(3).concat()).unwrap();
     master.flush().unwrap();
@@ -280,7 +195,7 @@ fn reconnect_waits_for_the_adapter_and_marks_the_gap() {
     }
     // Unplug: the device disappears. The open poll is closed, then the gap is marked.
     drop(master);
-    drop(_slave);
+    drop(slave);
     let (_, poll) = next_line(&rx);
     assert!(
         poll.starts_with("3\t") && poll.contains("\tFAS-40S\t"),

@@ -26,6 +26,19 @@ fn no_panic(out: &Output) {
     assert!(!err.contains("RUST_BACKTRACE"), "{err}");
 }
 
+/// Deterministic pseudo-random bytes (xorshift).
+fn noise(n: usize, seed: u64) -> Vec<u8> {
+    let mut x = seed;
+    (0..n)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 24) as u8
+        })
+        .collect()
+}
+
 const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote";
 
 #[test]
@@ -81,15 +94,7 @@ fn truncated_file() {
 #[test]
 fn random_bytes() {
     let dir = tempfile::tempdir().unwrap();
-    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-    let bytes: Vec<u8> = (0..200_000)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x as u8
-        })
-        .collect();
+    let bytes = noise(200_000, 0x2545_F491_4F6C_DD1D);
     let p = dir.path().join("noise.bin");
     std::fs::write(&p, &bytes).unwrap();
     let out = busnoop().args(["sport", "--raw"]).arg(&p).output().unwrap();
@@ -354,17 +359,8 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
     let dir = tempfile::tempdir().unwrap();
     let empty = dir.path().join("empty.bin");
     std::fs::write(&empty, b"").unwrap();
-    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-    let noise: Vec<u8> = (0..50_000)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 24) as u8
-        })
-        .collect();
     let noisy = dir.path().join("noise.bin");
-    std::fs::write(&noisy, &noise).unwrap();
+    std::fs::write(&noisy, noise(50_000, 0x9E37_79B9_7F4A_7C15)).unwrap();
     for p in PROTOCOLS {
         // Empty: the header only, nothing on stderr.
         let out = busnoop().arg(p).arg(&empty).output().unwrap();
@@ -421,17 +417,8 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
 #[test]
 fn every_protocol_closed_stdout_is_quiet() {
     let dir = tempfile::tempdir().unwrap();
-    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-    let noise: Vec<u8> = (0..400_000)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 24) as u8
-        })
-        .collect();
     let noisy = dir.path().join("noise.bin");
-    std::fs::write(&noisy, &noise).unwrap();
+    std::fs::write(&noisy, noise(400_000, 0x2545_F491_4F6C_DD1D)).unwrap();
     for p in PROTOCOLS {
         let mut child = busnoop()
             .arg(p)

@@ -1,88 +1,26 @@
 //! `busnoop sab2` on a live serial line (a pseudo-terminal pair): a request without a response
 //! gets its `Timeout` row while the bus is quiet, detection decides on a quiet line, and the
 //! recording replays to the same rows.
-//!
-//! pty pairs are not thread-safe to create (serialport's own tests say so), so every test here
-//! holds one lock.
 
-use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::Mutex;
-use std::sync::mpsc::{Receiver, channel};
+mod common;
+
+use std::io::Write;
+use std::process::Command;
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
+
+use common::pty::{Bus, bus, lock, spawn, wait_exit};
 
 use busnoop::sab::frame::Framing;
 use busnoop::sab::header::Flags;
 use busnoop::sab::sample;
-use serialport::{SerialPort, TTYPort};
 
-static PTY: Mutex<()> = Mutex::new(());
-
-fn lock() -> std::sync::MutexGuard<'static, ()> {
-    PTY.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// A pty pair: `master` is the bus side the test writes to, `path` the device busnoop opens.
-struct Bus {
-    master: TTYPort,
-    _slave: TTYPort,
-    path: PathBuf,
-}
-
-fn bus() -> Bus {
-    use std::os::fd::AsRawFd;
-    let (master, slave) = TTYPort::pair().expect("pty pair");
-    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
-        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
-    }
-    let path = PathBuf::from(slave.name().expect("slave name"));
-    Bus {
-        master,
-        _slave: slave,
-        path,
-    }
-}
-
-fn spawn(args: &[&str], device: &Path) -> (Child, Receiver<String>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_busnoop"))
-        .args(args)
-        .arg(device)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    (child, rx)
-}
-
-fn next_line(rx: &Receiver<String>) -> String {
-    rx.recv_timeout(Duration::from_secs(10))
-        .expect("busnoop printed nothing for 10 s")
+fn next_line(rx: &Receiver<(Instant, String)>) -> String {
+    common::pty::next_line(rx).1
 }
 
 fn field(line: &str, i: usize) -> &str {
     line.split('\t').nth(i).unwrap_or("")
-}
-
-fn wait_exit(child: &mut Child) -> std::process::ExitStatus {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            return s;
-        }
-        assert!(Instant::now() < deadline, "busnoop did not exit");
-        std::thread::sleep(Duration::from_millis(10));
-    }
 }
 
 fn write(b: &mut Bus, flags: Flags, cmd: u8, data: &[u8]) {
@@ -144,7 +82,7 @@ fn timeout_rows_appear_while_the_bus_is_quiet_and_the_recording_replays() {
     drop(b.master);
     let status = wait_exit(&mut child);
     assert_eq!(status.code(), Some(7), "adapter disconnected");
-    while let Ok(l) = rx.recv_timeout(Duration::from_secs(1)) {
+    while let Ok((_, l)) = rx.recv_timeout(Duration::from_secs(1)) {
         live.push(l);
     }
     assert_eq!(live.len(), 5, "{live:#?}");

@@ -2,55 +2,15 @@
 //! answer becomes a Timeout row while the line is silent, and the recording replays to the same
 //! rows.
 
-use std::io::{BufRead, BufReader, Write};
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+mod common;
+
+use std::io::Write;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
+use common::pty::{bin, bus, lock, next_line, spawn, wait_exit};
+
 use busnoop::sbus::telegram::{CrcBasis, encode_data};
-use serialport::{SerialPort, TTYPort};
-
-fn bin() -> PathBuf {
-    assert_cmd::cargo::cargo_bin("busnoop")
-}
-
-fn spawn(args: &[&str], device: &std::path::Path) -> (Child, Receiver<(Instant, String)>) {
-    let mut child = Command::new(bin())
-        .args(args)
-        .arg(device)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send((Instant::now(), line)).is_err() {
-                break;
-            }
-        }
-    });
-    (child, rx)
-}
-
-fn next_line(rx: &Receiver<(Instant, String)>) -> (Instant, String) {
-    rx.recv_timeout(Duration::from_secs(10))
-        .expect("busnoop printed nothing for 10 s")
-}
-
-fn wait_exit(child: &mut Child) -> std::process::ExitStatus {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            return s;
-        }
-        assert!(Instant::now() < deadline, "busnoop did not exit");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
 
 fn telegram(at: u8, payload: &[u8]) -> Vec<u8> {
     let mut v = Vec::new();
@@ -60,12 +20,12 @@ fn telegram(at: u8, payload: &[u8]) -> Vec<u8> {
 
 #[test]
 fn live_timeouts_and_the_recording_replays() {
-    use std::os::fd::AsRawFd;
-    let (mut master, slave) = TTYPort::pair().expect("pty pair");
-    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
-        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
-    }
-    let path = PathBuf::from(slave.name().unwrap());
+    let _g = lock();
+    let common::pty::Bus {
+        mut master,
+        slave,
+        path,
+    } = bus();
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("sbus.pcap");
     let (mut child, rx) = spawn(

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub mod pty;
+
 use busnoop::decoder::{Collected, Decoder, OwnedRow};
 
 /// Path of a file in `fixtures/`.
