@@ -199,9 +199,7 @@ fn ms(micros: u64) -> String {
     s
 }
 
-fn plural(n: u64, one: &str, many: &str) -> String {
-    format!("{n} {}", if n == 1 { one } else { many })
-}
+use crate::exit::count as plural;
 
 impl Stats {
     /// The `--stats` report. `device` names an address (may be empty).

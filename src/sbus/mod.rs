@@ -340,7 +340,7 @@ fn totals_line(t: &Totals, ether: bool) -> String {
 
 fn problems_line(t: &Totals) -> Option<String> {
     let mut parts = Vec::new();
-    let plural = |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    let plural = crate::exit::count;
     if t.crc_errors > 0 {
         parts.push(plural(t.crc_errors, "CRC error", "CRC errors"));
     }

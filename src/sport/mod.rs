@@ -488,8 +488,7 @@ impl Decoder for SportDecoder {
     fn problems(&self) -> Option<String> {
         let st = &self.table.stats;
         let mut parts = Vec::new();
-        let plural =
-            |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let plural = crate::exit::count;
         if st.crc_errors > 0 {
             parts.push(plural(st.crc_errors, "CRC error", "CRC errors"));
         }
