@@ -242,6 +242,8 @@ pub struct DataFramer {
     tele_fs: usize,
     secure: Option<Secure>,
     problem: Option<&'static str>,
+    /// A secure header was not followed by the inner telegram's B5.
+    no_inner: bool,
     time: Option<u64>,
     offset: u64,
     pos: u64,
@@ -263,6 +265,7 @@ impl DataFramer {
             tele_fs: 0,
             secure: None,
             problem: None,
+            no_inner: false,
             time: None,
             offset: 0,
             pos: 0,
@@ -308,6 +311,7 @@ impl DataFramer {
         self.tele_fs = 0;
         self.secure = None;
         self.problem = None;
+        self.no_inner = false;
         self.time = time;
         self.offset = self.pos;
     }
@@ -418,6 +422,7 @@ impl DataFramer {
                 // The secure header is not followed by a telegram: keep the bytes and report
                 // the frame as broken when it ends.
                 self.problem = Some(NO_INNER_TELEGRAM);
+                self.no_inner = true;
                 self.phase = Phase::Body;
                 self.tele_fs = wire_at;
                 self.push_tele(v, wire_at, emit);
@@ -519,10 +524,7 @@ impl DataFramer {
         }
         // A secure header without the inner telegram's B5 is malformed, whatever a CRC over an
         // assumed B5 would say: it is shown as broken, never as a telegram.
-        let (tele, crc) = if self.phase == Phase::Body
-            && self.tele.len() >= 3
-            && self.problem != Some(NO_INNER_TELEGRAM)
-        {
+        let (tele, crc) = if self.phase == Phase::Body && self.tele.len() >= 3 && !self.no_inner {
             let n = self.tele.len();
             let crc = self.crc_check();
             (classify(self.tele[0], &self.tele[1..n - 2]), crc)
