@@ -275,26 +275,15 @@ fn a_missing_port_lists_the_ports_that_exist() {
 #[test]
 fn a_forbidden_port_gets_the_group_hint() {
     use std::os::unix::fs::PermissionsExt;
-    use std::os::unix::process::CommandExt;
     let _g = lock();
     let b = bus();
+    // Owner-only (root's pty when the tests run as root; busnoop then runs unprivileged), or no
+    // access at all for the owner.
     let root = unsafe { libc::geteuid() } == 0;
     let mode = if root { 0o600 } else { 0o000 };
     std::fs::set_permissions(&b.path, std::fs::Permissions::from_mode(mode)).unwrap();
-    let mut cmd = Command::new(bin());
-    cmd.arg("sport").arg(&b.path);
-    if root {
-        // Root may open anything: run busnoop as an unprivileged user.
-        unsafe {
-            cmd.pre_exec(|| {
-                if libc::setgid(65534) != 0 || libc::setuid(65534) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
-    }
-    let out = cmd.output().unwrap();
+    let (_keep, mut cmd) = common::unprivileged_busnoop();
+    let out = cmd.arg("sport").arg(&b.path).output().unwrap();
     assert_eq!(
         out.status.code(),
         Some(4),

@@ -222,20 +222,14 @@ fn unreadable_file() {
     let p = dir.path().join("secret.bin");
     std::fs::copy(fixture("sport-sample.bin"), &p).unwrap();
     std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o000)).unwrap();
-    let mut cmd = busnoop();
-    cmd.arg("sport").arg(&p);
-    if unsafe { libc::geteuid() } == 0 {
-        // Root reads anything: run as an unprivileged user.
-        unsafe {
-            cmd.pre_exec(|| {
-                if libc::setgid(65534) != 0 || libc::setuid(65534) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
-    }
-    let out = cmd.output().unwrap();
+    // Root reads anything: then busnoop runs as an unprivileged user.
+    let (_keep, mut cmd) = common::unprivileged_busnoop();
+    let out = cmd
+        .arg("sport")
+        .arg(&p)
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap();
     no_panic(&out);
     assert_eq!(out.status.code(), Some(4));
     assert_eq!(

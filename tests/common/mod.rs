@@ -51,3 +51,34 @@ pub fn sport_rows(bytes: &[u8]) -> Vec<OwnedRow> {
     let mut d = busnoop::sport::SportDecoder::new();
     decode(&mut d, [(bytes, None)])
 }
+
+/// A command running busnoop as an unprivileged user (uid/gid 65534) when the tests run as root,
+/// since root may open anything; otherwise the normal binary. Root runs a copy of the binary in
+/// a world-readable temporary directory, so the checkout's own permissions do not matter.
+/// Keep the returned directory alive while the command runs.
+pub fn unprivileged_busnoop() -> (Option<tempfile::TempDir>, std::process::Command) {
+    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::process::CommandExt;
+    let bin = assert_cmd::cargo::cargo_bin("busnoop");
+    if unsafe { libc::geteuid() } != 0 {
+        return (None, std::process::Command::new(bin));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+    let copy = dir.path().join("busnoop");
+    std::fs::copy(&bin, &copy).unwrap();
+    std::fs::set_permissions(&copy, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let mut cmd = std::process::Command::new(&copy);
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::setgroups(0, std::ptr::null()) != 0
+                || libc::setgid(65534) != 0
+                || libc::setuid(65534) != 0
+            {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    (Some(dir), cmd)
+}
