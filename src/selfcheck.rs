@@ -250,6 +250,11 @@ fn sbus_serial_crc_ok(raw: &[u8]) -> bool {
             i += 1;
         }
     }
+    // A dangling DLE after the CRC (`… CRC C5` cut by the next B5) is noted by the decoder and
+    // is not part of the telegram.
+    if tokens.last().is_some_and(|t| t.0 == [0xC5]) {
+        tokens.pop();
+    }
     // A secure telegram carries a standard telegram after `B5 1x LEN SEQ`, with its own CRC
     // (a malformed one may lack the inner B5; it is noted, and its CRC still has to check).
     if tokens.len() > 4 && matches!(tokens[1].1, 0x10 | 0x11) {
