@@ -2,7 +2,7 @@
 //!
 //! Facts from the SAIA design document DD-EPFW6-027 (syntax of codes ≤ 0xA6) and the names
 //! Wireshark's `sbus` dissector shows (its Info text, without the `*` it puts on PGU-only
-//! commands); see `docs/sbus.md` and the shared wire reference §4-§5.
+//! commands); see `docs/sbus.md`.
 //!
 //! Count conventions: an **r-count** byte is the number of elements − 1; a **w-count** byte is
 //! the number of bytes that follow it in the telegram (CRC excluded) − 1; a **fio-count** is

@@ -186,7 +186,8 @@ impl Mapper {
                 let value = u32::from_le_bytes([b[3], b[4], b[5], b[6]]);
                 let ok = wire::crc_ok(&b);
                 // Firmware-update frames (`7E FF 50 …` from the radio, `7E 5E 50 …` from the
-                // device) carry their own checksum instead of the S.Port sum (wire reference §5.6).
+                // device) carry their own checksum instead of the S.Port sum (EdgeTX
+                // `radio/src/io/frsky_firmware_update.cpp`).
                 let firmware = b[0] == 0x50 && matches!(s.header, 0xFF | 0x5E);
                 if firmware {
                     ps.other += 1;

@@ -1,7 +1,8 @@
 //! S.Port tables of names: default devices per physical ID and frame types.
 
-/// Default device at each physical ID (0-based), as in `docs/sport.md` (from the wire reference
-/// §9). Empty where no device has that ID by default.
+/// Default device at each physical ID (0-based), as listed in `docs/sport.md` (EdgeTX
+/// `frsky_defs.h` DATA_ID_*, Pawelsky's FrSkySportTelemetry defaults, ArduPilot's and Betaflight's
+/// slots). Empty where no device has that ID by default.
 pub const DEVICES: [&str; 32] = [
     "Vario",     // 0
     "FLVSS",     // 1

@@ -1,4 +1,5 @@
-//! ArduPilot S.Port passthrough (app IDs 0x5000-0x50FF, wire reference §7.8).
+//! ArduPilot S.Port passthrough (app IDs 0x5000-0x50FF), as ArduPilot packs it
+//! (`libraries/AP_Frsky_Telem/AP_Frsky_SPort_Passthrough.cpp`, `AP_Frsky_SPort.cpp` prep_number).
 
 use std::fmt::Write as _;
 

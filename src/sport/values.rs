@@ -1,4 +1,5 @@
-//! S.Port app IDs: names, units, precisions and packed formats (wire reference §6-§7).
+//! S.Port app IDs: names, units, precisions and packed formats, as EdgeTX decodes them
+//! (`radio/src/telemetry/frsky_sport.cpp` sportSensors[], `frsky_defs.h`, `sensor_names.h`).
 //!
 //! [`decode`] writes the `Sensor` and `Data` columns of a data frame into reusable buffers and
 //! returns the unit; nothing here allocates once the buffers have grown.
