@@ -320,6 +320,12 @@ pub struct SerialReader {
 impl SerialReader {
     /// Reads the port opened at `path` (see [`open`]).
     pub fn new(path: &Path, port: Box<dyn SerialPort>, cfg: SerialConfig, reconnect: bool) -> Self {
+        tracing::info!(
+            "{}: {} baud, {} bits per character",
+            path.display(),
+            cfg.baud,
+            cfg.bits_per_char()
+        );
         SerialReader {
             path: path.to_owned(),
             cfg,
@@ -347,7 +353,9 @@ impl SerialReader {
         loop {
             std::thread::sleep(pause);
             pause = (pause * 2).min(RECONNECT_MAX);
-            if let Some(p) = self.identity.locate()
+            let found = self.identity.locate();
+            tracing::debug!("waiting for the adapter: found {found:?}");
+            if let Some(p) = found
                 && let Ok(port) = open(&p, &self.cfg)
             {
                 self.port = Some(port);
