@@ -149,9 +149,10 @@ fn main() {
     }
     let binary = rate(packets, best);
     println!(
-        "busnoop sbus -f tsv FILE:   {:>8.3} s  {:>12.0} packets/s",
+        "busnoop sbus -f tsv FILE:   {:>8.3} s  {:>12.0} packets/s, peak RSS {} kB",
         best.as_secs_f64(),
-        binary
+        binary,
+        common::children_peak_kb()
     );
 
     // tshark, once (it is slow)

@@ -245,10 +245,10 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 &args.capture,
                 &crate::sport::PROTOCOL,
                 |kind, _| match kind {
-                    Kind::Pcap | Kind::Pcapng => Err(Failure::Input(
-                        "this is a pcap of network traffic; S.Port captures are raw wire bytes, \
-                     EdgeTX logs or busnoop recordings"
-                            .into(),
+                    Kind::Pcap | Kind::Pcapng => Err(unusable(
+                        kind,
+                        "S.Port",
+                        "raw wire bytes, EdgeTX logs or busnoop recordings",
                     )),
                     _ => Ok(Box::new(crate::sport::SportDecoder::new())),
                 },
@@ -262,15 +262,10 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 &args.capture,
                 &crate::sab::PROTOCOL,
                 |kind, cfg| match kind {
-                    Kind::Pcap | Kind::Pcapng => Err(Failure::Input(
-                        "this is a pcap of network traffic; SAB captures are raw wire bytes or \
-                     busnoop recordings"
-                            .into(),
-                    )),
-                    Kind::EdgeTxLog => Err(Failure::Input(
-                        "this is an EdgeTX/OpenTX S.Port log; SAB captures are raw wire bytes or \
-                     busnoop recordings"
-                            .into(),
+                    Kind::Pcap | Kind::Pcapng | Kind::EdgeTxLog => Err(unusable(
+                        kind,
+                        "SAB",
+                        "raw wire bytes or busnoop recordings",
                     )),
                     _ => Ok(Box::new(crate::sab::SabDecoder::new(
                         args.options(cfg.baud),
@@ -280,6 +275,19 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Ports => list_ports(),
     }
+}
+
+/// The failure for an input of a kind `protocol` cannot read; `accepted` says what it reads.
+fn unusable(kind: Kind, protocol: &str, accepted: &str) -> Failure {
+    let what = match kind {
+        Kind::Pcap | Kind::Pcapng => "a pcap of network traffic",
+        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        Kind::Recording => "a busnoop recording",
+        Kind::Raw | Kind::Serial => "raw serial data",
+    };
+    Failure::Input(format!(
+        "this is {what}; {protocol} captures are {accepted}"
+    ))
 }
 
 /// The S-Bus decoder for an input kind: serial bytes (raw files, devices, busnoop recordings)
@@ -302,10 +310,10 @@ fn sbus_decoder(
             Ok(Box::new(crate::sbus::SerialDecoder::new(opts)))
         }
         Kind::Pcap | Kind::Pcapng => Ok(Box::new(crate::sbus::EtherDecoder::new(&opts))),
-        Kind::EdgeTxLog => Err(Failure::Input(
-            "this is an EdgeTX/OpenTX S.Port log; S-Bus captures are raw serial bytes, busnoop \
-             recordings or pcap/pcapng files of Ether-S-Bus traffic"
-                .into(),
+        Kind::EdgeTxLog => Err(unusable(
+            kind,
+            "S-Bus",
+            "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
         )),
     }
 }
