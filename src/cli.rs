@@ -43,7 +43,7 @@ pub enum Command {
     Sbus(SbusArgs),
     /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
     /// requests paired with responses.
-    #[command(alias = "sab")]
+    #[command(visible_alias = "sab")]
     Sab2(crate::sab::SabArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,

@@ -908,21 +908,7 @@ impl SerialCore {
                     self.totals.valid += 1;
                     self.good_frame(f, t, timed, seq, class, out)
                 }
-                _ => {
-                    self.totals.broken += 1;
-                    push_hex(&mut self.sc.data, f.wire);
-                    put_row(
-                        out,
-                        &self.sc,
-                        t,
-                        None,
-                        "",
-                        "Truncated",
-                        Class::Error,
-                        "",
-                        f.wire,
-                    )
-                }
+                _ => self.truncated_row(f.wire, t, out),
             },
         }
     }
@@ -1162,22 +1148,25 @@ impl SerialCore {
                     f.wire,
                 )
             }
-            Tele::Broken => {
-                self.totals.broken += 1;
-                push_hex(&mut self.sc.data, f.wire);
-                put_row(
-                    out,
-                    &self.sc,
-                    t,
-                    None,
-                    "",
-                    "Truncated",
-                    Class::Error,
-                    "",
-                    f.wire,
-                )
-            }
+            Tele::Broken => self.truncated_row(f.wire, t, out),
         }
+    }
+
+    /// A telegram cut short (or otherwise broken): its bytes, counted.
+    fn truncated_row(&mut self, wire: &[u8], t: u64, out: &mut dyn RowOut) -> io::Result<()> {
+        self.totals.broken += 1;
+        push_hex(&mut self.sc.data, wire);
+        put_row(
+            out,
+            &self.sc,
+            t,
+            None,
+            "",
+            "Truncated",
+            Class::Error,
+            "",
+            wire,
+        )
     }
 
     fn pairing_request(
