@@ -334,6 +334,18 @@ pub fn run_capture(
     protocol: &Protocol,
     decoder_for: impl FnOnce(Kind, &SerialConfig) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
+    if let Some(p) = &args.output.output
+        && matches!(
+            p.extension().and_then(|e| e.to_str()),
+            Some("pcap" | "pcapng" | "bin")
+        )
+    {
+        return Err(Failure::Usage(format!(
+            "-o writes the decoded table (pretty, tsv, csv or jsonl); to keep the bytes from the \
+             wire use --record {}",
+            p.display()
+        )));
+    }
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut cfg = protocol.serial;

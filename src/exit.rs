@@ -58,6 +58,8 @@ pub enum Failure {
     Signal(i32),
     /// Standard output closed by the reader: quiet.
     BrokenPipe,
+    /// A combination of options that cannot work (clap reports the other usage errors).
+    Usage(String),
     /// Anything else.
     Internal(String),
 }
@@ -76,6 +78,7 @@ impl Failure {
             Failure::Signal(_) => code::SIGINT,
             Failure::BrokenPipe => code::BROKEN_PIPE,
             Failure::Internal(_) => code::INTERNAL,
+            Failure::Usage(_) => code::USAGE,
         }
     }
 
@@ -133,7 +136,9 @@ impl fmt::Display for Failure {
                 count(*frames, "frame", "frames"),
                 path.display()
             ),
-            Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) => f.write_str(m),
+            Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) | Failure::Usage(m) => {
+                f.write_str(m)
+            }
             Failure::Signal(s) => write!(f, "stopped by signal {s}"),
             Failure::BrokenPipe => f.write_str("output closed"),
         }

@@ -504,3 +504,28 @@ fn wrong_protocol_for_every_decoder() {
         }
     }
 }
+
+#[test]
+fn output_to_a_capture_name_points_to_record() {
+    // `-o capture.pcap` would write a table into a file named like a capture: refused, with the
+    // option that does what was meant.
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("capture.pcap");
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .arg("-o")
+        .arg(&target)
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "busnoop: -o writes the decoded table (pretty, tsv, csv or jsonl); to keep the bytes from the wire use --record {}\n",
+            target.display()
+        )
+    );
+    assert!(!target.exists(), "nothing is created");
+}
