@@ -1,7 +1,5 @@
 //! Small allocation-free formatting helpers used on the hot path.
 
-use std::fmt::Write as _;
-
 const HEX: &[u8; 16] = b"0123456789ABCDEF";
 
 /// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`).
@@ -80,11 +78,6 @@ pub fn push_fixed(out: &mut String, raw: i64, prec: u8) {
         out.push('0');
     }
     out.push_str(digits);
-}
-
-/// Appends `value` rounded to `decimals` decimals (used where the scale is not a power of ten).
-pub fn push_rounded(out: &mut String, value: f64, decimals: usize) {
-    let _ = write!(out, "{value:.decimals$}");
 }
 
 #[cfg(test)]

@@ -42,24 +42,12 @@ impl Stop {
         Ok(Stop { signal })
     }
 
-    /// A stop that never fires (tests, benchmarks).
-    pub fn never() -> Stop {
-        Stop {
-            signal: Arc::new(AtomicUsize::new(0)),
-        }
-    }
-
     /// The signal received, if any.
     pub fn signal(&self) -> Option<i32> {
         match self.signal.load(Ordering::Relaxed) {
             0 => None,
             s => Some(s as i32),
         }
-    }
-
-    /// Asks the driver to stop as if `sig` had arrived.
-    pub fn raise(&self, sig: i32) {
-        self.signal.store(sig as usize, Ordering::Relaxed);
     }
 }
 

@@ -126,11 +126,6 @@ impl Table {
         }
     }
 
-    /// All column names in order.
-    pub fn columns(&self) -> &[&'static str] {
-        &self.columns
-    }
-
     /// Rows written so far.
     pub fn rows(&self) -> u64 {
         self.counter
@@ -138,10 +133,6 @@ impl Table {
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
         self.anchor = anchor;
-    }
-
-    pub fn has_anchor(&self) -> bool {
-        self.anchor.is_some()
     }
 
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.

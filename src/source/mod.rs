@@ -153,13 +153,6 @@ impl Input {
             Input::File(path)
         }
     }
-
-    pub fn name(&self) -> String {
-        match self {
-            Input::Stdin => "standard input".into(),
-            Input::File(p) | Input::Device(p) => p.display().to_string(),
-        }
-    }
 }
 
 /// An opened input with its first bytes already read for detection.

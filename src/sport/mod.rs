@@ -126,10 +126,6 @@ impl SportDecoder {
     pub fn new() -> Self {
         Self::default()
     }
-
-    pub fn stats_counters(&self) -> &Stats {
-        &self.table.stats
-    }
 }
 
 impl Mapper {
