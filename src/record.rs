@@ -37,8 +37,9 @@ const LINK_UP: &[u8] = b"busnoop link up";
 
 /// Writes a recording while the capture is decoded.
 pub struct Recorder {
-    path: PathBuf,
-    out: BufWriter<File>,
+    /// `None` for standard output.
+    path: Option<PathBuf>,
+    out: BufWriter<Box<dyn Write>>,
     format: RecordFormat,
     timed: bool,
     anchor: Option<DateTime<Utc>>,
@@ -61,19 +62,33 @@ impl Recorder {
             Failure::Output(format!("cannot create recording {}: {e}", path.display()))
         })?;
         Ok(Recorder {
-            path: path.to_owned(),
-            out: BufWriter::with_capacity(64 * 1024, file),
+            path: Some(path.to_owned()),
+            out: BufWriter::with_capacity(64 * 1024, Box::new(file)),
             format,
             timed,
             anchor: None,
         })
     }
 
+    /// Records the raw bytes on standard output (`--record -`).
+    pub fn stdout(timed: bool) -> Recorder {
+        Recorder {
+            path: None,
+            out: BufWriter::with_capacity(64 * 1024, Box::new(io::stdout())),
+            format: RecordFormat::Raw,
+            timed,
+            anchor: None,
+        }
+    }
+
     fn fail(&self, e: io::Error) -> Failure {
-        Failure::Output(format!(
-            "cannot write recording {}: {e}",
-            self.path.display()
-        ))
+        match &self.path {
+            Some(p) => Failure::Output(format!("cannot write recording {}: {e}", p.display())),
+            None if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
+            None => Failure::Output(format!(
+                "cannot write the recording to standard output: {e}"
+            )),
+        }
     }
 
     /// The wall-clock time of the capture's start; writes the pcap headers.

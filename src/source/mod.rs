@@ -142,11 +142,12 @@ pub enum Input {
 }
 
 impl Input {
-    pub fn parse(arg: &str) -> Input {
-        if arg == "-" {
+    /// Any OS path (not only UTF-8); `-` is standard input.
+    pub fn parse(arg: &Path) -> Input {
+        if arg.as_os_str() == "-" {
             return Input::Stdin;
         }
-        let path = PathBuf::from(arg);
+        let path = arg.to_path_buf();
         if serial::is_device_path(&path) {
             Input::Device(path)
         } else {
