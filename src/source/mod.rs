@@ -58,6 +58,18 @@ pub enum Message {
     Data(Batch),
     /// A note for the user (unreadable log lines and the like); printed on stderr.
     Warning(String),
+    /// A row busnoop adds to the table itself (a time jump in a log, an event of a recording),
+    /// at its place among the data.
+    Note {
+        micros: Option<u64>,
+        /// The `Type` column.
+        kind: &'static str,
+        class: crate::row::Class,
+        data: String,
+        /// The data before and after do not join (a time jump, lost data): frames still open
+        /// are closed first, as at the end of the input.
+        gap: bool,
+    },
     /// The adapter disappeared (live capture with `--reconnect`, or a recording of one).
     LinkDown {
         micros: u64,
