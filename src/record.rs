@@ -367,6 +367,7 @@ impl RecordingReader {
 impl ChunkReader for RecordingReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
         if let Some(f) = self.failure.take() {
+            self.summary(tx);
             return Err(f);
         }
         if let Some(m) = self.pending.take() {
@@ -374,13 +375,20 @@ impl ChunkReader for RecordingReader {
         }
         let mut batch = Batch::default();
         match self.fill(tx, &mut batch) {
-            Ok(()) => Ok((!batch.bytes.is_empty()).then_some(batch)),
+            Ok(()) if !batch.bytes.is_empty() => Ok(Some(batch)),
+            Ok(()) => {
+                self.summary(tx);
+                Ok(None)
+            }
             // Hand out what was read before the failure; report the failure next time.
             Err(f) if !batch.bytes.is_empty() => {
                 self.failure = Some(f);
                 Ok(Some(batch))
             }
-            Err(f) => Err(f),
+            Err(f) => {
+                self.summary(tx);
+                Err(f)
+            }
         }
     }
 }
@@ -410,12 +418,6 @@ impl RecordingReader {
                 return Ok(());
             }
             if !self.want(16)? {
-                if let Some(s) = std::mem::take(&mut self.counts).summary() {
-                    let _ = tx.send(Message::Warning(format!(
-                        "{}: {s}; each is a row in the table",
-                        self.name
-                    )));
-                }
                 if self.buf.len() > self.pos {
                     let _ = tx.send(Message::Warning(format!(
                         "{}: the recording ends inside a record header ({} bytes ignored)",
@@ -507,6 +509,16 @@ impl RecordingReader {
                 }
                 _ => {}
             }
+        }
+    }
+
+    /// At the end: how many records were not data (each was a row).
+    fn summary(&mut self, tx: &SyncSender<Message>) {
+        if let Some(s) = std::mem::take(&mut self.counts).summary() {
+            let _ = tx.send(Message::Warning(format!(
+                "{}: {s}; each is a row in the table",
+                self.name
+            )));
         }
     }
 
