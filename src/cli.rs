@@ -1,7 +1,7 @@
 //! Command line: argument parsing, wiring source → decoder → sink, messages and exit codes.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -63,12 +63,12 @@ pub struct SbusArgs {
 
     /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
     /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
     pub timeout_ms: Option<u64>,
 
     /// Serial sources with time: a silence longer than this ends a telegram [default: 20
     /// character times, at least 20 ms].
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
     pub gap_ms: Option<u64>,
 
     /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`.
@@ -76,7 +76,8 @@ pub struct SbusArgs {
     pub stations: Vec<(String, u8)>,
 
     /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
-    #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT)]
+    #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT,
+          value_parser = clap::value_parser!(u16).range(1..=65_535))]
     pub port: u16,
 }
 
@@ -92,7 +93,7 @@ pub struct CaptureArgs {
     /// What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a capture file
     /// (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap recording, a pcap of the protocol's
     /// network traffic) or `-` for standard input. File kinds are recognised by content.
-    pub source: String,
+    pub source: PathBuf,
 
     #[command(flatten)]
     pub output: OutputArgs,
@@ -106,7 +107,7 @@ pub struct CaptureArgs {
 pub struct LiveArgs {
     /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600, sbus
     /// 9600, sab2 115200]
-    #[arg(long, value_name = "BAUD")]
+    #[arg(long, value_name = "BAUD", value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
     pub baud: Option<u32>,
 
     /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
@@ -115,7 +116,8 @@ pub struct LiveArgs {
     pub reconnect: bool,
 
     /// Keep what came off the wire while decoding: FILE.pcap with arrival times (busnoop replays
-    /// it with the original Millis; Wireshark opens it), any other name: the raw bytes.
+    /// it with the original Millis; Wireshark opens it), any other name: the raw bytes; `-`: the
+    /// raw bytes on standard output (with -o FILE only).
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
 }
@@ -146,7 +148,7 @@ pub struct OutputArgs {
     pub format: Option<Format>,
 
     /// Write the table to FILE instead of standard output (.csv, .tsv, .jsonl, .txt pick
-    /// the format unless --format is given).
+    /// the format unless --format is given); `-` is standard output.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
 
@@ -172,10 +174,15 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
+    /// The `-o` file; `None` for standard output (no `-o`, or `-o -`).
+    pub fn output_file(&self) -> Option<&Path> {
+        self.output.as_deref().filter(|p| !is_dash(p))
+    }
+
     /// The table options for an output that is (or is not) a terminal, given whether the
     /// `NO_COLOR` environment variable is set to a non-empty value.
     fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
-        let format = self.format.unwrap_or_else(|| match &self.output {
+        let format = self.format.unwrap_or_else(|| match self.output_file() {
             Some(p) => Format::from_path(p).unwrap_or(Format::Tsv),
             None if to_terminal => Format::Pretty,
             None => Format::Tsv,
@@ -318,6 +325,18 @@ fn sbus_decoder(
     }
 }
 
+/// Valid values of the millisecond options (`--timeout-ms`, `--gap-ms`): 1 ms to one hour.
+pub const MS_RANGE: std::ops::RangeInclusive<u64> = 1..=3_600_000;
+
+/// Valid line speeds for `--baud`: 0 would mean "hang up" on a real UART, and nothing on a
+/// bus busnoop reads runs above 12 Mbaud (the fastest USB adapters, FT232H).
+pub const BAUD_RANGE: std::ops::RangeInclusive<i64> = 50..=12_000_000;
+
+/// `-` as a file name: standard input or output.
+fn is_dash(p: &Path) -> bool {
+    p.as_os_str() == "-"
+}
+
 /// What a protocol tells the shared command-line code.
 pub struct Protocol {
     /// Name in messages ("S.Port").
@@ -334,11 +353,12 @@ pub fn run_capture(
     protocol: &Protocol,
     decoder_for: impl FnOnce(Kind, &SerialConfig) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
-    if let Some(p) = &args.output.output
-        && matches!(
-            p.extension().and_then(|e| e.to_str()),
-            Some("pcap" | "pcapng" | "bin")
-        )
+    if let Some(p) = args.output.output_file()
+        && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+            ["pcap", "pcapng", "bin"]
+                .iter()
+                .any(|c| e.eq_ignore_ascii_case(c))
+        })
     {
         return Err(Failure::Usage(format!(
             "-o writes the decoded table (pretty, tsv, csv or jsonl); to keep the bytes from the \
@@ -346,30 +366,41 @@ pub fn run_capture(
             p.display()
         )));
     }
+    let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
+    if record_to_stdout && args.output.output_file().is_none() {
+        return Err(Failure::Usage(
+            "--record - needs -o FILE: standard output already carries the table".into(),
+        ));
+    }
+    let input = Input::parse(&args.source);
+    check_distinct(
+        &input,
+        args.output.output_file(),
+        args.live.record.as_deref(),
+    )?;
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut cfg = protocol.serial;
     if let Some(b) = args.live.baud {
         cfg.baud = b;
     }
-    let (kind, reader) = open_source(&args.source, &cfg, args.live.reconnect)?;
-    tracing::info!("{}: {:?}", args.source, kind);
+    let (kind, reader) = open_source(input, &cfg, args.live.reconnect)?;
+    tracing::info!("{}: {:?}", args.source.display(), kind);
     let mut decoder = decoder_for(kind, &cfg)?;
 
+    let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
     let mut recorder = match &args.live.record {
-        Some(p) => Some(Recorder::create(
-            p,
-            matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording),
-        )?),
+        Some(_) if record_to_stdout => Some(Recorder::stdout(timed)),
+        Some(p) => Some(Recorder::create(p, timed)?),
         None => None,
     };
     let out = &args.output;
-    let output = match &out.output {
+    let output = match out.output_file() {
         Some(p) => Output::create(p)
             .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
         None => Output::stdout(),
     };
-    let to_terminal = out.output.is_none() && std::io::stdout().is_terminal();
+    let to_terminal = out.output_file().is_none() && std::io::stdout().is_terminal();
     let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
     let mut table = Table::new(
         output,
@@ -399,11 +430,10 @@ pub fn run_capture(
 
 /// Opens SOURCE and returns its kind with the reader for it.
 fn open_source(
-    arg: &str,
+    input: Input,
     cfg: &SerialConfig,
     reconnect: bool,
 ) -> Result<(Kind, Box<dyn ChunkReader>), Failure> {
-    let input = Input::parse(arg);
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
             Ok(port) => {
@@ -428,6 +458,92 @@ fn open_source(
         }
     };
     Ok((kind, reader))
+}
+
+/// What a file argument is, for telling whether two of them are one file.
+#[derive(Debug, PartialEq, Eq)]
+enum FileId {
+    /// An existing regular file: device and inode (so symlinks and hard links compare equal).
+    Inode(u64, u64),
+    /// A file that does not exist yet: its absolute name, with the directory's links resolved.
+    Name(PathBuf),
+}
+
+impl FileId {
+    /// Regular files only: special files (/dev/null, a terminal, a pipe) may well be shared.
+    fn of_metadata(m: &std::fs::Metadata) -> Option<FileId> {
+        use std::os::unix::fs::MetadataExt;
+        m.is_file().then(|| FileId::Inode(m.dev(), m.ino()))
+    }
+
+    fn of_path(p: &Path) -> Option<FileId> {
+        match std::fs::metadata(p) {
+            Ok(m) => FileId::of_metadata(&m),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                // A dangling symlink would be created at its target: no name to compare.
+                if std::fs::symlink_metadata(p).is_ok() {
+                    return None;
+                }
+                let name = p.file_name()?;
+                let dir = match p.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d,
+                    _ => Path::new("."),
+                };
+                Some(FileId::Name(std::fs::canonicalize(dir).ok()?.join(name)))
+            }
+            Err(_) => None,
+        }
+    }
+
+    /// The file behind an open descriptor (standard input or output).
+    fn of_fd(fd: std::os::fd::BorrowedFd<'_>) -> Option<FileId> {
+        let file = std::fs::File::from(fd.try_clone_to_owned().ok()?);
+        FileId::of_metadata(&file.metadata().ok()?)
+    }
+}
+
+/// Refuses, before anything is opened for writing, an output (`-o`, standard output) or a
+/// recording that is the input file itself (by device and inode: symlinks, hard links and
+/// `- < file` included), or an output and a recording that are one file.
+fn check_distinct(
+    input: &Input,
+    output: Option<&Path>,
+    record: Option<&Path>,
+) -> Result<(), Failure> {
+    use std::os::fd::AsFd;
+    let stdout_id = || FileId::of_fd(std::io::stdout().as_fd());
+    let (source, source_name) = match input {
+        Input::Stdin => (
+            FileId::of_fd(std::io::stdin().as_fd()),
+            "standard input (the input)".to_string(),
+        ),
+        Input::File(p) => (FileId::of_path(p), format!("the input {}", p.display())),
+        Input::Device(_) => (None, String::new()),
+    };
+    let (out, out_name) = match output {
+        Some(p) => (FileId::of_path(p), format!("-o {}", p.display())),
+        None => (stdout_id(), "standard output".to_string()),
+    };
+    let (rec, rec_name) = match record {
+        Some(p) if is_dash(p) => (stdout_id(), "--record - (standard output)".to_string()),
+        Some(p) => (FileId::of_path(p), format!("--record {}", p.display())),
+        None => (None, String::new()),
+    };
+    let same = |a: &Option<FileId>, b: &Option<FileId>| a.is_some() && a == b;
+    for (id, name) in [(&out, &out_name), (&rec, &rec_name)] {
+        if same(&source, id) {
+            return Err(Failure::Usage(format!(
+                "{name} is the same file as {source_name}: writing it would destroy the \
+                 capture; write somewhere else"
+            )));
+        }
+    }
+    if same(&out, &rec) {
+        return Err(Failure::Usage(format!(
+            "{out_name} and {rec_name} are the same file; give them different names"
+        )));
+    }
+    Ok(())
 }
 
 /// `busnoop ports`.

@@ -147,7 +147,9 @@ impl fmt::Display for Failure {
 
 impl From<crate::sink::WriteError> for Failure {
     fn from(e: crate::sink::WriteError) -> Self {
-        if e.path.is_none() && e.error.kind() == std::io::ErrorKind::BrokenPipe {
+        // A closed pipe is a closed pipe whether it is standard output or `-o /dev/stdout`
+        // (or a FIFO): the reader went away, quietly.
+        if e.error.kind() == std::io::ErrorKind::BrokenPipe {
             Failure::BrokenPipe
         } else {
             Failure::Output(e.to_string())

@@ -25,9 +25,45 @@ pub const LINKTYPE_RTAC_SERIAL: u32 = 250;
 /// pcap link type USER0 (raw bytes per record).
 pub const LINKTYPE_USER0: u32 = 147;
 
-/// RTAC serial event types (Wireshark `packet-rtacser.c`).
+/// RTAC serial event types (as Wireshark's `rtacser` dissector names them). Every record starts
+/// with a 12-byte header: the arrival time (seconds and microseconds, big-endian), the event
+/// type, the control lines (CTS 0x01, DCD 0x02, DSR 0x04, RTS 0x08, DTR 0x10, RING 0x20,
+/// MBOK 0x40) and a 2-byte footer; the bytes of the line follow.
 const EVENT_STATUS: u8 = 0x00;
+const EVENT_TX_START: u8 = 0x01;
 const EVENT_RX_DATA: u8 = 0x02;
+const EVENT_RX_END: u8 = 0x04;
+const EVENT_DATA_LOST: u8 = 0x05;
+const EVENT_OVERFLOW: u8 = 0x0A;
+
+/// What an event other than data means, for its row.
+fn event_name(event: u8) -> Option<&'static str> {
+    Some(match event {
+        0x05 => "the capture device lost data here (CAPTURE_DATA_LOST)",
+        0x06 => "the capture device ended the capture (CAPTURE_COMPLETE)",
+        0x07 => "framing error (FRAMING_ERROR)",
+        0x08 => "parity error (PARITY_ERROR)",
+        0x09 => "break on the line (SERIAL_BREAK_EVENT)",
+        0x0A => "the capture device's buffer overflowed (SERIAL_OVERFLOW_EVENT)",
+        _ => return None,
+    })
+}
+
+/// The control lines byte as text: `CTS /DCD …`.
+fn control_lines(bits: u8) -> String {
+    const NAMES: [&str; 7] = ["CTS", "DCD", "DSR", "RTS", "DTR", "RING", "MBOK"];
+    let mut s = String::new();
+    for (i, n) in NAMES.iter().enumerate() {
+        if !s.is_empty() {
+            s.push(' ');
+        }
+        if bits & (1 << i) == 0 {
+            s.push('/');
+        }
+        s.push_str(n);
+    }
+    s
+}
 
 /// Payloads of the status records busnoop writes.
 const START: &[u8] = b"busnoop capture start";
@@ -37,8 +73,9 @@ const LINK_UP: &[u8] = b"busnoop link up";
 
 /// Writes a recording while the capture is decoded.
 pub struct Recorder {
-    path: PathBuf,
-    out: BufWriter<File>,
+    /// `None` for standard output.
+    path: Option<PathBuf>,
+    out: BufWriter<Box<dyn Write>>,
     format: RecordFormat,
     timed: bool,
     anchor: Option<DateTime<Utc>>,
@@ -61,19 +98,33 @@ impl Recorder {
             Failure::Output(format!("cannot create recording {}: {e}", path.display()))
         })?;
         Ok(Recorder {
-            path: path.to_owned(),
-            out: BufWriter::with_capacity(64 * 1024, file),
+            path: Some(path.to_owned()),
+            out: BufWriter::with_capacity(64 * 1024, Box::new(file)),
             format,
             timed,
             anchor: None,
         })
     }
 
+    /// Records the raw bytes on standard output (`--record -`).
+    pub fn stdout(timed: bool) -> Recorder {
+        Recorder {
+            path: None,
+            out: BufWriter::with_capacity(64 * 1024, Box::new(io::stdout())),
+            format: RecordFormat::Raw,
+            timed,
+            anchor: None,
+        }
+    }
+
     fn fail(&self, e: io::Error) -> Failure {
-        Failure::Output(format!(
-            "cannot write recording {}: {e}",
-            self.path.display()
-        ))
+        match &self.path {
+            Some(p) => Failure::Output(format!("cannot write recording {}: {e}", p.display())),
+            None if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
+            None => Failure::Output(format!(
+                "cannot write the recording to standard output: {e}"
+            )),
+        }
     }
 
     /// The wall-clock time of the capture's start; writes the pcap headers.
@@ -199,6 +250,49 @@ pub struct RecordingReader {
     pending: Option<Message>,
     /// A failure met after some records were read; reported on the next call.
     failure: Option<Failure>,
+    /// Records that are not data, shown as rows and counted for the summary warning.
+    counts: EventCounts,
+}
+
+/// RTAC serial records that are not line data, by kind.
+#[derive(Default)]
+struct EventCounts {
+    short: u64,
+    lost: u64,
+    line: u64,
+    status: u64,
+    unknown: u64,
+}
+
+impl EventCounts {
+    /// `2 line events (framing/parity errors, breaks), 1 short record`, or `None`.
+    fn summary(&self) -> Option<String> {
+        use crate::exit::count;
+        let parts: Vec<String> = [
+            (self.lost, "data-lost event", "data-lost events"),
+            (
+                self.line,
+                "line event (framing/parity error, break, end)",
+                "line events (framing/parity errors, breaks, end)",
+            ),
+            (self.status, "status change", "status changes"),
+            (
+                self.unknown,
+                "event of an unknown type",
+                "events of unknown types",
+            ),
+            (
+                self.short,
+                "record shorter than its 12-byte header",
+                "records shorter than their 12-byte header",
+            ),
+        ]
+        .iter()
+        .filter(|(n, ..)| *n > 0)
+        .map(|&(n, one, many)| count(n, one, many))
+        .collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -225,6 +319,7 @@ impl RecordingReader {
             untimed: false,
             pending: None,
             failure: None,
+            counts: EventCounts::default(),
         }
     }
 
@@ -272,6 +367,7 @@ impl RecordingReader {
 impl ChunkReader for RecordingReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
         if let Some(f) = self.failure.take() {
+            self.summary(tx);
             return Err(f);
         }
         if let Some(m) = self.pending.take() {
@@ -279,13 +375,20 @@ impl ChunkReader for RecordingReader {
         }
         let mut batch = Batch::default();
         match self.fill(tx, &mut batch) {
-            Ok(()) => Ok((!batch.bytes.is_empty()).then_some(batch)),
+            Ok(()) if !batch.bytes.is_empty() => Ok(Some(batch)),
+            Ok(()) => {
+                self.summary(tx);
+                Ok(None)
+            }
             // Hand out what was read before the failure; report the failure next time.
             Err(f) if !batch.bytes.is_empty() => {
                 self.failure = Some(f);
                 Ok(Some(batch))
             }
-            Err(f) => Err(f),
+            Err(f) => {
+                self.summary(tx);
+                Err(f)
+            }
         }
     }
 }
@@ -341,6 +444,7 @@ impl RecordingReader {
                 return Ok(());
             }
             let micros_abs = secs * 1_000_000 + if h.nanos { frac / 1000 } else { frac };
+            let record_at = self.pos;
             let start = self.pos + 16;
             self.pos = start + incl;
             let first = *self.first.get_or_insert_with(|| {
@@ -350,13 +454,24 @@ impl RecordingReader {
             });
             let micros = (micros_abs - first).max(0) as u64;
             let record = &self.buf[start..start + incl];
-            let (event, payload) = match h.link_type {
-                LINKTYPE_RTAC_SERIAL if record.len() >= 12 => (record[8], &record[12..]),
-                LINKTYPE_RTAC_SERIAL => continue,
-                _ => (EVENT_RX_DATA, record),
+            let (event, lines, payload) = match h.link_type {
+                LINKTYPE_RTAC_SERIAL if record.len() >= 12 => (record[8], record[9], &record[12..]),
+                LINKTYPE_RTAC_SERIAL => (SHORT_RECORD, 0, &[][..]),
+                _ => (EVENT_RX_DATA, 0, record),
             };
+            let note = self.note_for(event, lines, payload, micros);
+            if let Some(note) = note {
+                if !batch.bytes.is_empty() {
+                    // The row goes between the bytes before and after: send these first and
+                    // read the record again next time.
+                    self.pos = record_at;
+                    return Ok(());
+                }
+                self.counts.add(event);
+                let _ = tx.send(note);
+            }
             match event {
-                0x01 | 0x02 => {
+                EVENT_TX_START..=EVENT_RX_END => {
                     let time = (!self.untimed).then_some(micros);
                     if batch.marks.last().map(|m| m.1) != Some(time) {
                         batch.marks.push((batch.bytes.len(), time));
@@ -385,12 +500,90 @@ impl RecordingReader {
                         }
                     }
                 }
-                // Line events (framing/parity errors, breaks) carry no data bytes.
+                // Line events (framing/parity errors, breaks, lost data) are rows; bytes
+                // they carry (a character received with a framing error) are still line data.
+                _ if !payload.is_empty() && event != SHORT_RECORD => {
+                    let time = (!self.untimed).then_some(micros);
+                    batch.marks.push((batch.bytes.len(), time));
+                    batch.bytes.extend_from_slice(payload);
+                }
                 _ => {}
             }
         }
     }
+
+    /// At the end: how many records were not data (each was a row).
+    fn summary(&mut self, tx: &SyncSender<Message>) {
+        if let Some(s) = std::mem::take(&mut self.counts).summary() {
+            let _ = tx.send(Message::Warning(format!(
+                "{}: {s}; each is a row in the table",
+                self.name
+            )));
+        }
+    }
+
+    /// The row for a record that is not plain data (or busnoop's own status records).
+    fn note_for(&self, event: u8, lines: u8, payload: &[u8], micros: u64) -> Option<Message> {
+        use crate::row::Class;
+        let micros = (!self.untimed).then_some(micros);
+        let (kind, class, data, gap) = match event {
+            EVENT_TX_START..=EVENT_RX_END => return None,
+            EVENT_STATUS => match payload {
+                START | START_UNTIMED | LINK_DOWN | LINK_UP => return None,
+                _ => (
+                    "Status",
+                    Class::Info,
+                    format!("control lines {}", control_lines(lines)),
+                    false,
+                ),
+            },
+            SHORT_RECORD => (
+                "BadRecord",
+                Class::Error,
+                "RTAC serial record shorter than its 12-byte header".to_string(),
+                false,
+            ),
+            EVENT_DATA_LOST | EVENT_OVERFLOW => (
+                "DataLost",
+                Class::Error,
+                event_name(event).unwrap_or_default().to_string(),
+                true,
+            ),
+            _ => match event_name(event) {
+                Some(name) => ("LineEvent", Class::Warning, name.to_string(), false),
+                None => (
+                    "LineEvent",
+                    Class::Warning,
+                    format!("RTAC serial event of unknown type 0x{event:02X}"),
+                    false,
+                ),
+            },
+        };
+        Some(Message::Note {
+            micros,
+            kind,
+            class,
+            data,
+            gap,
+        })
+    }
 }
+
+impl EventCounts {
+    fn add(&mut self, event: u8) {
+        let c = self;
+        match event {
+            SHORT_RECORD => c.short += 1,
+            EVENT_DATA_LOST | EVENT_OVERFLOW => c.lost += 1,
+            EVENT_STATUS => c.status += 1,
+            _ if event_name(event).is_some() => c.line += 1,
+            _ => c.unknown += 1,
+        }
+    }
+}
+
+/// Stands for a record too short for the RTAC serial header (not a real event type).
+const SHORT_RECORD: u8 = 0xFF;
 
 #[cfg(test)]
 mod tests {
@@ -492,5 +685,68 @@ mod tests {
         rec.data(&[3], Some(7)).unwrap();
         rec.flush().unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), [1, 2, 3]);
+    }
+
+    #[test]
+    fn foreign_rtac_serial_captures_show_every_record() {
+        // A capture another tool wrote: data in DATA_RX_END records, no busnoop start record,
+        // a record too short for its header, line events, lost data, an unknown event type and
+        // a status change with control lines.
+        let anchor: DateTime<Utc> = "2026-01-02T03:04:05Z".parse().unwrap();
+        let mut f = Vec::new();
+        write_global_header(&mut f).unwrap();
+        write_record(&mut f, anchor, 0, 0x04, &[0x7E, 0xA1]).unwrap();
+        let t = anchor.timestamp() as u32;
+        f.extend_from_slice(&t.to_le_bytes());
+        f.extend_from_slice(&1000u32.to_le_bytes());
+        f.extend_from_slice(&5u32.to_le_bytes());
+        f.extend_from_slice(&5u32.to_le_bytes());
+        f.extend_from_slice(&[1, 2, 3, 4, 5]);
+        write_record(&mut f, anchor, 2000, 0x07, &[]).unwrap();
+        write_record(&mut f, anchor, 3000, 0x05, &[]).unwrap();
+        write_record(&mut f, anchor, 4000, 0x33, &[]).unwrap();
+        let mut status = Vec::new();
+        write_record(&mut status, anchor, 5000, EVENT_STATUS, &[]).unwrap();
+        status[16 + 9] = 0x19; // CTS, RTS, DTR
+        f.extend_from_slice(&status);
+        write_record(&mut f, anchor, 6000, 0x02, &[0x7E, 0x22]).unwrap();
+        let msgs = replay(f);
+        let mut seen = Vec::new();
+        let mut warning = None;
+        for m in &msgs {
+            match m {
+                Message::Anchor(_) => {}
+                Message::Data(b) => seen.push(format!("data {:?} {:?}", b.bytes, b.marks)),
+                Message::Note {
+                    micros,
+                    kind,
+                    class,
+                    data,
+                    gap,
+                } => seen.push(format!("{kind} {micros:?} {class:?} {gap} {data}")),
+                Message::Warning(w) => warning = Some(w.clone()),
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(
+            seen,
+            [
+                "data [126, 161] [(0, Some(0))]",
+                "BadRecord Some(1000) Error false RTAC serial record shorter than its 12-byte header",
+                "LineEvent Some(2000) Warning false framing error (FRAMING_ERROR)",
+                "DataLost Some(3000) Error true the capture device lost data here (CAPTURE_DATA_LOST)",
+                "LineEvent Some(4000) Warning false RTAC serial event of unknown type 0x33",
+                "Status Some(5000) Info false control lines CTS /DCD /DSR RTS DTR /RING /MBOK",
+                "data [126, 34] [(0, Some(6000))]",
+            ]
+        );
+        assert_eq!(
+            warning.as_deref(),
+            Some(
+                "rec.pcap: 1 data-lost event, 1 line event (framing/parity error, break, end), \
+                 1 status change, 1 event of an unknown type, 1 record shorter than its 12-byte \
+                 header; each is a row in the table"
+            )
+        );
     }
 }

@@ -153,6 +153,13 @@ impl Driver<'_> {
                     self.table.flush()?;
                     eprintln!("busnoop: warning: {w}");
                 }
+                Ok(Message::Note {
+                    micros,
+                    kind,
+                    class,
+                    data,
+                    gap,
+                }) => self.note(micros, kind, class, &data, gap)?,
                 Ok(Message::LinkDown { micros }) => self.link_down(micros)?,
                 Ok(Message::LinkUp { micros, path }) => self.link_up(micros, &path)?,
                 Ok(Message::End) => return Ok(()),
@@ -271,6 +278,29 @@ impl Driver<'_> {
         self.flush()?;
         eprintln!("busnoop: {data}");
         Ok(())
+    }
+
+    /// A row a source adds to the log (see [`Message::Note`]).
+    fn note(
+        &mut self,
+        micros: Option<u64>,
+        kind: &str,
+        class: Class,
+        data: &str,
+        gap: bool,
+    ) -> Result<(), Failure> {
+        if gap {
+            self.decoder
+                .finish(self.table)
+                .map_err(|_| output_error(self.table))?;
+        }
+        let row = Row {
+            kind,
+            class,
+            data,
+            ..Row::empty(micros)
+        };
+        self.table.row(&row).map_err(|_| output_error(self.table))
     }
 
     /// A row busnoop itself adds to the log (gaps).

@@ -13,7 +13,12 @@ const HIGH_WATER: usize = 64 * 1024;
 
 enum Dest {
     Stdout(io::Stdout),
-    File { file: File, path: PathBuf },
+    File {
+        file: File,
+        path: PathBuf,
+        /// A regular file (synced at the end, cut back after a failed write).
+        regular: bool,
+    },
     Memory(Vec<u8>),
 }
 
@@ -49,12 +54,15 @@ impl Output {
         Self::new(Dest::Stdout(io::stdout()))
     }
 
-    /// Creates (truncates) `path`.
+    /// Creates (truncates) `path`. It may also be a special file (`/dev/null`, `/dev/stdout`,
+    /// a FIFO): those are written to but never synced.
     pub fn create(path: &Path) -> io::Result<Self> {
         let file = File::create(path)?;
+        let regular = file.metadata()?.is_file();
         Ok(Self::new(Dest::File {
             file,
             path: path.to_owned(),
+            regular,
         }))
     }
 
@@ -126,11 +134,17 @@ impl Output {
                 self.failed = true;
                 self.buf.clear();
                 let path = match &mut self.dest {
-                    Dest::File { file, path } => {
+                    Dest::File {
+                        file,
+                        path,
+                        regular,
+                    } => {
                         // Cut a partly written row off again; ignore errors, the write error
                         // is what the user needs to see.
-                        let _ = file.set_len(self.committed);
-                        let _ = file.seek(SeekFrom::Start(self.committed));
+                        if *regular {
+                            let _ = file.set_len(self.committed);
+                            let _ = file.seek(SeekFrom::Start(self.committed));
+                        }
                         Some(path.clone())
                     }
                     _ => None,
@@ -140,10 +154,14 @@ impl Output {
         }
     }
 
-    /// Flushes and syncs a file to disk.
+    /// Flushes, and syncs a regular file to disk.
     pub fn close(&mut self) -> Result<(), WriteError> {
         self.flush()?;
-        if let Dest::File { file, path } = &mut self.dest
+        if let Dest::File {
+            file,
+            path,
+            regular: true,
+        } = &mut self.dest
             && !self.failed
         {
             file.sync_data().map_err(|error| WriteError {

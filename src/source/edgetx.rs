@@ -1,6 +1,10 @@
 //! The EdgeTX/OpenTX S.Port debug log: one poll or frame per line,
 //! `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 10 …` (hex bytes as on the wire, stuffing included; a line
 //! may end in the middle of a frame). Millis counts from the first line.
+//!
+//! Millis never goes back: when the log's time does (the radio's clock was set, or two logs were
+//! joined), a `TimeJump` row says by how much, Millis goes on from where it was, and the wall
+//! time (`--time abs`) follows the log again from there (a new anchor).
 
 use std::io::{self, Read};
 use std::sync::mpsc::SyncSender;
@@ -79,7 +83,13 @@ pub struct EdgeTxReader {
     line: Vec<u8>,
     overlong: bool,
     line_no: u64,
-    first: Option<NaiveDateTime>,
+    /// The logged time of Millis 0 (moved when the log's time goes back).
+    anchor: Option<NaiveDateTime>,
+    /// The last line's time, µs since the anchor.
+    last: u64,
+    /// `line` holds a parsed line that must wait for the batch before it (a time jump changes
+    /// the anchor, which applies from the next message on).
+    held: bool,
     bad_lines: u64,
 }
 
@@ -96,7 +106,9 @@ impl EdgeTxReader {
             line: Vec::new(),
             overlong: false,
             line_no: 0,
-            first: None,
+            anchor: None,
+            last: 0,
+            held: false,
             bad_lines: 0,
         }
     }
@@ -121,23 +133,61 @@ impl EdgeTxReader {
         }
     }
 
-    /// Handles one complete line; adds its bytes to `batch`.
-    fn take_line(&mut self, batch: &mut Batch, tx: &SyncSender<Message>) {
+    /// Handles one complete line; adds its bytes to `batch`. Returns true when the line has to
+    /// wait (in `line`, `held` set) until `batch` is sent.
+    fn take_line(&mut self, batch: &mut Batch, tx: &SyncSender<Message>) -> bool {
         self.line_no += 1;
         let line = std::mem::take(&mut self.line);
         let overlong = std::mem::replace(&mut self.overlong, false);
         if line.iter().all(|b| b.is_ascii_whitespace()) && !overlong {
             self.line = line;
             self.line.clear();
-            return;
+            return false;
         }
-        match parse_line(&line).filter(|_| !overlong) {
+        // A UTF-8 byte-order mark before the first line (an editor saved the log).
+        let text = match self.line_no {
+            1 => line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&line),
+            _ => &line[..],
+        };
+        match parse_line(text).filter(|_| !overlong) {
             Some(l) => {
-                let first = *self.first.get_or_insert_with(|| {
+                let anchor = *self.anchor.get_or_insert_with(|| {
                     let _ = tx.send(Message::Anchor(Anchor::Naive(l.time)));
                     l.time
                 });
-                let micros = (l.time - first).num_microseconds().unwrap_or(0).max(0) as u64;
+                let since = (l.time - anchor).num_microseconds().unwrap_or(i64::MIN);
+                let micros = if since >= self.last as i64 {
+                    since as u64
+                } else {
+                    if !batch.bytes.is_empty() {
+                        // Send the lines before the jump with the old anchor first.
+                        self.line_no -= 1;
+                        self.line = line;
+                        self.held = true;
+                        return true;
+                    }
+                    let before = anchor + chrono::Duration::microseconds(self.last as i64);
+                    let back = (before - l.time).num_microseconds().unwrap_or(i64::MAX);
+                    let new_anchor = l.time - chrono::Duration::microseconds(self.last as i64);
+                    self.anchor = Some(new_anchor);
+                    let _ = tx.send(Message::Note {
+                        micros: Some(self.last),
+                        kind: "TimeJump",
+                        class: crate::row::Class::Warning,
+                        data: format!(
+                            "the log's time goes back {:.3} s ({} -> {}) at line {}",
+                            back as f64 / 1e6,
+                            before.format("%Y-%m-%d %H:%M:%S%.3f"),
+                            l.time.format("%Y-%m-%d %H:%M:%S%.3f"),
+                            self.line_no
+                        ),
+                        gap: true,
+                    });
+                    // After the row, which is shown at the old time.
+                    let _ = tx.send(Message::Anchor(Anchor::Naive(new_anchor)));
+                    self.last
+                };
+                self.last = micros;
                 batch.marks.push((batch.bytes.len(), Some(micros)));
                 batch.bytes.extend_from_slice(&l.bytes);
             }
@@ -153,21 +203,28 @@ impl EdgeTxReader {
         }
         self.line = line;
         self.line.clear();
+        false
     }
 }
 
 impl ChunkReader for EdgeTxReader {
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
         let mut batch = Batch::default();
+        if std::mem::take(&mut self.held) {
+            self.take_line(&mut batch, tx);
+        }
         loop {
+            if self.held {
+                break;
+            }
             if self.pos >= self.filled {
                 // Send what we have before blocking on a slow pipe.
                 if !batch.bytes.is_empty() {
                     break;
                 }
                 if self.eof {
-                    if !self.line.is_empty() || self.overlong {
-                        self.take_line(&mut batch, tx);
+                    if (!self.line.is_empty() || self.overlong) && self.take_line(&mut batch, tx) {
+                        break;
                     }
                     if self.bad_lines > 3 {
                         let _ = tx.send(Message::Warning(format!(
@@ -194,8 +251,7 @@ impl ChunkReader for EdgeTxReader {
                         self.overlong = true;
                     }
                     self.pos += i + 1;
-                    self.take_line(&mut batch, tx);
-                    if batch.bytes.len() >= BATCH_BYTES {
+                    if self.take_line(&mut batch, tx) || batch.bytes.len() >= BATCH_BYTES {
                         break;
                     }
                 }
@@ -263,5 +319,80 @@ mod tests {
         let msgs: Vec<Message> = rx.try_iter().collect();
         assert!(matches!(msgs[0], Message::Anchor(_)));
         assert!(matches!(&msgs[1], Message::Warning(w) if w.contains("line 3")));
+    }
+
+    /// Every message the reader sends, batches included, in order.
+    fn messages(text: &[u8]) -> Vec<Message> {
+        let opened = Opened {
+            kind: super::super::Kind::EdgeTxLog,
+            prefix: Vec::new(),
+            reader: Box::new(std::io::Cursor::new(text.to_vec())),
+            name: "t".into(),
+        };
+        let (tx, rx) = std::sync::mpsc::sync_channel(1000);
+        let mut r = EdgeTxReader::new(opened);
+        while let Some(b) = r.next_batch(&tx).unwrap() {
+            tx.send(Message::Data(b)).unwrap();
+        }
+        drop(tx);
+        rx.iter().collect()
+    }
+
+    #[test]
+    fn a_byte_order_mark_does_not_cost_the_first_line() {
+        let msgs = messages(
+            b"\xEF\xBB\xBF2014-07-11,22:41:01.340: 7E 00\n2014-07-11,22:41:01.350: 7E A1\n",
+        );
+        assert!(
+            !msgs.iter().any(|m| matches!(m, Message::Warning(_))),
+            "{msgs:?}"
+        );
+        let bytes: Vec<u8> = msgs
+            .iter()
+            .filter_map(|m| match m {
+                Message::Data(b) => Some(b.bytes.clone()),
+                _ => None,
+            })
+            .flatten()
+            .collect();
+        assert_eq!(bytes, [0x7E, 0x00, 0x7E, 0xA1]);
+    }
+
+    #[test]
+    fn time_going_back_is_a_note_between_the_batches_and_a_new_anchor() {
+        let msgs = messages(
+            b"2014-07-11,22:41:05.000: 7E 00\n2014-07-11,22:41:05.100: 7E A1\n\
+              2014-07-11,22:41:01.000: 7E 22\n2014-07-11,22:41:01.012: 7E 83",
+        );
+        let mut seen = Vec::new();
+        for m in &msgs {
+            match m {
+                Message::Anchor(Anchor::Naive(a)) => seen.push(format!("anchor {a}")),
+                Message::Data(b) => seen.push(format!("data {:?}", b.marks)),
+                Message::Note {
+                    micros, kind, gap, ..
+                } => seen.push(format!("{kind} {micros:?} {gap}")),
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(
+            seen,
+            [
+                "anchor 2014-07-11 22:41:05".to_string(),
+                "data [(0, Some(0)), (2, Some(100000))]".to_string(),
+                "TimeJump Some(100000) true".to_string(),
+                "anchor 2014-07-11 22:41:00.900".to_string(),
+                "data [(0, Some(100000))]".to_string(),
+                "data [(0, Some(112000))]".to_string(),
+            ]
+        );
+        let note = msgs
+            .iter()
+            .find_map(|m| match m {
+                Message::Note { data, .. } => Some(data.clone()),
+                _ => None,
+            })
+            .unwrap();
+        assert!(note.contains("goes back 4.100 s"), "{note}");
     }
 }

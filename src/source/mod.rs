@@ -58,6 +58,18 @@ pub enum Message {
     Data(Batch),
     /// A note for the user (unreadable log lines and the like); printed on stderr.
     Warning(String),
+    /// A row busnoop adds to the table itself (a time jump in a log, an event of a recording),
+    /// at its place among the data.
+    Note {
+        micros: Option<u64>,
+        /// The `Type` column.
+        kind: &'static str,
+        class: crate::row::Class,
+        data: String,
+        /// The data before and after do not join (a time jump, lost data): frames still open
+        /// are closed first, as at the end of the input.
+        gap: bool,
+    },
     /// The adapter disappeared (live capture with `--reconnect`, or a recording of one).
     LinkDown {
         micros: u64,
@@ -142,11 +154,12 @@ pub enum Input {
 }
 
 impl Input {
-    pub fn parse(arg: &str) -> Input {
-        if arg == "-" {
+    /// Any OS path (not only UTF-8); `-` is standard input.
+    pub fn parse(arg: &Path) -> Input {
+        if arg.as_os_str() == "-" {
             return Input::Stdin;
         }
-        let path = PathBuf::from(arg);
+        let path = arg.to_path_buf();
         if serial::is_device_path(&path) {
             Input::Device(path)
         } else {

@@ -1,0 +1,474 @@
+//! Data safety on the command line: the input is never overwritten, special outputs work,
+//! option values are checked, any OS path is accepted (docs/robustness.md, "Paths and options").
+
+mod common;
+
+use std::ffi::OsStr;
+use std::io::{BufRead, BufReader};
+use std::os::unix::ffi::OsStrExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use busnoop::sport::wire;
+use common::fixture;
+
+fn busnoop() -> Command {
+    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
+    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
+    c
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn no_panic(out: &Output) {
+    let err = text(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A copy of the S.Port sample, repeated so that it is more than one read chunk, in `dir` under
+/// `name` (no capture extension: the extension guard of `-o` must not be what saves it).
+fn capture(dir: &Path, name: &str) -> (PathBuf, Vec<u8>) {
+    let sample = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    let bytes = sample.repeat(400);
+    let p = dir.join(name);
+    std::fs::write(&p, &bytes).unwrap();
+    (p, bytes)
+}
+
+/// The run was refused with a usage error naming the clash, and `path` still holds `bytes`.
+fn refused(out: &Output, path: &Path, bytes: &[u8]) {
+    no_panic(out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("same file"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        std::fs::read(path).unwrap() == bytes,
+        "{} was changed",
+        path.display()
+    );
+}
+
+#[test]
+fn output_onto_the_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap");
+
+    // -o onto the input, directly, through a symlink either way, through a hard link.
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&cap)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    let sym = dir.path().join("sym");
+    std::os::unix::fs::symlink(&cap, &sym).unwrap();
+    for (src, dst) in [(&cap, &sym), (&sym, &cap)] {
+        let out = busnoop()
+            .arg("sport")
+            .arg(src)
+            .arg("-o")
+            .arg(dst)
+            .output()
+            .unwrap();
+        refused(&out, &cap, &bytes);
+    }
+    let hard = dir.path().join("hard");
+    std::fs::hard_link(&cap, &hard).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&hard)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+
+    // Standard input is the file: `busnoop sport - -o cap < cap`.
+    let out = busnoop()
+        .args(["sport", "-", "-o"])
+        .arg(&cap)
+        .stdin(std::fs::File::open(&cap).unwrap())
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+
+    // --record onto the input.
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&hard)
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+
+    // Standard output appends to the input: `busnoop sport - < cap >> cap`.
+    let out = busnoop()
+        .args(["sport", "-"])
+        .stdin(std::fs::File::open(&cap).unwrap())
+        .stdout(std::fs::OpenOptions::new().append(true).open(&cap).unwrap())
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+}
+
+#[test]
+fn a_recording_replayed_onto_itself_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let rec = dir.path().join("rec.pcap");
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&rec)
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let bytes = std::fs::read(&rec).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&rec)
+        .arg("--record")
+        .arg(&rec)
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    refused(&out, &rec, &bytes);
+}
+
+#[test]
+fn record_and_output_onto_one_file_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap");
+    // X does not exist yet: the names are compared.
+    let x = dir.path().join("x.txt");
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("-o")
+        .arg(dir.path().join(".").join("x.txt"))
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    assert!(!x.exists(), "nothing is created");
+    // X exists: the files are compared.
+    std::fs::write(&x, b"keep").unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("-o")
+        .arg(&x)
+        .output()
+        .unwrap();
+    refused(&out, &x, b"keep");
+}
+
+#[test]
+fn unrelated_outputs_still_work() {
+    // The check must not refuse what is fine: the same /dev/null twice, stdin and stdout on one
+    // terminal-like device, a new output next to the input.
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap");
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(dir.path().join("cap.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read(&cap).unwrap(), bytes);
+    let out = busnoop()
+        .args([
+            "sport",
+            "/dev/null",
+            "-o",
+            "/dev/null",
+            "--record",
+            "/dev/null",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+#[test]
+fn special_outputs_are_not_synced() {
+    // fdatasync fails on /dev/null, a FIFO or a pipe: only regular files are synced.
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["-o", "/dev/null"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stderr), "");
+
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["-o", "/dev/stdout"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).starts_with("Counter\t"));
+
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(fifo).unwrap())
+    };
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .arg("-o")
+        .arg(&fifo)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&reader.join().unwrap()).starts_with("Counter\t"));
+}
+
+#[test]
+fn output_to_dev_stdout_closed_by_the_reader_exits_quietly() {
+    // `busnoop sport big.bin -o /dev/stdout | head -1`: like stdout itself, 141 and no message.
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..100_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0100,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    let mut child = busnoop()
+        .arg("sport")
+        .arg(&big)
+        .args(["-o", "/dev/stdout"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("Counter\t"));
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(141));
+    assert_eq!(text(&out.stderr), "");
+}
+
+#[test]
+fn the_capture_extension_guard_ignores_case() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["x.PCAP", "x.PcapNG", "x.BIN"] {
+        let target = dir.path().join(name);
+        let out = busnoop()
+            .arg("sport")
+            .arg(fixture("sport-sample.bin"))
+            .arg("-o")
+            .arg(&target)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        assert!(text(&out.stderr).contains("--record"), "{name}");
+        assert!(!target.exists(), "{name}");
+    }
+}
+
+#[test]
+fn dash_means_standard_output() {
+    let dir = tempfile::tempdir().unwrap();
+    // -o -: the table on stdout, no file named `-`.
+    let out = busnoop()
+        .current_dir(dir.path())
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["-o", "-"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).starts_with("Counter\t"));
+    assert!(!dir.path().join("-").exists());
+
+    // --record - with the table in a file: the raw bytes on stdout.
+    let out = busnoop()
+        .current_dir(dir.path())
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["--record", "-", "-o", "t.csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        out.stdout,
+        std::fs::read(fixture("sport-sample.bin")).unwrap()
+    );
+    assert!(dir.path().join("t.csv").exists());
+    assert!(!dir.path().join("-").exists());
+
+    // --record - with the table on stdout as well: refused.
+    for extra in [&[][..], &["-o", "-"][..]] {
+        let out = busnoop()
+            .current_dir(dir.path())
+            .arg("sport")
+            .arg(fixture("sport-sample.bin"))
+            .args(["--record", "-"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        assert!(
+            text(&out.stderr).contains("--record - needs -o FILE"),
+            "{}",
+            text(&out.stderr)
+        );
+        assert!(out.stdout.is_empty());
+        assert!(!dir.path().join("-").exists());
+    }
+}
+
+#[test]
+fn paths_that_are_not_utf8_are_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join(OsStr::from_bytes(b"cap\xff"));
+    std::fs::copy(fixture("sport-sample.bin"), &src).unwrap();
+    let csv = dir.path().join(OsStr::from_bytes(b"t\xfe.csv"));
+    let rec = dir.path().join(OsStr::from_bytes(b"r\xfd.pcap"));
+    let out = busnoop()
+        .arg("sport")
+        .arg(&src)
+        .arg("-o")
+        .arg(&csv)
+        .arg("--record")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&std::fs::read(&csv).unwrap()).starts_with("Counter,"));
+    // The recording replays.
+    let out = busnoop().arg("sport").arg(&rec).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).lines().count() > 10);
+}
+
+/// The run was refused with clap's usage error naming the valid range.
+fn out_of_range(args: &[&str], range: &str) {
+    let out = busnoop()
+        .args(args)
+        .arg(fixture("sport-sample.bin"))
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(err.contains(range), "{args:?}: {err}");
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn numeric_options_out_of_range_are_refused() {
+    for t in ["0", "18446744073709552", "3600001"] {
+        out_of_range(&["sbus", "--timeout-ms", t], "1..=3600000");
+        out_of_range(&["sbus", "--gap-ms", t], "1..=3600000");
+        out_of_range(&["sab2", "--timeout-ms", t], "1..=3600000");
+    }
+    out_of_range(&["sbus", "--port", "0"], "1..=65535");
+    out_of_range(&["sab2", "--max-payload", "0"], "1..=255");
+    for cmd in ["sport", "sbus", "sab2"] {
+        for b in ["0", "49", "12000001", "99999999999"] {
+            out_of_range(&[cmd, "--baud", b], "50..=12000000");
+        }
+    }
+    // The limits themselves are accepted.
+    let out = busnoop()
+        .args([
+            "sbus",
+            "--timeout-ms",
+            "3600000",
+            "--gap-ms",
+            "1",
+            "--baud",
+            "50",
+        ])
+        .arg(fixture("sport-sample.bin"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+#[test]
+fn an_edgetx_log_with_a_byte_order_mark_keeps_its_first_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("bom.log");
+    let mut text_in = b"\xEF\xBB\xBF".to_vec();
+    text_in.extend_from_slice(b"2014-07-11,22:41:01.340: 7E A1\n2014-07-11,22:41:01.350: 7E 22\n");
+    std::fs::write(&log, text_in).unwrap();
+    let out = busnoop().arg("sport").arg(&log).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stderr), "", "no line is skipped");
+    let rows: Vec<String> = text(&out.stdout)
+        .lines()
+        .skip(1)
+        .map(String::from)
+        .collect();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    assert!(rows[0].starts_with("1\t0\t1\t"), "{rows:?}");
+}
+
+#[test]
+fn time_going_back_in_an_edgetx_log_is_a_row_and_keeps_the_logged_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("jump.log");
+    std::fs::write(
+        &log,
+        "2014-07-11,22:41:05.000: 7E A1\n\
+         2014-07-11,22:41:05.100: 7E 22\n\
+         2014-07-11,22:41:01.000: 7E 83\n\
+         2014-07-11,22:41:01.012: 7E E4\n",
+    )
+    .unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&log)
+        .args(["--time", "abs", "--utc"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let rows: Vec<Vec<String>> = text(&out.stdout)
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').map(String::from).collect())
+        .collect();
+    let kinds: Vec<&str> = rows.iter().map(|r| r[4].as_str()).collect();
+    assert_eq!(kinds, ["", "", "TimeJump", "", ""], "{rows:?}");
+    let jump = &rows[2];
+    assert!(jump[7].contains("4.100 s"), "{jump:?}");
+    // Millis never goes back; the Time column shows what the log says.
+    let millis: Vec<u64> = rows.iter().map(|r| r[1].parse().unwrap()).collect();
+    assert!(millis.windows(2).all(|w| w[0] <= w[1]), "{millis:?}");
+    let times: Vec<&str> = rows.iter().map(|r| r[10].as_str()).collect();
+    assert!(times[0].contains("22:41:05.000"), "{times:?}");
+    assert!(times[3].contains("22:41:01.000"), "{times:?}");
+    assert!(times[4].contains("22:41:01.012"), "{times:?}");
+}
