@@ -8,12 +8,15 @@
 #
 #   tools/golden.sh [OUT_DIR]          # default: target/golden
 #   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial and sab (tsv only)
+#   GOLDEN_BENCH=1 tools/golden.sh     # also the benchmark captures in target/bench-data (tsv,
+#                                      # stored as the sha256 of stdout; run the benches first)
+#   BUSNOOP=path/to/busnoop tools/golden.sh   # another binary (e.g. a copy of the old one)
 #
 # Build first (cargo build --release); compare the printed hash before and after a change, or
 # diff -r two output directories to see what moved.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bin=target/release/busnoop
+bin=${BUSNOOP:-target/release/busnoop}
 out=${1:-target/golden}
 [ -x "$bin" ] || { echo "golden: build $bin first (cargo build --release)" >&2; exit 2; }
 rm -rf "$out"
@@ -57,6 +60,25 @@ if [ "${GOLDEN_CORPUS:-0}" = 1 ]; then
   for f in fuzz/corpus/sab/*; do
     # shellcheck disable=SC2086
     run "$(slug "$f sab2")" "$f" sab2 -f tsv
+  done
+fi
+
+if [ "${GOLDEN_BENCH:-0}" = 1 ]; then
+  for f in target/bench-data/*; do
+    case "$(basename "$f")" in
+      sab-*) cmds=("sab2") ;;
+      sbus-ether*) cmds=("sbus") ;;
+      sbus-*) cmds=("sbus --mode auto" "sbus --mode data" "sbus --mode break") ;;
+      sport-*) cmds=("sport") ;;
+      *) continue ;;
+    esac
+    for c in "${cmds[@]}"; do
+      name=$(slug "$f $c")
+      rc=0
+      # shellcheck disable=SC2086
+      "$bin" $c -f tsv --raw --stats "$f" 2>"$out/$name.err" </dev/null | sha256sum >"$out/$name.out.sha256" || rc=$?
+      echo "$rc" >"$out/$name.rc"
+    done
   done
 fi
 
