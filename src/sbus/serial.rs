@@ -213,3 +213,126 @@ impl GarbageRun {
         }
     }
 }
+
+/// What the framer tests share: events with their bytes copied, and feeding helpers.
+#[cfg(test)]
+mod testing {
+    use super::{CrcCheck, Event, Secure, Tele};
+
+    /// A telegram's meaning with its bytes copied.
+    #[derive(Clone, Debug, PartialEq, Eq)]
+    pub(super) enum T {
+        Request {
+            station: u8,
+            cmd: u8,
+            body: Vec<u8>,
+        },
+        Response {
+            data: Vec<u8>,
+        },
+        AckNak {
+            code: u16,
+            short: Option<(u8, bool)>,
+        },
+        Other {
+            at: u8,
+            payload: Vec<u8>,
+        },
+        Broken,
+    }
+
+    /// A framer event with its bytes copied.
+    #[derive(Clone, Debug, PartialEq, Eq)]
+    pub(super) enum Ev {
+        Frame {
+            time: Option<u64>,
+            offset: u64,
+            wire: Vec<u8>,
+            tele: T,
+            crc: CrcCheck,
+            secure: Option<Secure>,
+            problem: Option<&'static str>,
+            break_before: bool,
+            length_mismatch: bool,
+        },
+        Garbage {
+            time: Option<u64>,
+            offset: u64,
+            bytes: Vec<u8>,
+        },
+    }
+
+    impl Ev {
+        pub(super) fn of(e: &Event<'_>) -> Ev {
+            match e {
+                Event::Frame(f) => Ev::Frame {
+                    time: f.time,
+                    offset: f.offset,
+                    wire: f.wire.to_vec(),
+                    tele: match f.tele {
+                        Tele::Request { station, cmd, body } => T::Request {
+                            station,
+                            cmd,
+                            body: body.to_vec(),
+                        },
+                        Tele::Response { data } => T::Response {
+                            data: data.to_vec(),
+                        },
+                        Tele::AckNak { code, short } => T::AckNak { code, short },
+                        Tele::Other { at, payload } => T::Other {
+                            at,
+                            payload: payload.to_vec(),
+                        },
+                        Tele::Broken => T::Broken,
+                    },
+                    crc: f.crc,
+                    secure: f.secure,
+                    problem: f.problem,
+                    break_before: f.break_before,
+                    length_mismatch: f.length_mismatch,
+                },
+                Event::Garbage(g) => Ev::Garbage {
+                    time: g.time,
+                    offset: g.offset,
+                    bytes: g.bytes.to_vec(),
+                },
+            }
+        }
+
+        /// The telegram of a frame (`None` for garbage).
+        pub(super) fn tele(&self) -> Option<&T> {
+            match self {
+                Ev::Frame { tele, .. } => Some(tele),
+                Ev::Garbage { .. } => None,
+            }
+        }
+
+        pub(super) fn crc(&self) -> CrcCheck {
+            match self {
+                Ev::Frame { crc, .. } => *crc,
+                Ev::Garbage { .. } => CrcCheck::None,
+            }
+        }
+
+        pub(super) fn wire(&self) -> &[u8] {
+            match self {
+                Ev::Frame { wire, .. } => wire,
+                Ev::Garbage { bytes, .. } => bytes,
+            }
+        }
+
+        pub(super) fn offset(&self) -> u64 {
+            match self {
+                Ev::Frame { offset, .. } | Ev::Garbage { offset, .. } => *offset,
+            }
+        }
+    }
+
+    /// Splits timed segments into single bytes that keep their segment's time.
+    pub(super) fn bytewise(segments: &[(Vec<u8>, Option<u64>)]) -> Vec<(Vec<u8>, Option<u64>)> {
+        segments
+            .iter()
+            .flat_map(|(bytes, time)| bytes.iter().map(move |&b| (vec![b], *time)))
+            .collect()
+    }
+}

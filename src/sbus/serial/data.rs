@@ -359,3 +359,264 @@ impl DataFramer {
 
 /// The problem noted when a secure header is not followed by a telegram.
 const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
+
+#[cfg(test)]
+mod tests {
+    use super::super::GARBAGE_ROW_MAX;
+    use super::super::testing::{Ev, T, bytewise};
+    use super::*;
+    use crate::sbus::telegram::{encode_data, encode_secure};
+    use crate::sbus::tests::{SMode, session};
+
+    /// Feeds `segments` (bytes, time); returns the events before `finish` and all events.
+    fn feed(f: &mut DataFramer, segments: &[(Vec<u8>, Option<u64>)]) -> (usize, Vec<Ev>) {
+        let mut evs = Vec::new();
+        for (bytes, time) in segments {
+            f.push(bytes, *time, &mut |e| evs.push(Ev::of(e)));
+        }
+        let before = evs.len();
+        f.finish(&mut |e| evs.push(Ev::of(e)));
+        (before, evs)
+    }
+
+    fn run(bytes: &[u8]) -> (usize, Vec<Ev>) {
+        feed(&mut DataFramer::new(None), &[(bytes.to_vec(), None)])
+    }
+
+    fn data(at: u8, payload: &[u8], basis: CrcBasis) -> Vec<u8> {
+        let mut v = Vec::new();
+        encode_data(&mut v, at, payload, basis);
+        v
+    }
+
+    fn request(body: &[u8]) -> T {
+        T::Request {
+            station: body[0],
+            cmd: body[1],
+            body: body[2..].to_vec(),
+        }
+    }
+
+    #[test]
+    fn request_response_and_ack_end_by_their_length() {
+        // station 1 reads 4 registers from R0 (16 data bytes), then a write is ACKed
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let resp_data: Vec<u8> = (1..=16).collect();
+        let resp = data(AT_RESPONSE, &resp_data, CrcBasis::Both);
+        let ack = data(AT_ACKNAK, &[0, 0], CrcBasis::Both);
+        let wire = [req.clone(), resp.clone(), ack.clone()].concat();
+        let (before, evs) = run(&wire);
+        // every telegram is complete when its last byte arrives: nothing waits for the end
+        assert_eq!(before, 3, "{evs:?}");
+        assert_eq!(evs.len(), 3, "{evs:?}");
+        assert_eq!(evs[0].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        assert_eq!(evs[0].wire(), req);
+        assert_eq!(evs[0].offset(), 0);
+        assert_eq!(
+            evs[1].tele(),
+            Some(&T::Response {
+                data: resp_data.clone()
+            })
+        );
+        assert_eq!(evs[1].offset(), req.len() as u64);
+        assert_eq!(
+            evs[2].tele(),
+            Some(&T::AckNak {
+                code: 0,
+                short: None
+            })
+        );
+        assert_eq!(evs[2].wire(), ack);
+        for e in &evs {
+            assert_eq!(e.crc(), CrcCheck::Ok(CrcBasis::Both));
+            assert!(matches!(e, Ev::Frame { problem: None, .. }), "{e:?}");
+        }
+    }
+
+    #[test]
+    fn secure_telegram_keeps_its_header() {
+        let mut wire = Vec::new();
+        encode_secure(
+            &mut wire,
+            0x10,
+            2,
+            AT_REQUEST,
+            &[5, 6, 0, 0, 0],
+            CrcBasis::Both,
+        );
+        let (before, evs) = run(&wire);
+        assert_eq!((before, evs.len()), (1, 1), "{evs:?}");
+        assert_eq!(evs[0].tele(), Some(&request(&[5, 6, 0, 0, 0])));
+        assert_eq!(evs[0].wire(), wire);
+        let Ev::Frame { secure, .. } = &evs[0] else {
+            panic!("{evs:?}")
+        };
+        let s = secure.expect("secure header");
+        assert_eq!((s.at, s.len, s.seq, s.actual), (0x10, 9, 2, 9));
+        assert!(s.len_ok());
+    }
+
+    #[test]
+    fn dle_pairs_are_undone_and_both_crc_readings_are_accepted() {
+        // read R181: the address 0x00B5 travels as C5 00; the answer holds B5 and C5 as data
+        for basis in [CrcBasis::Escaped, CrcBasis::Unescaped] {
+            let req = data(AT_REQUEST, &[5, 6, 0, 0, FS], basis);
+            assert!(req.windows(2).any(|w| w == [DLE, 0x00]), "{req:02X?}");
+            let resp = data(AT_RESPONSE, &[FS, DLE, 0, 1], basis);
+            let (before, evs) = run(&[req.clone(), resp.clone()].concat());
+            assert_eq!((before, evs.len()), (2, 2), "{basis:?} {evs:?}");
+            assert_eq!(evs[0].tele(), Some(&request(&[5, 6, 0, 0, FS])));
+            assert_eq!(evs[0].wire(), req, "the wire keeps the DLE pairs");
+            assert_eq!(evs[0].crc(), CrcCheck::Ok(basis));
+            assert_eq!(
+                evs[1].tele(),
+                Some(&T::Response {
+                    data: vec![FS, DLE, 0, 1]
+                })
+            );
+            assert_eq!(evs[1].crc(), CrcCheck::Ok(basis));
+        }
+    }
+
+    #[test]
+    fn invalid_dle_pair_is_a_problem() {
+        // C5 02 is no DLE pair: the C5 is kept as data and the telegram flagged
+        let mut wire = vec![FS, AT_REQUEST, 5, 6, 0, 0, DLE, 0x02];
+        let crc = crc16(&wire);
+        wire.extend_from_slice(&crc.to_be_bytes());
+        let (_, evs) = run(&wire);
+        assert_eq!(evs.len(), 1, "{evs:?}");
+        let Ev::Frame { problem, tele, .. } = &evs[0] else {
+            panic!("{evs:?}")
+        };
+        assert_eq!(
+            *problem,
+            Some("invalid DLE pair (C5 not followed by 00 or 01)")
+        );
+        assert!(
+            matches!(
+                tele,
+                T::Request {
+                    station: 5,
+                    cmd: 6,
+                    ..
+                }
+            ),
+            "{tele:?}"
+        );
+    }
+
+    #[test]
+    fn bad_crc_is_reported_and_the_next_telegram_decodes() {
+        let mut bad = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let n = bad.len();
+        bad[n - 1] ^= 0x01;
+        let good = data(AT_REQUEST, &[2, 6, 1, 0, 0x64], CrcBasis::Both);
+        let (_, evs) = run(&[bad.clone(), good.clone()].concat());
+        assert_eq!(evs.len(), 2, "{evs:?}");
+        // the bad telegram ends at the next B5
+        assert_eq!(evs[0].wire(), bad);
+        assert_eq!(evs[0].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        let want = crc16(&bad[..n - 2]);
+        assert_eq!(
+            evs[0].crc(),
+            CrcCheck::Bad {
+                got: want ^ 0x01,
+                escaped: want,
+                unescaped: want
+            }
+        );
+        assert_eq!(evs[1].tele(), Some(&request(&[2, 6, 1, 0, 0x64])));
+        assert_eq!(evs[1].crc(), CrcCheck::Ok(CrcBasis::Both));
+        assert_eq!(evs[1].offset(), bad.len() as u64);
+    }
+
+    #[test]
+    fn truncated_telegram_comes_out_at_finish() {
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        // cut inside the header: too short to mean anything
+        let (before, evs) = run(&req[..2]);
+        assert_eq!(before, 0, "an open telegram waits for more bytes");
+        assert_eq!(evs.len(), 1, "{evs:?}");
+        assert!(
+            matches!(
+                &evs[0],
+                Ev::Frame {
+                    tele: T::Broken,
+                    problem: Some("cut short"),
+                    crc: CrcCheck::None,
+                    ..
+                }
+            ),
+            "{evs:?}"
+        );
+        assert_eq!(evs[0].wire(), &req[..2]);
+        // cut inside the CRC: read with the CRC it has, which fails
+        let (before, evs) = run(&req[..req.len() - 1]);
+        assert_eq!((before, evs.len()), (0, 1), "{evs:?}");
+        assert!(matches!(evs[0].crc(), CrcCheck::Bad { .. }), "{evs:?}");
+        assert_eq!(evs[0].wire(), &req[..req.len() - 1]);
+    }
+
+    #[test]
+    fn a_gap_ends_an_open_telegram() {
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let mut f = DataFramer::new(Some(10_000));
+        let segments = [
+            (req[..4].to_vec(), Some(0)),
+            (req[4..].to_vec(), Some(50_000)),
+        ];
+        let (_, evs) = feed(&mut f, &segments);
+        assert_eq!(evs.len(), 2, "{evs:?}");
+        assert_eq!(evs[0].wire(), &req[..4]);
+        assert!(
+            matches!(
+                evs[1],
+                Ev::Garbage {
+                    time: Some(50_000),
+                    offset: 4,
+                    ..
+                }
+            ),
+            "{evs:?}"
+        );
+    }
+
+    #[test]
+    fn garbage_before_a_telegram_then_resync() {
+        let noise: Vec<u8> = (0..GARBAGE_ROW_MAX as u8 + 6)
+            .map(|i| i.wrapping_mul(7))
+            .collect();
+        assert!(!noise.contains(&FS));
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let (_, evs) = run(&[noise.clone(), req.clone()].concat());
+        // garbage in runs of at most GARBAGE_ROW_MAX bytes, then the telegram
+        assert_eq!(evs.len(), 3, "{evs:?}");
+        assert!(matches!(&evs[0], Ev::Garbage { offset: 0, .. }));
+        assert_eq!(evs[0].wire(), &noise[..GARBAGE_ROW_MAX]);
+        assert!(matches!(&evs[1], Ev::Garbage { .. }));
+        assert_eq!(evs[1].offset(), GARBAGE_ROW_MAX as u64);
+        assert_eq!(evs[1].wire(), &noise[GARBAGE_ROW_MAX..]);
+        assert_eq!(evs[2].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        assert_eq!(evs[2].offset(), noise.len() as u64);
+    }
+
+    #[test]
+    fn byte_by_byte_gives_the_same_events_as_whole_segments() {
+        for mode in [SMode::Data, SMode::Secure] {
+            for (timed, seed) in [(true, 3), (false, 4)] {
+                let g = session(mode, timed, seed, 25);
+                let gap = timed.then_some(20_000);
+                let (_, whole) = feed(&mut DataFramer::new(gap), &g.segments);
+                let (_, single) = feed(&mut DataFramer::new(gap), &bytewise(&g.segments));
+                assert!(whole.len() > 25, "{mode:?}: {} events", whole.len());
+                assert_eq!(whole, single, "{mode:?} timed {timed}");
+                // and all in one push (times dropped)
+                if !timed {
+                    let all: Vec<u8> = g.segments.iter().flat_map(|s| s.0.clone()).collect();
+                    assert_eq!(run(&all).1, whole, "{mode:?} in one push");
+                }
+            }
+        }
+    }
+}
