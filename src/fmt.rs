@@ -2,15 +2,35 @@
 
 const HEX: &[u8; 16] = b"0123456789ABCDEF";
 
+/// Appends a byte as two upper-case hex digits (`7E`).
+#[inline]
+pub fn push_hex_u8(out: &mut String, b: u8) {
+    out.push(HEX[(b >> 4) as usize] as char);
+    out.push(HEX[(b & 0x0F) as usize] as char);
+}
+
+/// Appends `0xNN`.
+pub fn push_0x(out: &mut String, b: u8) {
+    out.push_str("0x");
+    push_hex_u8(out, b);
+}
+
+/// Appends `0xNNNN`.
+pub fn push_0x16(out: &mut String, v: u16) {
+    out.push_str("0x");
+    let [hi, lo] = v.to_be_bytes();
+    push_hex_u8(out, hi);
+    push_hex_u8(out, lo);
+}
+
 /// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`).
 pub fn push_hex(out: &mut String, bytes: &[u8]) {
     out.reserve(bytes.len() * 3);
-    for (i, b) in bytes.iter().enumerate() {
+    for (i, &b) in bytes.iter().enumerate() {
         if i > 0 {
             out.push(' ');
         }
-        out.push(HEX[(b >> 4) as usize] as char);
-        out.push(HEX[(b & 0x0F) as usize] as char);
+        push_hex_u8(out, b);
     }
 }
 
@@ -80,6 +100,23 @@ pub fn push_fixed(out: &mut String, raw: i64, prec: u8) {
     out.push_str(digits);
 }
 
+/// Appends µs as milliseconds with three decimals (`2500` → `2.500`).
+pub fn push_ms(out: &mut String, micros: u64) {
+    push_fixed(out, micros.min(i64::MAX as u64) as i64, 3);
+}
+
+/// Appends µs as milliseconds without useless decimals (`10000` → `10`, `2500` → `2.5`).
+pub fn push_ms_short(out: &mut String, micros: u64) {
+    if micros.is_multiple_of(1000) {
+        push_u64(out, micros / 1000);
+    } else {
+        push_ms(out, micros);
+        while out.ends_with('0') {
+            out.pop();
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -110,5 +147,39 @@ mod tests {
         assert_eq!(parse_hex("7ea100ff").unwrap(), bytes);
         assert!(parse_hex("7E A").is_none());
         assert!(parse_hex("7G").is_none());
+    }
+
+    #[test]
+    fn hex_prefixed() {
+        let mut s = String::new();
+        push_hex_u8(&mut s, 0x0A);
+        s.push(' ');
+        push_0x(&mut s, 0xF0);
+        s.push(' ');
+        push_0x16(&mut s, 0x8F1D);
+        s.push(' ');
+        push_0x16(&mut s, 0x0001);
+        assert_eq!(s, "0A 0xF0 0x8F1D 0x0001");
+    }
+
+    #[test]
+    fn milliseconds() {
+        let cases = [
+            (0, "0.000", "0"),
+            (1, "0.001", "0.001"),
+            (2_500, "2.500", "2.5"),
+            (10_000, "10.000", "10"),
+            (10_010, "10.010", "10.01"),
+            (86_805, "86.805", "86.805"),
+            (u64::MAX, "9223372036854775.807", "9223372036854775.807"),
+        ];
+        for (micros, full, short) in cases {
+            let mut s = String::new();
+            push_ms(&mut s, micros);
+            assert_eq!(s, full, "{micros}");
+            s.clear();
+            push_ms_short(&mut s, micros);
+            assert_eq!(s, short, "{micros}");
+        }
     }
 }

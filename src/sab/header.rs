@@ -137,11 +137,11 @@ impl NackCode {
             NackCode::System { name, .. } => out.push_str(name),
             NackCode::ReservedSystem(c) => {
                 out.push_str("reserved 0x");
-                super::push_hex_u8(out, c);
+                crate::fmt::push_hex_u8(out, c);
             }
             NackCode::User(c) => {
                 out.push_str("user 0x");
-                super::push_hex_u8(out, c);
+                crate::fmt::push_hex_u8(out, c);
             }
         }
     }

@@ -2,9 +2,16 @@
 //! detection, and property tests (round trips, noise, chunking, a stray 0x54, mixed
 //! request/response sessions).
 
+use super::decoder::Reasm;
+use super::detect::Reason;
+use super::frame::{EventKind, Framing};
+use super::header::Flags;
+use super::map::push_payload;
 use super::*;
+use crate::decoder::Decoder;
 use crate::decoder::{Collected, OwnedRow};
 use crate::fmt::{hex, parse_hex};
+use crate::row::Class;
 use frame::OwnedEvent;
 use proptest::prelude::*;
 

@@ -1,0 +1,66 @@
+//! SAB settings: line defaults, the table's extra columns, `--framing` and the decoder options.
+
+use super::hdlc;
+
+/// SAB runs at 115200 baud 8N1.
+pub const DEFAULT_BAUD: u32 = 115_200;
+
+/// What the shared command-line code needs to know about SAB.
+pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+    name: "SAB",
+    serial: crate::source::serial::SerialConfig {
+        baud: DEFAULT_BAUD,
+        data_bits: serialport::DataBits::Eight,
+        parity: serialport::Parity::None,
+        stop_bits: serialport::StopBits::One,
+    },
+};
+
+/// modm's `sab::Master` waits 10 ms for a response.
+pub const DEFAULT_TIMEOUT_MS: u64 = 10;
+/// Bits per byte on the wire (8N1: start, 8 data, stop), for time reconstruction.
+pub const BITS_PER_BYTE: u64 = 10;
+/// Extra columns after the eight base columns.
+pub const COLUMNS: &[&str] = &["Addr", "Resp ms", "Framing", "Note"];
+
+/// `--framing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FramingChoice {
+    /// Detect the framing from the stream (and say which one was chosen).
+    Auto,
+    /// SAB v1: `54 LEN HDR CMD DATA CRC8` (what modm's documentation describes).
+    #[value(alias = "sab1", alias = "v1")]
+    Sync,
+    /// SAB2: `7E HDR CMD DATA CRC16 7E`, byte-stuffed (what modm's SAB2 code sends).
+    #[value(alias = "sab2")]
+    Hdlc,
+}
+
+/// Decoder settings.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub framing: FramingChoice,
+    /// Baud rate, used to reconstruct time for sources without time.
+    pub baud: u32,
+    /// Master timeout in µs.
+    pub timeout_micros: u64,
+    /// SAB2 payload limit (modm's template parameter `N`).
+    pub max_payload: usize,
+    /// `(name, address)` pairs for the Device column.
+    pub devices: Vec<(String, u8)>,
+    /// `(name, command)` pairs for the Sensor column.
+    pub commands: Vec<(String, u8)>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            framing: FramingChoice::Auto,
+            baud: DEFAULT_BAUD,
+            timeout_micros: DEFAULT_TIMEOUT_MS * 1000,
+            max_payload: hdlc::DEFAULT_MAX_PAYLOAD,
+            devices: Vec::new(),
+            commands: Vec::new(),
+        }
+    }
+}

@@ -1,0 +1,583 @@
+//! The table mapping: reassembler events in, rows out. Pairs requests with responses, writes
+//! the notes and keeps the statistics (`docs/sab.md` documents the columns and notes).
+
+use std::io;
+
+use super::config::{BITS_PER_BYTE, Options};
+use super::detect::Reason;
+use super::frame::{Event, EventKind, Framing};
+use super::header::{self, Flags, NackCode};
+use super::names::Names;
+use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
+use super::stats::Stats;
+use super::{hdlc, sync};
+use crate::decoder::RowOut;
+use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
+use crate::row::{Class, Row};
+
+/// Payload bytes shown at most in the Data column of an overlong frame.
+const OVERLONG_DATA_MAX: usize = 64;
+
+/// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
+/// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
+pub fn push_payload(out: &mut String, payload: &[u8]) {
+    push_hex(out, payload);
+    let (unsigned, signed) = match *payload {
+        [a] => (a as u64, a as i8 as i64),
+        [a, b] => {
+            let v = u16::from_le_bytes([a, b]);
+            (v as u64, v as i16 as i64)
+        }
+        [a, b, c, d] => {
+            let v = u32::from_le_bytes([a, b, c, d]);
+            (v as u64, v as i32 as i64)
+        }
+        _ => return,
+    };
+    out.push_str(" (");
+    push_u64(out, unsigned);
+    if signed < 0 {
+        out.push_str(", ");
+        push_i64(out, signed);
+    }
+    out.push(')');
+}
+
+/// Scratch buffers reused for every row.
+#[derive(Default)]
+struct Scratch {
+    sensor_no: String,
+    data: String,
+    addr: String,
+    resp: String,
+    note: String,
+}
+
+impl Scratch {
+    fn clear(&mut self) {
+        self.sensor_no.clear();
+        self.data.clear();
+        self.addr.clear();
+        self.resp.clear();
+        self.note.clear();
+    }
+
+    /// Starts a new part of the note.
+    fn note(&mut self) -> &mut String {
+        if !self.note.is_empty() {
+            self.note.push_str("; ");
+        }
+        &mut self.note
+    }
+}
+
+/// What a row is made of besides the scratch strings.
+struct RowParts<'a> {
+    micros: u64,
+    id: Option<u8>,
+    /// Command for Sensor # and Sensor.
+    command: Option<u8>,
+    kind: &'a str,
+    class: Class,
+    framing: Framing,
+    raw: &'a [u8],
+}
+
+/// Maps events onto rows, pairs requests with responses, keeps the statistics.
+pub(super) struct Mapper {
+    baud: u32,
+    max_payload: usize,
+    pub(super) names: Names,
+    pub(super) pairing: Pairing,
+    pub(super) stats: Stats,
+    scratch: Scratch,
+    /// Said on the next row: how the framing was chosen.
+    framing_note: Option<String>,
+    /// First output error; later rows are dropped.
+    error: Option<io::Error>,
+}
+
+impl Mapper {
+    pub(super) fn new(opts: &Options) -> Self {
+        Mapper {
+            baud: opts.baud.max(1),
+            max_payload: opts.max_payload,
+            names: Names::new(opts),
+            pairing: Pairing::new(opts.timeout_micros.saturating_mul(1000)),
+            stats: Stats::default(),
+            scratch: Scratch::default(),
+            framing_note: None,
+            error: None,
+        }
+    }
+
+    // Pairing runs in nanoseconds so that reconstructed times (86.8 µs per byte at 115200
+    // baud) give the same response time for the same exchange wherever it is in the capture;
+    // rows show µs.
+
+    /// Time of stream offset `pos` reconstructed from the baud rate (ns).
+    pub(super) fn nanos_at(&self, pos: u64) -> u64 {
+        let ns = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / self.baud as u128;
+        ns.min(u64::MAX as u128) as u64
+    }
+
+    fn start_ns(&self, ev: &Event<'_>) -> u64 {
+        match ev.start_time {
+            Some(us) => us.saturating_mul(1000),
+            None => self.nanos_at(ev.start_pos),
+        }
+    }
+
+    fn end_ns(&self, ev: &Event<'_>) -> u64 {
+        match ev.end_time {
+            Some(us) => us.saturating_mul(1000),
+            None => self.nanos_at(ev.end_pos),
+        }
+    }
+
+    pub(super) fn chosen(&mut self, framing: Framing, reason: Reason) {
+        let mut note = String::new();
+        reason.describe(framing, &mut note);
+        self.framing_note = Some(note);
+        self.stats.framings.push((framing, reason));
+    }
+
+    pub(super) fn take_error(&mut self) -> io::Result<()> {
+        match self.error.take() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
+        if self.error.is_some() {
+            return;
+        }
+        let sc = &mut self.scratch;
+        if let Some(n) = self.framing_note.take() {
+            if sc.note.is_empty() {
+                sc.note = n;
+            } else {
+                sc.note.insert_str(0, "; ");
+                sc.note.insert_str(0, &n);
+            }
+        }
+        let device = match p.id {
+            Some(a) => {
+                sc.addr.clear();
+                push_0x(&mut sc.addr, a);
+                self.names.device(a)
+            }
+            None => "",
+        };
+        sc.sensor_no.clear();
+        let sensor = match p.command {
+            Some(c) => {
+                push_0x(&mut sc.sensor_no, c);
+                self.names.command(c)
+            }
+            None => "",
+        };
+        let extra = [
+            sc.addr.as_str(),
+            sc.resp.as_str(),
+            p.framing.name(),
+            sc.note.as_str(),
+        ];
+        let row = Row {
+            micros: Some(p.micros),
+            id: p.id.map(u32::from),
+            device,
+            kind: p.kind,
+            class: p.class,
+            sensor_no: &sc.sensor_no,
+            sensor,
+            data: &sc.data,
+            extra: &extra,
+            raw: p.raw,
+        };
+        if let Err(e) = out.row(&row) {
+            self.error = Some(e);
+        }
+    }
+
+    pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut dyn RowOut) {
+        let r = x.request;
+        self.stats.timeouts += 1;
+        self.stats.per[r.address as usize].timeouts += 1;
+        let sc = &mut self.scratch;
+        sc.clear();
+        let n = sc.note();
+        match x.why {
+            Why::Deadline => {
+                n.push_str("no response within ");
+                push_ms_short(n, self.pairing.timeout() / 1000);
+                n.push_str(" ms");
+            }
+            Why::NextRequest => {
+                n.push_str("no response before the next request (after ");
+                push_ms(n, x.waited / 1000);
+                n.push_str(" ms)");
+            }
+            Why::EndOfCapture => {
+                n.push_str("no response before the end of the capture (after ");
+                push_ms(n, x.waited / 1000);
+                n.push_str(" ms)");
+            }
+        }
+        self.put(
+            RowParts {
+                micros: x.at / 1000,
+                id: Some(r.address),
+                command: Some(r.command),
+                kind: "Timeout",
+                class: Class::Warning,
+                framing,
+                raw: &[],
+            },
+            out,
+        );
+    }
+
+    /// Handles one event of the active reassembler.
+    pub(super) fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) {
+        let start = self.start_ns(ev);
+        if let Some(x) = self.pairing.advance(start) {
+            self.timeout_row(&x, ev.framing, out);
+        }
+        match ev.kind {
+            EventKind::Frame => self.frame(ev, start, out),
+            EventKind::BadCrc => self.bad_crc(ev, start / 1000, out),
+            _ => self.broken(ev, start / 1000, out),
+        }
+    }
+
+    /// A valid frame; `start` in ns.
+    fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+        let (Some(header), Some(command)) = (ev.header(), ev.command()) else {
+            return self.broken(ev, start / 1000, out);
+        };
+        let flags = Flags::of(header);
+        let addr = header::address(header);
+        let payload = ev.payload();
+        let st = &mut self.stats;
+        st.valid_frames += 1;
+        let mut class = Class::Plain;
+        let mut answer = None;
+        if flags.is_response() {
+            // A late response's Timeout row comes once the time passes the deadline.
+            answer = Some(self.pairing.response(addr, command, self.end_ns(ev)));
+        } else if let Some(x) = self.pairing.request(pairing::Request {
+            address: addr,
+            command,
+            start,
+        }) {
+            self.timeout_row(&x, ev.framing, out);
+        }
+
+        let st = &mut self.stats;
+        let per = &mut st.per[addr as usize];
+        let sc = &mut self.scratch;
+        sc.clear();
+        push_payload(&mut sc.data, payload);
+        match flags {
+            Flags::Request => per.requests += 1,
+            Flags::Reserved => {
+                per.reserved += 1;
+                class = Class::Warning;
+                sc.note()
+                    .push_str("reserved flag bits 01 (never sent by modm; handled as a request)");
+            }
+            Flags::Ack => per.acks += 1,
+            Flags::Nack => {
+                class = Class::Warning;
+                st.nacks += 1;
+                let n = sc.note();
+                match payload.first() {
+                    Some(&code) => {
+                        per.nack(code);
+                        n.push_str("NACK ");
+                        NackCode::of(code).push_description(n);
+                        if payload.len() > 1 {
+                            n.push_str("; ");
+                            push_u64(n, payload.len() as u64);
+                            n.push_str(" payload bytes (modm sends 1)");
+                        }
+                    }
+                    None => {
+                        per.nacks += 1;
+                        n.push_str("NACK without an error code (modm sends 1 byte)");
+                    }
+                }
+            }
+        }
+        match answer {
+            Some(Answer::Paired {
+                request,
+                micros,
+                late,
+                repeat,
+                ..
+            }) => {
+                let micros = micros / 1000;
+                push_ms(&mut sc.resp, micros);
+                if repeat {
+                    st.repeats += 1;
+                    per.repeats += 1;
+                    class = Class::Warning;
+                    sc.note().push_str(
+                        "repeated response to the same request (two slaves on one address?)",
+                    );
+                } else {
+                    per.times.add(micros);
+                }
+                match late {
+                    Lateness::OnTime => {}
+                    Lateness::AfterTimeout => {
+                        st.late += 1;
+                        per.late += 1;
+                        class = Class::Warning;
+                        let n = sc.note();
+                        n.push_str("late: after the master's ");
+                        push_ms_short(n, self.pairing.timeout() / 1000);
+                        n.push_str(" ms timeout");
+                    }
+                    Lateness::AfterNextRequest => {
+                        st.late += 1;
+                        per.late += 1;
+                        class = Class::Warning;
+                        let n = sc.note();
+                        n.push_str("late: after the master's next request (request at ");
+                        push_ms(n, request.start / 1000);
+                        n.push_str(" ms)");
+                    }
+                }
+            }
+            Some(Answer::Unpaired { open }) => {
+                st.unpaired += 1;
+                per.unpaired += 1;
+                class = Class::Warning;
+                let n = sc.note();
+                n.push_str("no matching request");
+                if let Some(o) = open {
+                    n.push_str(" (the master waits for address ");
+                    push_u64(n, o.address as u64);
+                    n.push_str(" command ");
+                    push_0x(n, o.command);
+                    n.push(')');
+                }
+            }
+            None => {}
+        }
+        if ev.framing == Framing::Hdlc && payload.len() > self.max_payload {
+            st.overlong += 1;
+            class = Class::Warning;
+            let n = sc.note();
+            n.push_str("overlong: ");
+            push_u64(n, payload.len() as u64);
+            n.push_str("-byte payload, more than --max-payload ");
+            push_u64(n, self.max_payload as u64);
+            n.push_str(" (a modm receiver with N = ");
+            push_u64(n, self.max_payload as u64);
+            n.push_str(" drops it)");
+        }
+        if ev.odd_escapes > 0 {
+            st.odd_escapes += ev.odd_escapes as u64;
+            if class == Class::Plain {
+                class = Class::Warning;
+            }
+            sc.note().push_str(
+                "unusual escape (0x7D not followed by 0x5E or 0x5D), decoded as modm does",
+            );
+        }
+        self.put(
+            RowParts {
+                micros: start / 1000,
+                id: Some(addr),
+                command: Some(command),
+                kind: flags.type_name(),
+                class,
+                framing: ev.framing,
+                raw: ev.wire,
+            },
+            out,
+        );
+    }
+
+    fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+        let st = &mut self.stats;
+        st.bad_crc += 1;
+        let sc = &mut self.scratch;
+        sc.clear();
+        let addr = ev.address();
+        if let Some(a) = addr {
+            st.per[a as usize].bad_crc += 1;
+        }
+        push_payload(&mut sc.data, ev.payload());
+        let n = sc.note();
+        if let Some((received, computed)) = ev.crc {
+            match ev.framing {
+                Framing::Sync => {
+                    n.push_str("CRC-8 ");
+                    push_0x(n, received as u8);
+                    n.push_str(", expected ");
+                    push_0x(n, computed as u8);
+                }
+                Framing::Hdlc => {
+                    n.push_str("CRC-16 ");
+                    push_0x16(n, received);
+                    n.push_str(", expected ");
+                    push_0x16(n, computed);
+                }
+            }
+        }
+        if let Some(flags) = ev.flags() {
+            n.push_str("; read as ");
+            n.push_str(flags.type_name());
+        }
+        if ev.crc_with_sync {
+            n.push_str("; the CRC matches if SYNC is covered too (not modm's rule)");
+        }
+        if ev.odd_escapes > 0 {
+            st.odd_escapes += ev.odd_escapes as u64;
+            n.push_str("; unusual escape");
+        }
+        self.put(
+            RowParts {
+                micros: start,
+                id: addr,
+                command: ev.command(),
+                kind: "BadCRC",
+                class: Class::Error,
+                framing: ev.framing,
+                raw: ev.wire,
+            },
+            out,
+        );
+    }
+
+    /// Garbage, truncated frames, runts, aborts, overlong frames.
+    fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+        let st = &mut self.stats;
+        let sc = &mut self.scratch;
+        sc.clear();
+        let mut id = None;
+        let mut command = None;
+        let kind = match ev.kind {
+            EventKind::Garbage => {
+                st.garbage_bytes += ev.wire.len() as u64;
+                st.garbage_runs += 1;
+                st.false_syncs += ev.false_syncs as u64;
+                st.bad_lengths += ev.bad_lengths as u64;
+                push_hex(&mut sc.data, ev.wire);
+                let n = sc.note();
+                push_u64(n, ev.wire.len() as u64);
+                n.push_str(if ev.wire.len() == 1 {
+                    " byte"
+                } else {
+                    " bytes"
+                });
+                n.push_str(match (ev.before_first, ev.framing) {
+                    (true, Framing::Hdlc) => " before the first 0x7E",
+                    (true, Framing::Sync) => " before the first frame",
+                    (false, _) => " between frames",
+                });
+                if ev.false_syncs > 0 {
+                    n.push_str("; ");
+                    push_u64(n, ev.false_syncs as u64);
+                    n.push_str(" false 0x54 (the frame it announced overlapped a valid frame)");
+                }
+                if ev.bad_lengths > 0 {
+                    n.push_str("; ");
+                    push_u64(n, ev.bad_lengths as u64);
+                    n.push_str(" 0x54 followed by a LENGTH above 32");
+                }
+                "Garbage"
+            }
+            EventKind::Truncated => {
+                st.truncated += 1;
+                id = ev.address();
+                command = ev.command();
+                push_hex(&mut sc.data, ev.wire);
+                let n = sc.note();
+                n.push_str("the input ended inside a frame after ");
+                push_u64(n, ev.wire_len);
+                n.push_str(" bytes");
+                if let (Framing::Sync, Some(len)) = (ev.framing, ev.length_byte) {
+                    n.push_str(" of ");
+                    push_u64(n, len as u64 + sync::OVERHEAD as u64);
+                }
+                "Truncated"
+            }
+            EventKind::Runt => {
+                st.runts += 1;
+                push_hex(&mut sc.data, ev.body);
+                let n = sc.note();
+                push_u64(n, ev.body_len);
+                n.push_str(if ev.body_len == 1 {
+                    " byte between flags"
+                } else {
+                    " bytes between flags"
+                });
+                n.push_str(" (a frame has at least 4), ignored by modm");
+                "Runt"
+            }
+            EventKind::Abort => {
+                st.aborts += 1;
+                push_hex(&mut sc.data, ev.body);
+                let n = sc.note();
+                n.push_str("0x7D 0x7E: escape followed by a flag, frame aborted after ");
+                push_u64(n, ev.body_len);
+                n.push_str(if ev.body_len == 1 { " byte" } else { " bytes" });
+                "Abort"
+            }
+            EventKind::Overlong => {
+                st.overlong += 1;
+                id = ev.address();
+                command = ev.command();
+                let shown = ev.body.len().min(OVERLONG_DATA_MAX);
+                push_hex(&mut sc.data, &ev.body[..shown]);
+                if shown < ev.body.len() || (ev.body.len() as u64) < ev.body_len {
+                    sc.data.push_str(" …");
+                }
+                let n = sc.note();
+                push_u64(n, ev.body_len);
+                n.push_str(" bytes between flags, more than the ");
+                push_u64(n, (self.max_payload + hdlc::OVERHEAD) as u64);
+                n.push_str(" of a ");
+                push_u64(n, self.max_payload as u64);
+                n.push_str("-byte payload");
+                if ev.body_len > hdlc::STORE_MAX as u64 {
+                    n.push_str(" (too long to check)");
+                } else {
+                    n.push_str(", CRC fails");
+                }
+                "Overlong"
+            }
+            EventKind::Frame | EventKind::BadCrc => {
+                // Only reached for a frame too short to have a command (cannot happen).
+                push_hex(&mut sc.data, ev.wire);
+                "Garbage"
+            }
+        };
+        self.put(
+            RowParts {
+                micros: start,
+                id,
+                command,
+                kind,
+                class: Class::Error,
+                framing: ev.framing,
+                raw: ev.wire,
+            },
+            out,
+        );
+    }
+
+    /// End of the capture at `now` (ns).
+    pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
+        if let Some(x) = self.pairing.finish(now) {
+            self.timeout_row(&x, framing, out);
+        }
+    }
+}

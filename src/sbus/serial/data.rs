@@ -1,0 +1,622 @@
+//! The SM2 data mode and secure data-mode framer. A raw 0xB5 starts every telegram (inside a
+//! telegram B5 and C5 travel as the DLE pairs `C5 00` / `C5 01`). A telegram ends at the next
+//! raw B5, at a time gap, at the end of the input, or as soon as its length is known and its CRC
+//! checks (requests: the command table; ACK/NAK: 2 bytes; responses: the length the last request
+//! asked for; secure telegrams: their LEN byte).
+
+use super::{CrcCheck, Event, Frame, GapClock, GarbageRun, Secure, Tele, classify, expect_of};
+use crate::sbus::commands::{self, Expect};
+use crate::sbus::telegram::{
+    AT_ACKNAK, AT_REQUEST, AT_RESPONSE, AT_SECURE_REQUEST, AT_SECURE_RESPONSE, CrcBasis, DLE, FS,
+    crc16,
+};
+
+/// Longest data-mode telegram kept on the wire (longer ones are cut and reported).
+pub const MAX_WIRE: usize = 1024;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Outside a telegram: bytes are garbage until the next raw B5.
+    Outside,
+    /// After the FS: the next logical byte is the AT.
+    At,
+    SecLen,
+    SecSeq,
+    /// Secure header complete: the inner telegram's raw B5 must follow.
+    InnerFs,
+    /// Collecting the standard telegram's logical bytes (AT included).
+    Body,
+}
+
+/// Pure SM2 / secure data-mode reassembler.
+#[derive(Clone, Debug)]
+pub struct DataFramer {
+    phase: Phase,
+    dle: bool,
+    wire: Vec<u8>,
+    /// Logical bytes of the standard telegram after its FS: AT, payload, CRC.
+    tele: Vec<u8>,
+    /// Offset in `wire` where each logical byte of `tele` starts.
+    tele_at: Vec<u16>,
+    /// Offset in `wire` of the standard telegram's FS (0, or after the secure header).
+    tele_fs: usize,
+    secure: Option<Secure>,
+    problem: Option<&'static str>,
+    /// A secure header was not followed by the inner telegram's B5.
+    no_inner: bool,
+    time: Option<u64>,
+    offset: u64,
+    pos: u64,
+    garbage: GarbageRun,
+    clock: GapClock,
+    /// What the last request asked for (for responses, which carry no length).
+    expect: Expect,
+}
+
+impl DataFramer {
+    /// `gap`: a silence longer than this (µs) ends an open telegram (sources with time only).
+    pub fn new(gap: Option<u64>) -> Self {
+        DataFramer {
+            phase: Phase::Outside,
+            dle: false,
+            wire: Vec::with_capacity(MAX_WIRE),
+            tele: Vec::with_capacity(MAX_WIRE),
+            tele_at: Vec::with_capacity(MAX_WIRE),
+            tele_fs: 0,
+            secure: None,
+            problem: None,
+            no_inner: false,
+            time: None,
+            offset: 0,
+            pos: 0,
+            garbage: GarbageRun::default(),
+            clock: GapClock { gap, last: None },
+            expect: Expect::Nothing,
+        }
+    }
+
+    /// Feeds `data` that arrived at `time`.
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        for &b in data {
+            if self.clock.gap_before(time) {
+                self.close(emit);
+                self.garbage.flush(emit);
+            }
+            self.byte(b, time, emit);
+            self.pos += 1;
+        }
+    }
+
+    /// Time passed without data: a silence longer than the gap ends an open telegram.
+    pub fn idle(&mut self, now: u64, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.clock.idle(now) {
+            self.close(emit);
+            self.garbage.flush(emit);
+        }
+    }
+
+    /// End of input.
+    pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.close(emit);
+        self.garbage.flush(emit);
+    }
+
+    fn start(&mut self, time: Option<u64>) {
+        self.phase = Phase::At;
+        self.dle = false;
+        self.wire.clear();
+        self.wire.push(FS);
+        self.tele.clear();
+        self.tele_at.clear();
+        self.tele_fs = 0;
+        self.secure = None;
+        self.problem = None;
+        self.no_inner = false;
+        self.time = time;
+        self.offset = self.pos;
+    }
+
+    fn byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if b == FS {
+            if self.phase == Phase::InnerFs {
+                self.inner_fs();
+                return;
+            }
+            if self.dle && self.phase == Phase::SecSeq {
+                // `C5 B5`: SEQ 0xC5 sent unescaped by old firmware (FAQ 101180).
+                self.dle = false;
+                if let Some(s) = self.secure.as_mut() {
+                    s.seq = DLE;
+                    s.seq_unescaped = true;
+                }
+                self.inner_fs();
+                return;
+            }
+            if self.phase != Phase::Outside {
+                if self.dle {
+                    self.problem = Some("DLE (C5) at the end of the telegram");
+                }
+                self.close(emit);
+            }
+            self.garbage.flush(emit);
+            self.start(time);
+            return;
+        }
+        if self.phase == Phase::Outside {
+            self.garbage.push(b, time, self.pos, emit);
+            return;
+        }
+        if self.wire.len() >= MAX_WIRE {
+            self.problem = Some("longer than any S-Bus telegram");
+            self.close(emit);
+            self.garbage.push(b, time, self.pos, emit);
+            return;
+        }
+        let at = self.wire.len();
+        self.wire.push(b);
+        if self.dle {
+            self.dle = false;
+            match b {
+                0x00 => self.logical(FS, at - 1, emit),
+                0x01 => self.logical(DLE, at - 1, emit),
+                _ => {
+                    self.problem = Some("invalid DLE pair (C5 not followed by 00 or 01)");
+                    self.logical(DLE, at - 1, emit);
+                    if self.phase == Phase::Outside {
+                        return;
+                    }
+                    if b == DLE {
+                        self.dle = true;
+                    } else {
+                        self.logical(b, at, emit);
+                    }
+                }
+            }
+        } else if b == DLE {
+            self.dle = true;
+        } else {
+            self.logical(b, at, emit);
+        }
+    }
+
+    fn inner_fs(&mut self) {
+        self.wire.push(FS);
+        self.tele_fs = self.wire.len() - 1;
+        self.phase = Phase::Body;
+        // The inner AT follows; `tele` starts with it.
+        self.tele.clear();
+        self.tele_at.clear();
+    }
+
+    fn logical(&mut self, v: u8, wire_at: usize, emit: &mut impl FnMut(&Event<'_>)) {
+        match self.phase {
+            Phase::Outside => {}
+            Phase::At => {
+                if v == AT_SECURE_REQUEST || v == AT_SECURE_RESPONSE {
+                    self.secure = Some(Secure {
+                        at: v,
+                        len: 0,
+                        seq: 0,
+                        actual: 0,
+                        seq_unescaped: false,
+                    });
+                    self.phase = Phase::SecLen;
+                } else {
+                    self.phase = Phase::Body;
+                    self.push_tele(v, wire_at, emit);
+                }
+            }
+            Phase::SecLen => {
+                if let Some(s) = self.secure.as_mut() {
+                    s.len = v;
+                }
+                self.phase = Phase::SecSeq;
+            }
+            Phase::SecSeq => {
+                if let Some(s) = self.secure.as_mut() {
+                    s.seq = v;
+                }
+                self.phase = Phase::InnerFs;
+            }
+            Phase::InnerFs => {
+                // The secure header is not followed by a telegram: keep the bytes and report
+                // the frame as broken when it ends.
+                self.problem = Some(NO_INNER_TELEGRAM);
+                self.no_inner = true;
+                self.phase = Phase::Body;
+                self.tele_fs = wire_at;
+                self.push_tele(v, wire_at, emit);
+            }
+            Phase::Body => self.push_tele(v, wire_at, emit),
+        }
+    }
+
+    fn push_tele(&mut self, v: u8, wire_at: usize, emit: &mut impl FnMut(&Event<'_>)) {
+        self.tele.push(v);
+        self.tele_at.push(wire_at as u16);
+        if self.complete_len() == Some(self.tele.len())
+            && (self.secure.is_some() || self.crc_check().ok())
+        {
+            self.close(emit);
+        }
+    }
+
+    /// The logical length (AT … CRC) the open telegram must have, when known.
+    fn complete_len(&self) -> Option<usize> {
+        if let Some(s) = &self.secure {
+            // LEN counts the inner FS too.
+            return (s.len as usize).checked_sub(1).filter(|&n| n > 0);
+        }
+        let t = &self.tele;
+        match *t.first()? {
+            AT_ACKNAK => Some(1 + 2 + 2),
+            AT_REQUEST => {
+                if t.len() < 3 {
+                    return None;
+                }
+                let cmd = commands::command(t[2])?;
+                let body = &t[3..];
+                match cmd.layout.body_len(body)? {
+                    Ok(n) => Some(1 + 2 + n + 2),
+                    Err(_) => None,
+                }
+            }
+            AT_RESPONSE => match self.expect {
+                Expect::Data(n) => Some(1 + n + 2),
+                Expect::LengthPrefixed => t.get(1).map(|&n| 1 + 1 + n as usize + 2),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// Checks the CRC of the open standard telegram both ways.
+    fn crc_check(&self) -> CrcCheck {
+        let n = self.tele.len();
+        if n < 3 {
+            return CrcCheck::None;
+        }
+        let got = u16::from_be_bytes([self.tele[n - 2], self.tele[n - 1]]);
+        let mut d = crate::sbus::telegram::CRC.digest();
+        d.update(&[FS]);
+        d.update(&self.tele[..n - 2]);
+        let unescaped = d.finalize();
+        let crc_wire = self.tele_at[n - 2] as usize;
+        let escaped = crc16(&self.wire[self.tele_fs..crc_wire]);
+        if got == escaped && got == unescaped {
+            CrcCheck::Ok(CrcBasis::Both)
+        } else if got == escaped {
+            CrcCheck::Ok(CrcBasis::Escaped)
+        } else if got == unescaped {
+            CrcCheck::Ok(CrcBasis::Unescaped)
+        } else {
+            CrcCheck::Bad {
+                got,
+                escaped,
+                unescaped,
+            }
+        }
+    }
+
+    /// Ends the open telegram (if any) and emits it.
+    fn close(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.phase == Phase::Outside {
+            return;
+        }
+        let mut problem = self.problem;
+        if self.dle {
+            problem = problem.or(Some("DLE (C5) at the end of the telegram"));
+        }
+        let mut secure = self.secure;
+        if let Some(s) = secure.as_mut() {
+            s.actual = if self.phase == Phase::Body {
+                self.tele.len() + 1
+            } else {
+                0
+            };
+            if !s.len_ok() && problem.is_none() {
+                problem = Some(if s.actual < s.len as usize {
+                    "secure telegram shorter than its LEN"
+                } else {
+                    "secure telegram longer than its LEN"
+                });
+            }
+        }
+        // A secure header without the inner telegram's B5 is malformed, whatever a CRC over an
+        // assumed B5 would say: it is shown as broken, never as a telegram.
+        let (tele, crc) = if self.phase == Phase::Body && self.tele.len() >= 3 && !self.no_inner {
+            let n = self.tele.len();
+            let crc = self.crc_check();
+            (classify(self.tele[0], &self.tele[1..n - 2]), crc)
+        } else {
+            problem = problem.or(Some("cut short"));
+            (Tele::Broken, CrcCheck::None)
+        };
+        if crc.ok() {
+            match tele {
+                Tele::Request { station, cmd, body } => {
+                    self.expect = expect_of(station, cmd, body);
+                }
+                Tele::Response { .. } | Tele::AckNak { .. } => self.expect = Expect::Nothing,
+                _ => {}
+            }
+        }
+        emit(&Event::Frame(Frame {
+            time: self.time,
+            offset: self.offset,
+            wire: &self.wire,
+            tele,
+            crc,
+            secure,
+            problem,
+            break_before: false,
+            length_mismatch: false,
+        }));
+        self.phase = Phase::Outside;
+        self.dle = false;
+    }
+}
+
+/// The problem noted when a secure header is not followed by a telegram.
+const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
+
+#[cfg(test)]
+mod tests {
+    use super::super::GARBAGE_ROW_MAX;
+    use super::super::testing::{Ev, T, bytewise};
+    use super::*;
+    use crate::sbus::telegram::{encode_data, encode_secure};
+    use crate::sbus::tests::{SMode, session};
+
+    /// Feeds `segments` (bytes, time); returns the events before `finish` and all events.
+    fn feed(f: &mut DataFramer, segments: &[(Vec<u8>, Option<u64>)]) -> (usize, Vec<Ev>) {
+        let mut evs = Vec::new();
+        for (bytes, time) in segments {
+            f.push(bytes, *time, &mut |e| evs.push(Ev::of(e)));
+        }
+        let before = evs.len();
+        f.finish(&mut |e| evs.push(Ev::of(e)));
+        (before, evs)
+    }
+
+    fn run(bytes: &[u8]) -> (usize, Vec<Ev>) {
+        feed(&mut DataFramer::new(None), &[(bytes.to_vec(), None)])
+    }
+
+    fn data(at: u8, payload: &[u8], basis: CrcBasis) -> Vec<u8> {
+        let mut v = Vec::new();
+        encode_data(&mut v, at, payload, basis);
+        v
+    }
+
+    fn request(body: &[u8]) -> T {
+        T::Request {
+            station: body[0],
+            cmd: body[1],
+            body: body[2..].to_vec(),
+        }
+    }
+
+    #[test]
+    fn request_response_and_ack_end_by_their_length() {
+        // station 1 reads 4 registers from R0 (16 data bytes), then a write is ACKed
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let resp_data: Vec<u8> = (1..=16).collect();
+        let resp = data(AT_RESPONSE, &resp_data, CrcBasis::Both);
+        let ack = data(AT_ACKNAK, &[0, 0], CrcBasis::Both);
+        let wire = [req.clone(), resp.clone(), ack.clone()].concat();
+        let (before, evs) = run(&wire);
+        // every telegram is complete when its last byte arrives: nothing waits for the end
+        assert_eq!(before, 3, "{evs:?}");
+        assert_eq!(evs.len(), 3, "{evs:?}");
+        assert_eq!(evs[0].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        assert_eq!(evs[0].wire(), req);
+        assert_eq!(evs[0].offset(), 0);
+        assert_eq!(
+            evs[1].tele(),
+            Some(&T::Response {
+                data: resp_data.clone()
+            })
+        );
+        assert_eq!(evs[1].offset(), req.len() as u64);
+        assert_eq!(
+            evs[2].tele(),
+            Some(&T::AckNak {
+                code: 0,
+                short: None
+            })
+        );
+        assert_eq!(evs[2].wire(), ack);
+        for e in &evs {
+            assert_eq!(e.crc(), CrcCheck::Ok(CrcBasis::Both));
+            assert!(matches!(e, Ev::Frame { problem: None, .. }), "{e:?}");
+        }
+    }
+
+    #[test]
+    fn secure_telegram_keeps_its_header() {
+        let mut wire = Vec::new();
+        encode_secure(
+            &mut wire,
+            0x10,
+            2,
+            AT_REQUEST,
+            &[5, 6, 0, 0, 0],
+            CrcBasis::Both,
+        );
+        let (before, evs) = run(&wire);
+        assert_eq!((before, evs.len()), (1, 1), "{evs:?}");
+        assert_eq!(evs[0].tele(), Some(&request(&[5, 6, 0, 0, 0])));
+        assert_eq!(evs[0].wire(), wire);
+        let Ev::Frame { secure, .. } = &evs[0] else {
+            panic!("{evs:?}")
+        };
+        let s = secure.expect("secure header");
+        assert_eq!((s.at, s.len, s.seq, s.actual), (0x10, 9, 2, 9));
+        assert!(s.len_ok());
+    }
+
+    #[test]
+    fn dle_pairs_are_undone_and_both_crc_readings_are_accepted() {
+        // read R181: the address 0x00B5 travels as C5 00; the answer holds B5 and C5 as data
+        for basis in [CrcBasis::Escaped, CrcBasis::Unescaped] {
+            let req = data(AT_REQUEST, &[5, 6, 0, 0, FS], basis);
+            assert!(req.windows(2).any(|w| w == [DLE, 0x00]), "{req:02X?}");
+            let resp = data(AT_RESPONSE, &[FS, DLE, 0, 1], basis);
+            let (before, evs) = run(&[req.clone(), resp.clone()].concat());
+            assert_eq!((before, evs.len()), (2, 2), "{basis:?} {evs:?}");
+            assert_eq!(evs[0].tele(), Some(&request(&[5, 6, 0, 0, FS])));
+            assert_eq!(evs[0].wire(), req, "the wire keeps the DLE pairs");
+            assert_eq!(evs[0].crc(), CrcCheck::Ok(basis));
+            assert_eq!(
+                evs[1].tele(),
+                Some(&T::Response {
+                    data: vec![FS, DLE, 0, 1]
+                })
+            );
+            assert_eq!(evs[1].crc(), CrcCheck::Ok(basis));
+        }
+    }
+
+    #[test]
+    fn invalid_dle_pair_is_a_problem() {
+        // C5 02 is no DLE pair: the C5 is kept as data and the telegram flagged
+        let mut wire = vec![FS, AT_REQUEST, 5, 6, 0, 0, DLE, 0x02];
+        let crc = crc16(&wire);
+        wire.extend_from_slice(&crc.to_be_bytes());
+        let (_, evs) = run(&wire);
+        assert_eq!(evs.len(), 1, "{evs:?}");
+        let Ev::Frame { problem, tele, .. } = &evs[0] else {
+            panic!("{evs:?}")
+        };
+        assert_eq!(
+            *problem,
+            Some("invalid DLE pair (C5 not followed by 00 or 01)")
+        );
+        assert!(
+            matches!(
+                tele,
+                T::Request {
+                    station: 5,
+                    cmd: 6,
+                    ..
+                }
+            ),
+            "{tele:?}"
+        );
+    }
+
+    #[test]
+    fn bad_crc_is_reported_and_the_next_telegram_decodes() {
+        let mut bad = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let n = bad.len();
+        bad[n - 1] ^= 0x01;
+        let good = data(AT_REQUEST, &[2, 6, 1, 0, 0x64], CrcBasis::Both);
+        let (_, evs) = run(&[bad.clone(), good.clone()].concat());
+        assert_eq!(evs.len(), 2, "{evs:?}");
+        // the bad telegram ends at the next B5
+        assert_eq!(evs[0].wire(), bad);
+        assert_eq!(evs[0].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        let want = crc16(&bad[..n - 2]);
+        assert_eq!(
+            evs[0].crc(),
+            CrcCheck::Bad {
+                got: want ^ 0x01,
+                escaped: want,
+                unescaped: want
+            }
+        );
+        assert_eq!(evs[1].tele(), Some(&request(&[2, 6, 1, 0, 0x64])));
+        assert_eq!(evs[1].crc(), CrcCheck::Ok(CrcBasis::Both));
+        assert_eq!(evs[1].offset(), bad.len() as u64);
+    }
+
+    #[test]
+    fn truncated_telegram_comes_out_at_finish() {
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        // cut inside the header: too short to mean anything
+        let (before, evs) = run(&req[..2]);
+        assert_eq!(before, 0, "an open telegram waits for more bytes");
+        assert_eq!(evs.len(), 1, "{evs:?}");
+        assert!(
+            matches!(
+                &evs[0],
+                Ev::Frame {
+                    tele: T::Broken,
+                    problem: Some("cut short"),
+                    crc: CrcCheck::None,
+                    ..
+                }
+            ),
+            "{evs:?}"
+        );
+        assert_eq!(evs[0].wire(), &req[..2]);
+        // cut inside the CRC: read with the CRC it has, which fails
+        let (before, evs) = run(&req[..req.len() - 1]);
+        assert_eq!((before, evs.len()), (0, 1), "{evs:?}");
+        assert!(matches!(evs[0].crc(), CrcCheck::Bad { .. }), "{evs:?}");
+        assert_eq!(evs[0].wire(), &req[..req.len() - 1]);
+    }
+
+    #[test]
+    fn a_gap_ends_an_open_telegram() {
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let mut f = DataFramer::new(Some(10_000));
+        let segments = [
+            (req[..4].to_vec(), Some(0)),
+            (req[4..].to_vec(), Some(50_000)),
+        ];
+        let (_, evs) = feed(&mut f, &segments);
+        assert_eq!(evs.len(), 2, "{evs:?}");
+        assert_eq!(evs[0].wire(), &req[..4]);
+        assert!(
+            matches!(
+                evs[1],
+                Ev::Garbage {
+                    time: Some(50_000),
+                    offset: 4,
+                    ..
+                }
+            ),
+            "{evs:?}"
+        );
+    }
+
+    #[test]
+    fn garbage_before_a_telegram_then_resync() {
+        let noise: Vec<u8> = (0..GARBAGE_ROW_MAX as u8 + 6)
+            .map(|i| i.wrapping_mul(7))
+            .collect();
+        assert!(!noise.contains(&FS));
+        let req = data(AT_REQUEST, &[1, 6, 3, 0, 0], CrcBasis::Both);
+        let (_, evs) = run(&[noise.clone(), req.clone()].concat());
+        // garbage in runs of at most GARBAGE_ROW_MAX bytes, then the telegram
+        assert_eq!(evs.len(), 3, "{evs:?}");
+        assert!(matches!(&evs[0], Ev::Garbage { offset: 0, .. }));
+        assert_eq!(evs[0].wire(), &noise[..GARBAGE_ROW_MAX]);
+        assert!(matches!(&evs[1], Ev::Garbage { .. }));
+        assert_eq!(evs[1].offset(), GARBAGE_ROW_MAX as u64);
+        assert_eq!(evs[1].wire(), &noise[GARBAGE_ROW_MAX..]);
+        assert_eq!(evs[2].tele(), Some(&request(&[1, 6, 3, 0, 0])));
+        assert_eq!(evs[2].offset(), noise.len() as u64);
+    }
+
+    #[test]
+    fn byte_by_byte_gives_the_same_events_as_whole_segments() {
+        for mode in [SMode::Data, SMode::Secure] {
+            for (timed, seed) in [(true, 3), (false, 4)] {
+                let g = session(mode, timed, seed, 25);
+                let gap = timed.then_some(20_000);
+                let (_, whole) = feed(&mut DataFramer::new(gap), &g.segments);
+                let (_, single) = feed(&mut DataFramer::new(gap), &bytewise(&g.segments));
+                assert!(whole.len() > 25, "{mode:?}: {} events", whole.len());
+                assert_eq!(whole, single, "{mode:?} timed {timed}");
+                // and all in one push (times dropped)
+                if !timed {
+                    let all: Vec<u8> = g.segments.iter().flat_map(|s| s.0.clone()).collect();
+                    assert_eq!(run(&all).1, whole, "{mode:?} in one push");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Golden outputs for refactors that must not change behaviour.
+#
+# Runs target/release/busnoop over every file in fixtures/ and fuzz/seeds/ with each subcommand
+# (sport; sbus --mode auto/data/break; sab2 --framing auto/sync/hdlc) and each format
+# (tsv, csv, jsonl, pretty --color always), with --raw and --stats, and stores stdout, stderr
+# and the exit code of every run in one directory. Prints one sha256 over that directory.
+#
+#   tools/golden.sh [OUT_DIR]          # default: target/golden
+#   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial and sab (tsv only)
+#   GOLDEN_BENCH=1 tools/golden.sh     # also the benchmark captures in target/bench-data (tsv,
+#                                      # stored as the sha256 of stdout; run the benches first)
+#   BUSNOOP=path/to/busnoop tools/golden.sh   # another binary (e.g. a copy of the old one)
+#
+# Build first (cargo build --release); compare the printed hash before and after a change, or
+# diff -r two output directories to see what moved.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${BUSNOOP:-target/release/busnoop}
+out=${1:-target/golden}
+[ -x "$bin" ] || { echo "golden: build $bin first (cargo build --release)" >&2; exit 2; }
+rm -rf "$out"
+mkdir -p "$out"
+
+commands=(
+  "sport"
+  "sbus --mode auto" "sbus --mode data" "sbus --mode break"
+  "sab2 --framing auto" "sab2 --framing sync" "sab2 --framing hdlc"
+)
+formats=("tsv" "csv" "jsonl" "pretty --color always")
+
+run() { # name, file, args...
+  local name=$1 file=$2
+  shift 2
+  local rc=0
+  "$bin" "$@" --raw --stats "$file" >"$out/$name.out" 2>"$out/$name.err" </dev/null || rc=$?
+  echo "$rc" >"$out/$name.rc"
+}
+
+slug() { echo "$*" | tr ' /' '__' | tr -s '_' | sed 's/--//g'; }
+
+files=()
+while IFS= read -r f; do files+=("$f"); done < <(find fixtures fuzz/seeds -type f | sort)
+for f in "${files[@]}"; do
+  for c in "${commands[@]}"; do
+    for fmt in "${formats[@]}"; do
+      # shellcheck disable=SC2086
+      run "$(slug "$f $c $fmt")" "$f" $c -f $fmt
+    done
+  done
+done
+
+if [ "${GOLDEN_CORPUS:-0}" = 1 ]; then
+  for f in fuzz/corpus/sbus_serial/*; do
+    for c in "sbus --mode auto" "sbus --mode data" "sbus --mode break"; do
+      # shellcheck disable=SC2086
+      run "$(slug "$f $c")" "$f" $c -f tsv
+    done
+  done
+  for f in fuzz/corpus/sab/*; do
+    # shellcheck disable=SC2086
+    run "$(slug "$f sab2")" "$f" sab2 -f tsv
+  done
+fi
+
+if [ "${GOLDEN_BENCH:-0}" = 1 ]; then
+  for f in target/bench-data/*; do
+    case "$(basename "$f")" in
+      sab-*) cmds=("sab2") ;;
+      sbus-ether*) cmds=("sbus") ;;
+      sbus-*) cmds=("sbus --mode auto" "sbus --mode data" "sbus --mode break") ;;
+      sport-*) cmds=("sport") ;;
+      *) continue ;;
+    esac
+    for c in "${cmds[@]}"; do
+      name=$(slug "$f $c")
+      rc=0
+      # shellcheck disable=SC2086
+      "$bin" $c -f tsv --raw --stats "$f" 2>"$out/$name.err" </dev/null | sha256sum >"$out/$name.out.sha256" || rc=$?
+      echo "$rc" >"$out/$name.rc"
+    done
+  done
+fi
+
+echo "$(find "$out" -type f | wc -l) files in $out"
+(cd "$out" && find . -type f -print0 | sort -z | xargs -0 sha256sum) | sha256sum | cut -d' ' -f1
