@@ -6,7 +6,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
-use crate::decoder::{Decoder, RowOut};
+use crate::protocol::Decoder;
+use crate::row::RowOut;
 use crate::exit::Failure;
 use crate::record::Recorder;
 use crate::row::{Class, Row};
@@ -185,7 +186,7 @@ impl Driver<'_> {
         }
     }
 
-    fn anchor(&mut self, a: crate::sink::Anchor) -> Result<(), Failure> {
+    fn anchor(&mut self, a: crate::time::Anchor) -> Result<(), Failure> {
         self.table.set_anchor(Some(a));
         if let Some(r) = self.recorder.as_deref_mut() {
             r.start(Some(a))?;

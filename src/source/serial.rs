@@ -13,7 +13,8 @@ use serialport::{DataBits, FlowControl, Parity, SerialPort, SerialPortType, Stop
 
 use super::{Batch, ChunkReader, Message};
 use crate::exit::Failure;
-use crate::sink::Anchor;
+use crate::protocol::{Line, Parity as LineParity};
+use crate::time::Anchor;
 
 /// Read timeout: how long a read waits for data before the reader looks around (the crate's
 /// default of 0 would make every read return at once).
@@ -23,44 +24,6 @@ const READ_BUF: usize = 4096;
 /// Waiting for an adapter to come back: first and longest pause between attempts.
 const RECONNECT_FIRST: Duration = Duration::from_millis(200);
 const RECONNECT_MAX: Duration = Duration::from_millis(1000);
-
-/// Character format and speed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct SerialConfig {
-    pub baud: u32,
-    pub data_bits: DataBits,
-    pub parity: Parity,
-    pub stop_bits: StopBits,
-}
-
-impl SerialConfig {
-    /// 8N1 at `baud`.
-    pub fn n81(baud: u32) -> Self {
-        SerialConfig {
-            baud,
-            data_bits: DataBits::Eight,
-            parity: Parity::None,
-            stop_bits: StopBits::One,
-        }
-    }
-
-    /// Bits per character on the wire (start + data + parity + stop).
-    pub fn bits_per_char(&self) -> u32 {
-        let data = match self.data_bits {
-            DataBits::Five => 5,
-            DataBits::Six => 6,
-            DataBits::Seven => 7,
-            DataBits::Eight => 8,
-        };
-        let parity = if self.parity == Parity::None { 0 } else { 1 };
-        let stop = if self.stop_bits == StopBits::Two {
-            2
-        } else {
-            1
-        };
-        1 + data + parity + stop
-    }
-}
 
 /// True when `arg` names a serial device rather than a capture file: an existing character
 /// device, or a path that looks like one (`/dev/…`, `COMn`) even if it does not exist (so that a
@@ -163,15 +126,8 @@ pub fn ports_hint() -> String {
 fn group_of(path: &Path) -> Option<String> {
     use std::os::unix::fs::MetadataExt;
     let gid = std::fs::metadata(path).ok()?.gid();
-    let mut grp: libc::group = unsafe { std::mem::zeroed() };
-    let mut buf = vec![0 as libc::c_char; 4096];
-    let mut result: *mut libc::group = std::ptr::null_mut();
-    let rc = unsafe { libc::getgrgid_r(gid, &mut grp, buf.as_mut_ptr(), buf.len(), &mut result) };
-    if rc != 0 || result.is_null() {
-        return None;
-    }
-    let name = unsafe { std::ffi::CStr::from_ptr(grp.gr_name) };
-    Some(name.to_string_lossy().into_owned())
+    let group = nix::unistd::Group::from_gid(nix::unistd::Gid::from_raw(gid)).ok()??;
+    Some(group.name)
 }
 
 #[cfg(not(unix))]
@@ -225,11 +181,27 @@ pub fn is_not_a_tty(e: &serialport::Error) -> bool {
 }
 
 /// Opens and configures `path`.
-pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, serialport::Error> {
-    serialport::new(path.to_string_lossy(), cfg.baud)
-        .data_bits(cfg.data_bits)
-        .parity(cfg.parity)
-        .stop_bits(cfg.stop_bits)
+pub fn open(path: &Path, line: &Line) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    let data_bits = match line.data_bits {
+        5 => DataBits::Five,
+        6 => DataBits::Six,
+        7 => DataBits::Seven,
+        _ => DataBits::Eight,
+    };
+    let parity = match line.parity {
+        LineParity::None => Parity::None,
+        LineParity::Odd => Parity::Odd,
+        LineParity::Even => Parity::Even,
+    };
+    let stop_bits = if line.stop_bits == 2 {
+        StopBits::Two
+    } else {
+        StopBits::One
+    };
+    serialport::new(path.to_string_lossy(), line.baud)
+        .data_bits(data_bits)
+        .parity(parity)
+        .stop_bits(stop_bits)
         .flow_control(FlowControl::None)
         .timeout(READ_TIMEOUT)
         .open()
@@ -308,7 +280,7 @@ impl Identity {
 /// Reads a serial port in the reader thread.
 pub struct SerialReader {
     path: PathBuf,
-    cfg: SerialConfig,
+    cfg: Line,
     port: Option<Box<dyn SerialPort>>,
     start: Instant,
     reconnect: bool,
@@ -319,7 +291,7 @@ pub struct SerialReader {
 
 impl SerialReader {
     /// Reads the port opened at `path` (see [`open`]).
-    pub fn new(path: &Path, port: Box<dyn SerialPort>, cfg: SerialConfig, reconnect: bool) -> Self {
+    pub fn new(path: &Path, port: Box<dyn SerialPort>, cfg: Line, reconnect: bool) -> Self {
         tracing::info!(
             "{}: {} baud, {} bits per character",
             path.display(),
@@ -427,16 +399,6 @@ mod tests {
         assert!(!is_device_path(Path::new("COM")));
         assert!(!is_device_path(Path::new("capture.bin")));
         assert!(is_device_path(Path::new("/dev/null")), "a character device");
-    }
-
-    #[test]
-    fn bits_per_char() {
-        assert_eq!(SerialConfig::n81(9600).bits_per_char(), 10);
-        let parity = SerialConfig {
-            parity: Parity::Even,
-            ..SerialConfig::n81(9600)
-        };
-        assert_eq!(parity.bits_per_char(), 11);
     }
 
     #[test]
