@@ -8,6 +8,9 @@ use super::header::{ADDRESSES, NackCode};
 
 pub use crate::summary::Times;
 
+/// Framing choices listed at most: the first ones and the latest; the others are counted.
+pub const MAX_FRAMINGS: usize = 16;
+
 /// Counters of one address.
 #[derive(Clone, Debug, Default)]
 pub struct AddrStats {
@@ -60,8 +63,11 @@ pub struct Stats {
     pub unpaired: u64,
     pub repeats: u64,
     pub nacks: u64,
-    /// The framings chosen, in order (more than one after a switch).
+    /// The framings chosen, in order (more than one after a switch): at most
+    /// [`MAX_FRAMINGS`], the first ones and the latest.
     pub framings: Vec<(Framing, Reason)>,
+    /// Choices left out of `framings` (a stream switching back and forth).
+    pub framings_omitted: u64,
 }
 
 impl Default for Stats {
@@ -86,7 +92,19 @@ impl Default for Stats {
             repeats: 0,
             nacks: 0,
             framings: Vec::new(),
+            framings_omitted: 0,
         }
+    }
+}
+
+impl Stats {
+    /// Records a framing choice (the list stays bounded).
+    pub fn chose(&mut self, framing: Framing, reason: Reason) {
+        if self.framings.len() >= MAX_FRAMINGS {
+            self.framings.pop();
+            self.framings_omitted += 1;
+        }
+        self.framings.push((framing, reason));
     }
 }
 
@@ -105,7 +123,10 @@ impl Stats {
         if self.framings.is_empty() {
             let _ = writeln!(s, "framing: not decided (no input)");
         }
-        for (framing, reason) in &self.framings {
+        for (i, (framing, reason)) in self.framings.iter().enumerate() {
+            if self.framings_omitted > 0 && i + 1 == self.framings.len() {
+                let _ = writeln!(s, "… {} more framing switches", self.framings_omitted);
+            }
             let mut line = String::new();
             reason.describe(*framing, &mut line);
             let _ = writeln!(s, "{line}");
