@@ -1538,7 +1538,6 @@ struct EtherCore {
     totals: Totals,
     sc: Scratch,
     expired: Vec<Expired>,
-    left: Vec<Outstanding>,
     last_micros: u64,
     /// Packets whose link type is a serial recording: reported once.
     serial_link_noted: bool,
@@ -1562,7 +1561,6 @@ impl EtherDecoder {
                 totals: Totals::default(),
                 sc: Scratch::default(),
                 expired: Vec::new(),
-                left: Vec::new(),
                 last_micros: 0,
                 serial_link_noted: false,
                 failed: false,
@@ -2134,9 +2132,7 @@ impl Decoder for EtherDecoder {
             self.pcap_failed(e, out)?;
         }
         let c = &mut self.core;
-        c.pairing.finish(&mut c.left);
-        c.totals.unanswered_at_end += c.left.len() as u64;
-        c.left.clear();
+        c.totals.unanswered_at_end += c.pairing.finish();
         c.sync_forgotten();
         Ok(())
     }

@@ -294,12 +294,12 @@ struct Conv {
     time: u64,
 }
 
-/// A deadline: `generation` tells whether the request it was made for is still the one waiting.
+/// A deadline (the request's time + the timeout): `generation` tells whether the request it
+/// was made for is still the one waiting.
 #[derive(Clone, Copy, Debug)]
 struct Deadline {
-    at: u64,
     key: (u32, u16),
-    generation: u64,
+    generation: u32,
 }
 
 /// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
@@ -307,7 +307,11 @@ struct Deadline {
 /// bounded: see [`MAX_OUTSTANDING`], [`MAX_CONVERSATIONS`] and [`CONVERSATION_IDLE`].
 #[derive(Debug)]
 pub struct EtherPairing<K> {
-    map: FastMap<(u32, u16), (Outstanding, u64)>,
+    /// Waiting requests by (conversation, sequence): an index into `slots` (a compact map).
+    map: FastMap<(u32, u16), u32>,
+    /// The requests, with the generation of their deadline; `free` lists unused slots.
+    slots: Vec<(Outstanding, u32)>,
+    free: Vec<u32>,
     /// In the order of insertion; entries whose request was answered or sent again are stale
     /// and dropped lazily (and compacted when they outnumber the live ones).
     deadlines: VecDeque<Deadline>,
@@ -318,7 +322,7 @@ pub struct EtherPairing<K> {
     lru: VecDeque<(K, u64)>,
     next_conv: u32,
     stamp: u64,
-    generation: u64,
+    generation: u32,
     pub timeout: u64,
     pub forgotten: Forgotten,
 }
@@ -337,6 +341,8 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     pub fn new(timeout: u64) -> Self {
         EtherPairing {
             map: FastMap::default(),
+            slots: Vec::new(),
+            free: Vec::new(),
             deadlines: VecDeque::new(),
             late: VecDeque::new(),
             convs: FastMap::default(),
@@ -358,6 +364,28 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             late: self.late.len(),
             plcs: 0,
         }
+    }
+
+    fn get(&self, key: (u32, u16)) -> Option<&Outstanding> {
+        self.map.get(&key).map(|&i| &self.slots[i as usize].0)
+    }
+
+    fn get_mut(&mut self, key: (u32, u16)) -> Option<&mut Outstanding> {
+        let i = *self.map.get(&key)?;
+        Some(&mut self.slots[i as usize].0)
+    }
+
+    fn remove(&mut self, key: (u32, u16)) -> Option<Outstanding> {
+        let i = self.map.remove(&key)?;
+        self.free.push(i);
+        Some(self.slots[i as usize].0)
+    }
+
+    /// Whether deadline `d` belongs to the request waiting now.
+    fn live(&self, d: &Deadline) -> bool {
+        self.map
+            .get(&d.key)
+            .is_some_and(|&i| self.slots[i as usize].1 == d.generation)
     }
 
     fn idle_limit(&self) -> u64 {
@@ -429,7 +457,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             return;
         };
         if let Some(seq) = c.last_seq
-            && let Some((mut r, _)) = self.map.remove(&(c.id, seq))
+            && let Some(mut r) = self.remove((c.id, seq))
         {
             r.timeout_reported = true;
             if !r.bad_answer {
@@ -458,7 +486,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let conv = c.id;
         let last = c.last_seq.replace(seq);
         if last == Some(seq) {
-            let prev = self.map.get(&(conv, seq)).map(|e| e.0).or_else(|| {
+            let prev = self.get((conv, seq)).copied().or_else(|| {
                 self.late
                     .iter()
                     .rev()
@@ -500,8 +528,8 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
                 let Some(d) = self.deadlines.pop_front() else {
                     break;
                 };
-                if self.map.get(&d.key).is_some_and(|e| e.1 == d.generation) {
-                    let (mut r, _) = self.map.remove(&d.key).expect("present");
+                if self.live(&d) {
+                    let mut r = self.remove(d.key).expect("live");
                     r.timeout_reported = true;
                     self.forgotten.requests += 1;
                     if !r.bad_answer {
@@ -515,17 +543,34 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
                 }
             }
         }
-        self.generation += 1;
-        self.map.insert(key, (req, self.generation));
+        self.generation = self.generation.wrapping_add(1);
+        let entry = (req, self.generation);
+        match self.map.get(&key) {
+            Some(&i) => self.slots[i as usize] = entry,
+            None => {
+                let i = match self.free.pop() {
+                    Some(i) => {
+                        self.slots[i as usize] = entry;
+                        i
+                    }
+                    None => {
+                        self.slots.push(entry);
+                        (self.slots.len() - 1) as u32
+                    }
+                };
+                self.map.insert(key, i);
+            }
+        }
         self.deadlines.push_back(Deadline {
-            at: req.time.saturating_add(self.timeout),
             key,
             generation: self.generation,
         });
-        if self.deadlines.len() > 2 * self.map.len() + 1_024 {
-            let map = &self.map;
-            self.deadlines
-                .retain(|d| map.get(&d.key).is_some_and(|e| e.1 == d.generation));
+        // Answered and repeated requests leave stale deadlines behind: drop them when they
+        // outnumber a quarter of the live ones.
+        if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
+            let mut deadlines = std::mem::take(&mut self.deadlines);
+            deadlines.retain(|d| self.live(d));
+            self.deadlines = deadlines;
         }
     }
 
@@ -538,8 +583,8 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
 
     /// An answer on conversation `conv` with sequence `seq` at `time`.
     pub fn answer(&mut self, conv: u32, seq: u16, time: u64) -> Answer {
-        let req = match self.map.remove(&(conv, seq)) {
-            Some((r, _)) => r,
+        let req = match self.remove((conv, seq)) {
+            Some(r) => r,
             None => match self.late.iter().rposition(|(k, _)| *k == (conv, seq)) {
                 Some(i) => self.late.remove(i).map(|e| e.1).expect("index in range"),
                 None => return Answer::NoRequest,
@@ -555,7 +600,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
 
     /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
     pub fn bad_answer(&mut self, conv: u32, seq: u16) {
-        if let Some((r, _)) = self.map.get_mut(&(conv, seq)) {
+        if let Some(r) = self.get_mut((conv, seq)) {
             r.bad_answer = true;
         }
     }
@@ -564,22 +609,25 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     /// than [`CONVERSATION_IDLE`] are forgotten.
     pub fn expire(&mut self, now: u64, out: &mut Vec<Expired>) {
         while let Some(&d) = self.deadlines.front() {
-            if d.at >= now {
+            if !self.live(&d) {
+                self.deadlines.pop_front();
+                continue;
+            }
+            let at = self.get(d.key).expect("live").time.saturating_add(self.timeout);
+            if at >= now {
                 break;
             }
             self.deadlines.pop_front();
-            if self.map.get(&d.key).is_some_and(|e| e.1 == d.generation) {
-                let (mut r, _) = self.map.remove(&d.key).expect("present");
-                r.timeout_reported = true;
-                if !r.bad_answer {
-                    out.push(Expired {
-                        req: r,
-                        why: TimeoutWhy::Deadline,
-                        at: d.at,
-                    });
-                }
-                self.remember_late(d.key, r);
+            let mut r = self.remove(d.key).expect("live");
+            r.timeout_reported = true;
+            if !r.bad_answer {
+                out.push(Expired {
+                    req: r,
+                    why: TimeoutWhy::Deadline,
+                    at,
+                });
             }
+            self.remember_late(d.key, r);
         }
         let idle = self.idle_limit();
         while let Some(&(k, s)) = self.lru.front() {
@@ -599,16 +647,17 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         }
     }
 
-    /// End of input: every request still waiting, oldest first.
-    pub fn finish(&mut self, out: &mut Vec<Outstanding>) {
+    /// End of input: forgets every request still waiting; returns how many there were (not
+    /// counting those whose answer came with a bad CRC).
+    pub fn finish(&mut self) -> u64 {
+        let mut n = 0;
         while let Some(d) = self.deadlines.pop_front() {
-            if self.map.get(&d.key).is_some_and(|e| e.1 == d.generation) {
-                let (r, _) = self.map.remove(&d.key).expect("present");
-                if !r.bad_answer {
-                    out.push(r);
-                }
+            if self.live(&d) {
+                let r = self.remove(d.key).expect("live");
+                n += u64::from(!r.bad_answer);
             }
         }
+        n
     }
 }
 
