@@ -106,7 +106,10 @@ fn conversations(path: &Path, size: u64) -> u64 {
     let mut w = Writer::pcap(path);
     let mut i = 0u64;
     while w.len() < size {
-        let client = ([10, (i >> 24) as u8 | 64, (i >> 16) as u8, (i >> 8) as u8], i as u16);
+        let client = (
+            [10, (i >> 24) as u8 | 64, (i >> 16) as u8, (i >> 8) as u8],
+            i as u16,
+        );
         let p = i % 1024;
         let plc = ([172, 16, (p >> 8) as u8, p as u8], 5050);
         w.sbus(T0 + i as i64, client, plc, i as u16, 0);
@@ -136,11 +139,16 @@ fn interfaces(path: &Path, size: u64) -> u64 {
     while w.len() < size {
         // link type Ethernet, snap length 0; every 1000th block a packet on interface 0
         block(&mut w.buf, 1, &[1, 0, 0, 0, 0, 0, 0, 0]);
-        if i % 1000 == 0 {
+        if i.is_multiple_of(1000) {
             w.payload.clear();
             w.frame.clear();
             encode_ether(&mut w.payload, i as u16, 0, &[1, 6, 0, 0, 0]);
-            pw::udp4_frame(&mut w.frame, ([10, 0, 0, 1], 40_000), ([10, 0, 0, 5], 5050), &w.payload);
+            pw::udp4_frame(
+                &mut w.frame,
+                ([10, 0, 0, 1], 40_000),
+                ([10, 0, 0, 5], 5050),
+                &w.payload,
+            );
             body.clear();
             body.extend_from_slice(&0u32.to_le_bytes());
             let ts = (T0 + i as i64) as u64;
@@ -225,7 +233,14 @@ fn sab(path: &Path, size: u64) -> u64 {
             for _ in 0..rng.below(4) {
                 payload.push(rng.next() as u8 & 0x3F);
             }
-            sample::frame(&mut w.buf, Framing::Hdlc, Flags::Request, addr, 0x21, &payload);
+            sample::frame(
+                &mut w.buf,
+                Framing::Hdlc,
+                Flags::Request,
+                addr,
+                0x21,
+                &payload,
+            );
             payload.clear();
             for _ in 0..rng.below(9) {
                 payload.push(rng.next() as u8 & 0x3F);
@@ -238,6 +253,8 @@ fn sab(path: &Path, size: u64) -> u64 {
 }
 
 /// Runs busnoop on `path`; returns its peak resident memory (kB) and its last stderr line.
+// The child is reaped by `wait4`, which also gives its own peak memory.
+#[allow(clippy::zombie_processes)]
 fn peak_kb(args: &[&str], path: &Path, stderr: &Path) -> (u64, String) {
     let exe = std::env::var_os("BUSNOOP_BENCH_EXE")
         .unwrap_or_else(|| env!("CARGO_BIN_EXE_busnoop").into());
@@ -255,7 +272,11 @@ fn peak_kb(args: &[&str], path: &Path, stderr: &Path) -> (u64, String) {
     let r = unsafe { libc::wait4(pid, &mut status, 0, &mut ru) };
     assert_eq!(r, pid, "wait4");
     let status = std::process::ExitStatus::from_raw(status);
-    assert!(status.success(), "busnoop {args:?} {}: {status}", path.display());
+    assert!(
+        status.success(),
+        "busnoop {args:?} {}: {status}",
+        path.display()
+    );
     let err = std::fs::read_to_string(stderr).unwrap_or_default();
     let last = err
         .lines()
@@ -271,13 +292,28 @@ type Generator = fn(&Path, u64) -> u64;
 fn main() {
     let base = common::env_u64("BUSNOOP_BENCH_MB", 20) * 1_000_000;
     let inputs: [(&str, &[&str], &str, Generator); 7] = [
-        ("conversations (port scan)", &["sbus"], "pcap", conversations),
+        (
+            "conversations (port scan)",
+            &["sbus"],
+            "pcap",
+            conversations,
+        ),
         ("pcapng interfaces", &["sbus"], "pcapng", interfaces),
         ("constant timestamps", &["sbus"], "pcap", constant_time),
         ("unanswered requests", &["sbus"], "pcap", unanswered),
         ("retries", &["sbus"], "pcap", retries),
-        ("normal Ether-S-Bus, --stats", &["sbus", "--stats"], "pcap", normal),
-        ("SAB2, 64 addresses, --stats", &["sab2", "--stats"], "bin", sab),
+        (
+            "normal Ether-S-Bus, --stats",
+            &["sbus", "--stats"],
+            "pcap",
+            normal,
+        ),
+        (
+            "SAB2, 64 addresses, --stats",
+            &["sab2", "--stats"],
+            "bin",
+            sab,
+        ),
     ];
     let dir = tempfile::tempdir().unwrap();
     let stderr = dir.path().join("stderr.txt");

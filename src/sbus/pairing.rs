@@ -613,7 +613,11 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
                 self.deadlines.pop_front();
                 continue;
             }
-            let at = self.get(d.key).expect("live").time.saturating_add(self.timeout);
+            let at = self
+                .get(d.key)
+                .expect("live")
+                .time
+                .saturating_add(self.timeout);
             if at >= now {
                 break;
             }
