@@ -1963,9 +1963,7 @@ impl EtherCore {
                 let mut req = Outstanding::new(info, t, true, Some(tele.seq));
                 req.tag = plc as u32;
                 let mut expired = std::mem::take(&mut self.expired);
-                let (kind, gap) =
-                    self.pairing
-                        .request((client, server), tele.seq, req, &mut expired);
+                let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut expired);
                 let r = self.timeout_rows(&expired, out);
                 expired.clear();
                 self.expired = expired;

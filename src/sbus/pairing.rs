@@ -288,10 +288,11 @@ pub struct Forgotten {
 struct Conv {
     id: u32,
     tag: u32,
-    last_seq: Option<u16>,
     /// Use stamp (for the least recently used order) and the time of the last packet.
     stamp: u64,
     time: u64,
+    /// The stamp of its entry in the use queue (older than `stamp` when used since).
+    queued: u64,
 }
 
 /// A deadline (the request's time + the timeout): `generation` tells whether the request it
@@ -318,8 +319,14 @@ pub struct EtherPairing<K> {
     /// Recently timed-out requests, for late answers.
     late: VecDeque<((u32, u16), Outstanding)>,
     convs: FastMap<K, Conv>,
-    /// Conversations in order of use; stale entries (used again since) are skipped.
+    /// The last sequence of each conversation (by id; a cheaper key than the addresses).
+    last_seq: FastMap<u32, u16>,
+    /// Every conversation once, in order of use when queued; an entry whose conversation was
+    /// used since is queued again when it reaches the front (so the front is the least
+    /// recently used one).
     lru: VecDeque<(K, u64)>,
+    /// Capture time of the next sweep for idle conversations.
+    next_sweep: u64,
     next_conv: u32,
     stamp: u64,
     generation: u32,
@@ -346,7 +353,9 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             deadlines: VecDeque::new(),
             late: VecDeque::new(),
             convs: FastMap::default(),
+            last_seq: FastMap::default(),
             lru: VecDeque::new(),
+            next_sweep: 0,
             next_conv: 0,
             stamp: 0,
             generation: 0,
@@ -358,7 +367,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     #[doc(hidden)]
     pub fn sizes(&self) -> TableSizes {
         TableSizes {
-            conversations: self.convs.len(),
+            conversations: self.convs.len().max(self.last_seq.len()),
             outstanding: self.map.len(),
             deadlines: self.deadlines.len(),
             late: self.late.len(),
@@ -407,17 +416,23 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         if let Some(c) = self.convs.get_mut(&key) {
             c.stamp = stamp;
             c.time = now;
-            let r = (c.id, c.tag);
-            self.touch(key, stamp);
-            return r;
+            return (c.id, c.tag);
         }
         while self.convs.len() >= MAX_CONVERSATIONS {
             let Some((k, s)) = self.lru.pop_front() else {
                 break;
             };
-            if self.convs.get(&k).is_some_and(|c| c.stamp == s) {
-                self.forgotten.dropped += 1;
-                self.drop_conversation(k, now, TimeoutWhy::Dropped, out);
+            match self.convs.get_mut(&k) {
+                Some(c) if c.queued == s && c.stamp != s => {
+                    // Used since it was queued: not the least recently used one.
+                    c.queued = c.stamp;
+                    self.lru.push_back((k, c.stamp));
+                }
+                Some(c) if c.queued == s => {
+                    self.forgotten.dropped += 1;
+                    self.drop_conversation(k, now, TimeoutWhy::Dropped, out);
+                }
+                _ => {}
             }
         }
         let id = self.next_conv;
@@ -426,12 +441,12 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let c = Conv {
             id,
             tag: tag(),
-            last_seq: None,
             stamp,
             time: now,
+            queued: stamp,
         };
         self.convs.insert(key, c);
-        self.touch(key, stamp);
+        self.lru.push_back((key, stamp));
         (id, c.tag)
     }
 
@@ -442,21 +457,12 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         }
     }
 
-    fn touch(&mut self, key: K, stamp: u64) {
-        self.lru.push_back((key, stamp));
-        if self.lru.len() > 2 * self.convs.len() + 1_024 {
-            let convs = &self.convs;
-            self.lru
-                .retain(|(k, s)| convs.get(k).is_some_and(|c| c.stamp == *s));
-        }
-    }
-
     /// Forgets a conversation; its last request, if still waiting, goes to `out`.
     fn drop_conversation(&mut self, key: K, now: u64, why: TimeoutWhy, out: &mut Vec<Expired>) {
         let Some(c) = self.convs.remove(&key) else {
             return;
         };
-        if let Some(seq) = c.last_seq
+        if let Some(seq) = self.last_seq.remove(&c.id)
             && let Some(mut r) = self.remove((c.id, seq))
         {
             r.timeout_reported = true;
@@ -470,21 +476,17 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         }
     }
 
-    /// A request with sequence `seq` on the conversation `key` (see [`Self::conversation`]).
-    /// When more than [`MAX_OUTSTANDING`] requests wait, the oldest go to `out`.
+    /// A request with sequence `seq` on conversation `conv` (an id from
+    /// [`Self::conversation`], just now). When more than [`MAX_OUTSTANDING`] requests wait,
+    /// the oldest go to `out`.
     pub fn request(
         &mut self,
-        key: K,
+        conv: u32,
         seq: u16,
         req: Outstanding,
         out: &mut Vec<Expired>,
     ) -> (RequestKind, Option<SeqGap>) {
-        if !self.convs.contains_key(&key) {
-            self.conversation(key, req.time, || req.tag, out);
-        }
-        let c = self.convs.get_mut(&key).expect("just made");
-        let conv = c.id;
-        let last = c.last_seq.replace(seq);
+        let last = self.last_seq.insert(conv, seq);
         if last == Some(seq) {
             let prev = self.get((conv, seq)).copied().or_else(|| {
                 self.late
@@ -633,16 +635,26 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             }
             self.remember_late(d.key, r);
         }
+        if now < self.next_sweep {
+            return;
+        }
         let idle = self.idle_limit();
+        self.next_sweep = now.saturating_add(idle / 8);
         while let Some(&(k, s)) = self.lru.front() {
-            match self.convs.get(&k) {
-                Some(c) if c.stamp == s => {
-                    if c.time.saturating_add(idle) >= now {
+            match self.convs.get_mut(&k) {
+                Some(c) if c.queued == s => {
+                    if c.time.saturating_add(idle) < now {
+                        self.lru.pop_front();
+                        self.forgotten.expired += 1;
+                        self.drop_conversation(k, now, TimeoutWhy::Deadline, out);
+                    } else if c.stamp != s {
+                        c.queued = c.stamp;
+                        let stamp = c.stamp;
+                        self.lru.pop_front();
+                        self.lru.push_back((k, stamp));
+                    } else {
                         break;
                     }
-                    self.lru.pop_front();
-                    self.forgotten.expired += 1;
-                    self.drop_conversation(k, now, TimeoutWhy::Deadline, out);
                 }
                 _ => {
                     self.lru.pop_front();
@@ -742,15 +754,15 @@ mod tests {
         let mut out = Vec::new();
         let r = |t| Outstanding::new(info(75), t, true, None);
         let (c0, _) = p.conversation(0, 0, || 0, &mut out);
-        assert_eq!(p.request(0, 1, r(0), &mut out), (RequestKind::New, None));
+        assert_eq!(p.request(c0, 1, r(0), &mut out), (RequestKind::New, None));
         let (c1, _) = p.conversation(1, 10, || 0, &mut out);
-        assert_eq!(p.request(1, 1, r(10), &mut out), (RequestKind::New, None));
+        assert_eq!(p.request(c1, 1, r(10), &mut out), (RequestKind::New, None));
         assert!(matches!(
             p.answer(c1, 1, 50),
             Answer::Paired { elapsed: 40, .. }
         ));
         assert_eq!(
-            p.request(0, 1, r(500), &mut out),
+            p.request(c0, 1, r(500), &mut out),
             (RequestKind::Retry { n: 1, since: 500 }, None)
         );
         assert!(matches!(
@@ -758,7 +770,7 @@ mod tests {
             Answer::Paired { elapsed: 100, .. }
         ));
         assert_eq!(p.answer(c0, 1, 700), Answer::NoRequest);
-        let (k, gap) = p.request(0, 5, r(800), &mut out);
+        let (k, gap) = p.request(c0, 5, r(800), &mut out);
         assert_eq!(k, RequestKind::New);
         assert_eq!(gap, Some(SeqGap { missing: Some(3) }));
         p.expire(1_000_000, &mut out);
@@ -778,7 +790,7 @@ mod tests {
         assert_eq!(p.forgotten.expired, 2);
         let (c2, _) = p.conversation(0, 70_000_001, || 0, &mut out);
         assert_ne!(c2, c0);
-        assert_eq!(p.request(0, 9, r(70_000_001), &mut out).1, None);
+        assert_eq!(p.request(c2, 9, r(70_000_001), &mut out).1, None);
         assert!(out.is_empty());
     }
 }

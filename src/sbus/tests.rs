@@ -1004,7 +1004,8 @@ fn ether_idle_conversations_expire() {
     assert_eq!(count(&rows, "Response"), 2_000);
     assert_eq!(count(&rows, "Timeout"), 0);
     let s = e.table_sizes();
-    assert!(s.conversations <= 601, "{s:?}");
+    // idle for 60 s, found by a sweep every 7.5 s of capture time
+    assert!(s.conversations <= 676, "{s:?}");
     let t = e.totals();
     assert!(t.conversations_expired >= 1_300, "{t:?}");
     assert_eq!(t.conversations_dropped, 0);
