@@ -20,3 +20,4 @@ pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;
+pub mod summary;
