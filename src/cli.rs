@@ -352,7 +352,7 @@ pub fn run_capture(
     if let Some(b) = args.live.baud {
         cfg.baud = b;
     }
-    let (kind, reader) = open_source(&args.source, &cfg, args.live.reconnect)?;
+    let (kind, reader, progress) = open_source(&args.source, &cfg, args.live.reconnect)?;
     tracing::info!("{}: {:?}", args.source, kind);
     let mut decoder = decoder_for(kind, &cfg)?;
 
@@ -376,7 +376,7 @@ pub fn run_capture(
         out.table_options(to_terminal, no_color_env),
         decoder.columns(),
     );
-    let rx = source::spawn(reader);
+    let rx = source::spawn(reader, progress);
     let ctx = Context {
         stop: &stop,
         recorder: recorder.as_mut(),
@@ -398,11 +398,7 @@ pub fn run_capture(
 }
 
 /// Opens SOURCE and returns its kind with the reader for it.
-fn open_source(
-    arg: &str,
-    cfg: &SerialConfig,
-    reconnect: bool,
-) -> Result<(Kind, Box<dyn ChunkReader>), Failure> {
+fn open_source(arg: &str, cfg: &SerialConfig, reconnect: bool) -> Result<source::Reading, Failure> {
     let input = Input::parse(arg);
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
@@ -411,14 +407,14 @@ fn open_source(
                     eprintln!("busnoop: note: {w}");
                 }
                 let reader = SerialReader::new(path, port, *cfg, reconnect);
-                return Ok((Kind::Serial, Box::new(reader)));
+                return Ok((Kind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
             Err(e) if serial::is_not_a_tty(&e) => {}
             Err(e) => return Err(serial::open_failure(path, &e)),
         }
     }
-    let opened = source::open(&input)?;
+    let (opened, progress) = source::open(&input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
         Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
@@ -427,7 +423,7 @@ fn open_source(
             Box::new(source::RawReader::new(opened))
         }
     };
-    Ok((kind, reader))
+    Ok((kind, reader, Some(progress)))
 }
 
 /// `busnoop ports`.
@@ -490,8 +486,11 @@ fn report(
     {
         eprintln!("busnoop: {p}");
     }
-    if let Err(Failure::Signal(_)) = result {
-        eprintln!("busnoop: interrupted after {rows} rows; all decoded rows were written");
+    if let Err(Failure::Signal(i)) = result {
+        eprintln!(
+            "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
+            i.input_note()
+        );
     }
 }
 
