@@ -118,6 +118,12 @@ pub struct LiveArgs {
     /// it with the original Millis; Wireshark opens it), any other name: the raw bytes.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+
+    /// The device's DTR and RTS outputs: low drops them right after opening (an RS-485 adapter
+    /// whose driver follows RTS stays off the bus); keep leaves them as the driver sets them
+    /// (raised on open), for adapters powered or enabled by them.
+    #[arg(long, value_enum, value_name = "MODE", default_value_t)]
+    pub dtr_rts: serial::ModemLines,
 }
 
 /// When to colour pretty output.
@@ -352,6 +358,7 @@ pub fn run_capture(
     if let Some(b) = args.live.baud {
         cfg.baud = b;
     }
+    cfg.lines = args.live.dtr_rts;
     let (kind, reader, progress) = open_source(&args.source, &cfg, args.live.reconnect)?;
     tracing::info!("{}: {:?}", args.source, kind);
     let mut decoder = decoder_for(kind, &cfg)?;
