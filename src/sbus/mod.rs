@@ -37,6 +37,7 @@ pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
         data_bits: serialport::DataBits::Eight,
         parity: serialport::Parity::None,
         stop_bits: serialport::StopBits::One,
+        lines: crate::source::serial::ModemLines::Low,
     },
 };
 
