@@ -223,6 +223,12 @@ pub struct LiveArgs {
     /// raw bytes on standard output (with -o FILE only).
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+
+    /// The device's DTR and RTS outputs: low drops them right after opening (an RS-485 adapter
+    /// whose driver follows RTS stays off the bus); keep leaves them as the driver sets them
+    /// (raised on open), for adapters powered or enabled by them.
+    #[arg(long, value_enum, value_name = "MODE", default_value_t)]
+    pub dtr_rts: serial::ModemLines,
 }
 
 /// When to colour pretty output.
@@ -430,7 +436,11 @@ pub fn run_capture(
     if let Some(b) = args.live.baud {
         line.baud = b;
     }
-    let (kind, reader) = open_source(input, &line, args.live.reconnect)?;
+    let serial = serial::SerialConfig {
+        line,
+        lines: args.live.dtr_rts,
+    };
+    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -456,7 +466,7 @@ pub fn run_capture(
         out.table_options(to_terminal, no_color_env),
         decoder.columns(),
     );
-    let rx = source::spawn(reader);
+    let rx = source::spawn(reader, progress);
     let ctx = Context {
         stop: &stop,
         recorder: recorder.as_mut(),
@@ -480,24 +490,24 @@ pub fn run_capture(
 /// Opens SOURCE and returns its kind with the reader for it.
 fn open_source(
     input: Input,
-    line: &Line,
+    cfg: &serial::SerialConfig,
     reconnect: bool,
-) -> Result<(Kind, Box<dyn ChunkReader>), Failure> {
+) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
-        match serial::open(path, line) {
+        match serial::open(path, cfg) {
             Ok(port) => {
                 if let Some(w) = serial::latency_warning(path, std::path::Path::new("/sys")) {
                     eprintln!("busnoop: note: {w}");
                 }
-                let reader = SerialReader::new(path, port, *line, reconnect);
-                return Ok((Kind::Serial, Box::new(reader)));
+                let reader = SerialReader::new(path, port, *cfg, reconnect);
+                return Ok((Kind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
             Err(e) if serial::is_not_a_tty(&e) => {}
             Err(e) => return Err(serial::open_failure(path, &e)),
         }
     }
-    let opened = source::open(&input)?;
+    let (opened, progress) = source::open(&input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
         Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
@@ -506,7 +516,7 @@ fn open_source(
             Box::new(source::RawReader::new(opened))
         }
     };
-    Ok((kind, reader))
+    Ok((kind, reader, Some(progress)))
 }
 
 /// What a file argument is, for telling whether two of them are one file.
@@ -655,8 +665,11 @@ fn report(
     {
         eprintln!("busnoop: {p}");
     }
-    if let Err(Failure::Signal(_)) = result {
-        eprintln!("busnoop: interrupted after {rows} rows; all decoded rows were written");
+    if let Err(Failure::Signal(i)) = result {
+        eprintln!(
+            "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
+            i.input_note()
+        );
     }
 }
 

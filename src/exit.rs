@@ -55,13 +55,40 @@ pub enum Failure {
     /// Input could not be read or used.
     Input(String),
     /// Stopped by a signal (SIGINT or SIGTERM); not an error message.
-    Signal(i32),
+    Signal(Interrupt),
     /// Standard output closed by the reader: quiet.
     BrokenPipe,
     /// A combination of options that cannot work (clap reports the other usage errors).
     Usage(String),
     /// Anything else.
     Internal(String),
+}
+
+/// How a run was stopped by a signal.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Interrupt {
+    /// SIGINT or SIGTERM.
+    pub signal: i32,
+    /// How much of a file or stream was decoded and how much was left, e.g.
+    /// "4194304 of 1073741824 bytes of the input decoded, 1069547520 not decoded"; `None` for
+    /// live devices and when the signal came before any input.
+    pub input: Option<String>,
+}
+
+impl Interrupt {
+    pub fn new(signal: i32) -> Self {
+        Interrupt {
+            signal,
+            input: None,
+        }
+    }
+
+    /// "; <input>" or nothing, to end the "interrupted after N rows" line.
+    pub fn input_note(&self) -> String {
+        self.input
+            .as_ref()
+            .map_or(String::new(), |i| format!("; {i}"))
+    }
 }
 
 impl Failure {
@@ -74,7 +101,7 @@ impl Failure {
             Failure::Disconnected { .. } => code::DISCONNECTED,
             Failure::Output(_) => code::OUTPUT,
             Failure::Input(_) => code::INPUT,
-            Failure::Signal(s) if *s == libc::SIGTERM => code::SIGTERM,
+            Failure::Signal(i) if i.signal == libc::SIGTERM => code::SIGTERM,
             Failure::Signal(_) => code::SIGINT,
             Failure::BrokenPipe => code::BROKEN_PIPE,
             Failure::Internal(_) => code::INTERNAL,
@@ -139,7 +166,7 @@ impl fmt::Display for Failure {
             Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) | Failure::Usage(m) => {
                 f.write_str(m)
             }
-            Failure::Signal(s) => write!(f, "stopped by signal {s}"),
+            Failure::Signal(i) => write!(f, "stopped by signal {}", i.signal),
             Failure::BrokenPipe => f.write_str("output closed"),
         }
     }

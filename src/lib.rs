@@ -22,3 +22,4 @@ pub mod sink;
 pub mod source;
 pub mod sport;
 pub mod time;
+pub mod summary;

@@ -13,6 +13,9 @@ use std::fmt;
 /// Longest record or block accepted (Wireshark's limit for pcapng blocks is 16 MiB too).
 pub const MAX_RECORD: usize = 16 * 1024 * 1024;
 
+/// pcapng interfaces kept per section (24 bytes each); a packet naming a later one is an error.
+pub const MAX_INTERFACES: usize = 65_536;
+
 /// Well-known link types (LINKTYPE_* values).
 pub mod linktype {
     pub const NULL: u32 = 0;
@@ -55,6 +58,8 @@ pub enum PcapError {
     LengthMismatch { offset: u64 },
     /// A pcapng packet for an interface no IDB described.
     UnknownInterface { offset: u64, interface: u32 },
+    /// A pcapng packet for an interface beyond [`MAX_INTERFACES`].
+    TooManyInterfaces { offset: u64, interface: u32 },
     /// A pcapng block before the first section header.
     NoSection { offset: u64 },
     /// The input ended inside a record.
@@ -79,6 +84,10 @@ impl fmt::Display for PcapError {
             PcapError::UnknownInterface { offset, interface } => write!(
                 f,
                 "pcapng packet at byte {offset} names interface {interface}, which no interface description block defined"
+            ),
+            PcapError::TooManyInterfaces { offset, interface } => write!(
+                f,
+                "pcapng packet at byte {offset} names interface {interface}; busnoop keeps the first {MAX_INTERFACES} interfaces of a section"
             ),
             PcapError::NoSection { offset } => {
                 write!(f, "pcapng block at byte {offset} before any section header")
@@ -133,7 +142,10 @@ enum Format {
     },
     Pcapng {
         big: bool,
+        /// The first [`MAX_INTERFACES`] interfaces of the section.
         ifaces: Vec<Iface>,
+        /// Interfaces the section defined (kept or not).
+        defined: u64,
         in_section: bool,
     },
     /// A previous error: nothing more is read.
@@ -193,6 +205,15 @@ impl PcapStream {
             offset: 0,
             last_ts: 0,
             packets: 0,
+        }
+    }
+
+    /// pcapng interfaces kept for the current section (for tests of the bound).
+    #[doc(hidden)]
+    pub fn interfaces_kept(&self) -> usize {
+        match &self.format {
+            Format::Pcapng { ifaces, .. } => ifaces.len(),
+            _ => 0,
         }
     }
 
@@ -324,6 +345,7 @@ impl PcapStream {
                 self.format = Format::Pcapng {
                     big: false,
                     ifaces: Vec::new(),
+                    defined: 0,
                     in_section: false,
                 };
                 return Ok(Step::Took(0));
@@ -444,6 +466,7 @@ impl PcapStream {
         let Format::Pcapng {
             big: fbig,
             ifaces,
+            defined,
             in_section,
         } = &mut self.format
         else {
@@ -452,6 +475,8 @@ impl PcapStream {
         if is_shb {
             *fbig = big;
             ifaces.clear();
+            ifaces.shrink_to(16);
+            *defined = 0;
             *in_section = true;
             return Ok(Step::Took(len));
         }
@@ -502,7 +527,10 @@ impl PcapStream {
                     }
                     opts = opts.get(4 + padded..).unwrap_or(&[]);
                 }
-                ifaces.push(iface);
+                *defined += 1;
+                if ifaces.len() < MAX_INTERFACES {
+                    ifaces.push(iface);
+                }
             }
             // Enhanced packet block and the obsolete packet block.
             6 | 2 => {
@@ -527,6 +555,9 @@ impl PcapStream {
                     });
                 }
                 let Some(iface) = ifaces.get(interface as usize) else {
+                    if (interface as u64) < *defined {
+                        return Err(PcapError::TooManyInterfaces { offset, interface });
+                    }
                     return Err(PcapError::UnknownInterface { offset, interface });
                 };
                 let ts_micros = iface
@@ -840,6 +871,39 @@ mod tests {
         f[n - 4] ^= 0x10;
         let (_, r) = collect(&[&f]);
         assert!(matches!(r, Err(PcapError::LengthMismatch { .. })));
+    }
+
+    #[test]
+    fn interface_blocks_are_kept_up_to_a_cap() {
+        let n = MAX_INTERFACES as u32 + 4_464;
+        let mut f = shb_le();
+        for i in 0..n {
+            f.extend(idb_le(if i % 2 == 0 { 1 } else { 101 }, None));
+        }
+        f.extend(epb_le(5, 7, b"ok"));
+        f.extend(epb_le(n - 1, 8, b"lost"));
+        let mut s = PcapStream::new();
+        let mut got = Vec::new();
+        let mut r = Ok(());
+        let mut most = 0;
+        for c in f.chunks(65_536) {
+            r = s.push(c, &mut |p| got.push((p.interface, p.link_type)));
+            most = most.max(s.interfaces_kept());
+            if r.is_err() {
+                break;
+            }
+        }
+        assert_eq!(got, [(5, 101)]);
+        assert_eq!(most, MAX_INTERFACES);
+        assert_eq!(
+            r,
+            Err(PcapError::TooManyInterfaces {
+                offset: f.len() as u64 - 36,
+                interface: n - 1
+            })
+        );
+        let msg = r.unwrap_err().to_string();
+        assert!(msg.contains("keeps the first 65536 interfaces"), "{msg}");
     }
 
     proptest::proptest! {

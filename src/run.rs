@@ -2,17 +2,18 @@
 //! with signals, adapter gaps and the "no frames" hint.
 
 use std::sync::Arc;
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
 use crate::protocol::Decoder;
 use crate::row::RowOut;
-use crate::exit::Failure;
+use crate::exit::{Failure, Interrupt};
 use crate::record::Recorder;
 use crate::row::{Class, Row};
 use crate::sink::Table;
-use crate::source::{Batch, Message};
+use crate::source::{Batch, Feed, Message};
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
 const TICK: Duration = Duration::from_millis(20);
@@ -22,16 +23,26 @@ const NO_FRAMES_AFTER: Duration = Duration::from_secs(3);
 /// ... provided at least this many bytes arrived.
 const NO_FRAMES_BYTES: u64 = 256;
 
+/// Untimed bytes are decoded in pieces of at most this many, with a look for a signal between
+/// them, so that one large batch cannot delay the stop (decoders give the same rows however
+/// their input is cut).
+const UNIT: usize = 4096;
+
 /// SIGINT/SIGTERM catcher. The first signal asks busnoop to stop cleanly; a second one of the
-/// same kind ends the process at once.
+/// same kind ends the process at once. Signals are process-wide, so there is one catcher.
 #[derive(Clone)]
 pub struct Stop {
     signal: Arc<AtomicUsize>,
 }
 
+static STOP: OnceLock<Stop> = OnceLock::new();
+
 impl Stop {
-    /// Installs the handlers.
+    /// Installs the handlers (once per process; later calls return the same catcher).
     pub fn install() -> std::io::Result<Stop> {
+        if let Some(s) = STOP.get() {
+            return Ok(s.clone());
+        }
         let signal = Arc::new(AtomicUsize::new(0));
         for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
             let armed = Arc::new(AtomicBool::new(false));
@@ -40,7 +51,7 @@ impl Stop {
             signal_hook::flag::register(sig, armed)?;
             signal_hook::flag::register_usize(sig, signal.clone(), sig as usize)?;
         }
-        Ok(Stop { signal })
+        Ok(STOP.get_or_init(|| Stop { signal }).clone())
     }
 
     /// The signal received, if any.
@@ -49,6 +60,12 @@ impl Stop {
             0 => None,
             s => Some(s as i32),
         }
+    }
+
+    /// The signal received, if the handlers are installed and one came (for waits outside the
+    /// driver, such as opening a FIFO).
+    pub fn received() -> Option<i32> {
+        STOP.get().and_then(Stop::signal)
     }
 }
 
@@ -63,12 +80,14 @@ pub struct Context<'a> {
     pub live: bool,
 }
 
-/// Feeds every message from `rx` through `decoder` into `table` until the source ends, fails,
+/// Feeds every message from `feed` through `decoder` into `table` until the source ends, fails,
 /// or a signal arrives. Rows are flushed after every batch, so live output appears as soon as
-/// a frame completes. Whatever happens, every row decoded so far is written before returning.
+/// a frame completes. A signal stops the decoding within one [`UNIT`] of input, whatever the
+/// input rate; the reader thread then reads no more. Whatever happens, every row decoded so far
+/// is written before returning.
 pub fn drive(
     decoder: &mut dyn Decoder,
-    rx: &Receiver<Message>,
+    feed: &Feed,
     table: &mut Table,
     ctx: Context<'_>,
 ) -> Result<(), Failure> {
@@ -83,8 +102,19 @@ pub fn drive(
         first_byte: None,
         hinted: false,
         down_at: None,
+        input_decoded: 0,
     };
-    let result = state.run(rx, ctx.stop);
+    let result = state.run(feed, ctx.stop);
+    feed.halt();
+    let result = match result {
+        Err(Failure::Signal(mut i)) => {
+            if let Some(p) = &feed.progress {
+                i.input = Some(unread_note(state.input_decoded, p));
+            }
+            Err(Failure::Signal(i))
+        }
+        r => r,
+    };
     let Driver {
         decoder,
         table,
@@ -128,26 +158,53 @@ struct Driver<'a> {
     first_byte: Option<Instant>,
     hinted: bool,
     down_at: Option<u64>,
+    /// Files and streams: input bytes (as read, before any parsing) whose content reached the
+    /// decoder.
+    input_decoded: u64,
+}
+
+/// What was decoded of a file or stream and what was left, when a signal stopped busnoop.
+fn unread_note(decoded: u64, p: &crate::source::Progress) -> String {
+    let read = p.read().max(decoded);
+    match p.size {
+        Some(size) => {
+            let decoded = decoded.min(size);
+            format!(
+                "{decoded} of {size} bytes of the input decoded, {} not decoded",
+                size - decoded
+            )
+        }
+        None => format!(
+            "{decoded} bytes of the input decoded, {} more read but not decoded, the rest left unread",
+            read - decoded
+        ),
+    }
 }
 
 impl Driver<'_> {
-    fn run(&mut self, rx: &Receiver<Message>, stop: &Stop) -> Result<(), Failure> {
+    fn run(&mut self, feed: &Feed, stop: &Stop) -> Result<(), Failure> {
         loop {
             if let Some(sig) = stop.signal() {
-                // Decode what was already received, then stop.
-                while let Ok(msg) = rx.try_recv() {
-                    match msg {
-                        Message::Data(b) => self.feed(&b)?,
-                        Message::Anchor(a) => self.anchor(a)?,
-                        _ => break,
+                return Err(Failure::Signal(Interrupt::new(sig)));
+            }
+            match feed.rx.recv_timeout(TICK) {
+                Ok(Message::Data(b)) => {
+                    let fed = self.feed(&b, stop)?;
+                    self.input_decoded += fed as u64;
+                    self.flush()?;
+                    if fed < b.bytes.len() {
+                        // Stopped inside the batch: where it ended in the input bounds the count.
+                        if let Ok(Message::ReadUpTo(n)) = feed.rx.try_recv() {
+                            self.input_decoded = self.input_decoded.min(n);
+                        }
+                        let sig = stop.signal().unwrap_or(libc::SIGINT);
+                        return Err(Failure::Signal(Interrupt::new(sig)));
                     }
                 }
-                return Err(Failure::Signal(sig));
-            }
-            match rx.recv_timeout(TICK) {
-                Ok(Message::Data(b)) => {
-                    self.feed(&b)?;
-                    self.flush()?;
+                Ok(Message::ReadUpTo(n)) => {
+                    // Exact for raw bytes; parsed inputs (logs, recordings) take up more room
+                    // than the wire bytes they hold.
+                    self.input_decoded = n;
                 }
                 Ok(Message::Anchor(a)) => self.anchor(a)?,
                 Ok(Message::Warning(w)) => {
@@ -202,32 +259,60 @@ impl Driver<'_> {
         Ok(())
     }
 
-    fn feed(&mut self, batch: &Batch) -> Result<(), Failure> {
+    /// Decodes `batch`, looking for a signal between segments and between [`UNIT`]s of untimed
+    /// bytes; returns how many of its bytes were decoded (all of them unless a signal came).
+    fn feed(&mut self, batch: &Batch, stop: &Stop) -> Result<usize, Failure> {
         let now = Instant::now();
-        for (bytes, time) in batch.segments() {
-            if let Some(r) = self.recorder.as_deref_mut() {
-                r.data(bytes, time)?;
-            }
+        let mut fed = 0;
+        'segments: for (bytes, time) in batch.segments() {
             if self.clock.is_none()
                 && let Some(t) = time
             {
                 self.clock = now.checked_sub(Duration::from_micros(t));
             }
-            self.decoder
-                .push(bytes, time, self.table)
-                .map_err(|_| output_error(self.table))?;
+            if bytes.is_empty() {
+                self.push(bytes, time)?;
+                continue;
+            }
+            // Timed bytes stay whole: a decoder may spread a chunk's time over its bytes.
+            let unit = if time.is_some() {
+                bytes.len().max(1)
+            } else {
+                UNIT
+            };
+            for piece in bytes.chunks(unit) {
+                if stop.signal().is_some() {
+                    break 'segments;
+                }
+                self.push(piece, time)?;
+                fed += piece.len();
+            }
         }
-        self.bytes += batch.bytes.len() as u64;
-        if !batch.bytes.is_empty() {
+        self.bytes += fed as u64;
+        if fed > 0 {
             self.first_byte.get_or_insert(now);
         }
         self.watch();
-        Ok(())
+        Ok(fed)
+    }
+
+    fn push(&mut self, bytes: &[u8], time: Option<u64>) -> Result<(), Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.data(bytes, time)?;
+        }
+        self.decoder
+            .push(bytes, time, self.table)
+            .map_err(|_| output_error(self.table))
     }
 
     /// Bytes keep arriving but nothing decodes: say so once, with the likely causes.
+    /// Live sources only: a replayed file has no wiring to check.
     fn watch(&mut self) {
-        if self.hinted || self.bytes < NO_FRAMES_BYTES || self.decoder.valid_frames() > 0 {
+        if !self.live
+            || self.hinted
+            || self.bytes < NO_FRAMES_BYTES
+            || self.decoder.valid_frames() > 0
+        {
             return;
         }
         let Some(first) = self.first_byte else {

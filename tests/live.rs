@@ -329,3 +329,62 @@ fn a_silent_line_with_noise_gets_the_wiring_hint() {
     assert!(hints[0].contains("not inverted"), "{err}");
     assert!(hints[0].contains("57600"), "{err}");
 }
+
+/// The flags of the descriptor `pid` holds on `dev`, from /proc.
+fn open_flags(pid: u32, dev: &std::path::Path) -> Option<i32> {
+    for e in std::fs::read_dir(format!("/proc/{pid}/fd")).ok()?.flatten() {
+        if std::fs::read_link(e.path()).ok().as_deref() == Some(dev) {
+            let info = std::fs::read_to_string(format!(
+                "/proc/{pid}/fdinfo/{}",
+                e.file_name().to_string_lossy()
+            ))
+            .ok()?;
+            let flags = info.lines().find_map(|l| l.strip_prefix("flags:"))?;
+            return i32::from_str_radix(flags.trim(), 8).ok();
+        }
+    }
+    None
+}
+
+/// The slave's termios c_cflag, read through the master.
+fn cflag(b: &Bus) -> libc::tcflag_t {
+    use std::os::fd::AsRawFd;
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    assert_eq!(unsafe { libc::tcgetattr(b.master.as_raw_fd(), &mut t) }, 0);
+    t.c_cflag
+}
+
+#[test]
+fn the_device_is_opened_read_only_and_nothing_reaches_the_bus() {
+    let _g = lock();
+    let mut b = bus();
+    let hupcl_before = cflag(&b) & libc::HUPCL;
+    let (mut child, rx) = spawn(&["sport", "-f", "tsv"], &b.path);
+    next_line(&rx);
+    // busnoop cannot write: its descriptor on the device is read-only.
+    let flags = open_flags(child.id(), &b.path).expect("busnoop holds the device open");
+    assert_eq!(flags & libc::O_ACCMODE, libc::O_RDONLY, "flags {flags:o}");
+    // Traffic decodes, and not one byte comes back on the bus side (no echo, no write).
+    b.master.write_all(&slots(6).concat()).unwrap();
+    b.master.flush().unwrap();
+    for _ in 0..4 {
+        next_line(&rx);
+    }
+    serialport::SerialPort::set_timeout(&mut b.master, Duration::from_millis(300)).unwrap();
+    let mut buf = [0u8; 64];
+    match std::io::Read::read(&mut b.master, &mut buf) {
+        Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+        other => panic!("the bus side received {other:?}: {:?}", &buf[..8]),
+    }
+    // HUPCL is left as it was: busnoop changes no setting that outlives it.
+    assert_eq!(cflag(&b) & libc::HUPCL, hupcl_before);
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert_eq!(wait_exit(&mut child).code(), Some(130));
+    // The same with --dtr-rts keep.
+    let (mut child, rx) = spawn(&["sport", "-f", "tsv", "--dtr-rts", "keep"], &b.path);
+    next_line(&rx);
+    let flags = open_flags(child.id(), &b.path).expect("busnoop holds the device open");
+    assert_eq!(flags & libc::O_ACCMODE, libc::O_RDONLY, "flags {flags:o}");
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert_eq!(wait_exit(&mut child).code(), Some(130));
+}

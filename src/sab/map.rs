@@ -139,7 +139,7 @@ impl Mapper {
         let mut note = String::new();
         reason.describe(framing, &mut note);
         self.framing_note = Some(note);
-        self.stats.framings.push((framing, reason));
+        self.stats.chose(framing, reason);
     }
 
     pub(super) fn take_error(&mut self) -> io::Result<()> {

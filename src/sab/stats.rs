@@ -6,110 +6,10 @@ use super::detect::Reason;
 use super::frame::Framing;
 use super::header::{ADDRESSES, NackCode};
 
-/// Response times are kept exactly below this many µs …
-const EXACT: u64 = 1_000;
-/// … and with three significant digits up to this many µs (1000 s); above in one bucket.
-const TOP: u64 = 1_000_000_000;
-/// Buckets per decade above `EXACT`.
-const PER_DECADE: usize = 900;
-const DECADES: usize = 6; // 1e3 .. 1e9
-const BUCKETS: usize = EXACT as usize + DECADES * PER_DECADE + 1;
+pub use crate::summary::Times;
 
-fn bucket(v: u64) -> usize {
-    if v < EXACT {
-        return v as usize;
-    }
-    let mut low = EXACT;
-    let mut width = EXACT / 100;
-    let mut index = EXACT as usize;
-    while low < TOP {
-        if v < low * 10 {
-            return index + ((v - low) / width) as usize;
-        }
-        index += PER_DECADE;
-        low *= 10;
-        width *= 10;
-    }
-    BUCKETS - 1
-}
-
-/// Smallest value of a bucket.
-fn bucket_low(i: usize) -> u64 {
-    if i < EXACT as usize {
-        return i as u64;
-    }
-    let d = (i - EXACT as usize) / PER_DECADE;
-    if d >= DECADES {
-        return TOP;
-    }
-    let r = ((i - EXACT as usize) % PER_DECADE) as u64;
-    let low = EXACT * 10u64.pow(d as u32);
-    low + r * (low / 100)
-}
-
-/// Response times kept exactly per address; beyond this many the median comes from a
-/// histogram (three significant digits, exact below 1 ms).
-pub const EXACT_SAMPLES: usize = 65_536;
-
-/// Response times of one address: exact count, minimum and maximum; the median exactly for
-/// the first [`EXACT_SAMPLES`] responses, then from a histogram.
-#[derive(Clone, Debug, Default)]
-pub struct Times {
-    pub count: u64,
-    pub min: u64,
-    pub max: u64,
-    samples: Vec<u32>,
-    hist: Option<Box<[u32]>>,
-}
-
-impl Times {
-    pub fn add(&mut self, micros: u64) {
-        if self.count == 0 {
-            self.min = micros;
-            self.max = micros;
-        } else {
-            self.min = self.min.min(micros);
-            self.max = self.max.max(micros);
-        }
-        self.count += 1;
-        if self.hist.is_none() && self.samples.len() < EXACT_SAMPLES {
-            self.samples.push(micros.min(u32::MAX as u64) as u32);
-            return;
-        }
-        let samples = std::mem::take(&mut self.samples);
-        let hist = self
-            .hist
-            .get_or_insert_with(|| vec![0u32; BUCKETS].into_boxed_slice());
-        for v in samples.into_iter().map(u64::from).chain([micros]) {
-            let slot = &mut hist[bucket(v)];
-            *slot = slot.saturating_add(1);
-        }
-    }
-
-    /// The median (the lower one for an even count) and whether it is exact (otherwise it has
-    /// three significant digits).
-    pub fn median(&self) -> Option<(u64, bool)> {
-        if let Some(hist) = &self.hist {
-            let total: u64 = hist.iter().map(|&c| c as u64).sum();
-            let rank = total.div_ceil(2);
-            let mut seen = 0u64;
-            for (i, &c) in hist.iter().enumerate() {
-                seen += c as u64;
-                if seen >= rank && c > 0 {
-                    return Some((bucket_low(i).clamp(self.min, self.max), false));
-                }
-            }
-            return None;
-        }
-        if self.samples.is_empty() {
-            return None;
-        }
-        let mut v = self.samples.clone();
-        let mid = (v.len() - 1) / 2;
-        let (_, m, _) = v.select_nth_unstable(mid);
-        Some((*m as u64, true))
-    }
-}
+/// Framing choices listed at most: the first ones and the latest; the others are counted.
+pub const MAX_FRAMINGS: usize = 16;
 
 /// Counters of one address.
 #[derive(Clone, Debug, Default)]
@@ -163,8 +63,11 @@ pub struct Stats {
     pub unpaired: u64,
     pub repeats: u64,
     pub nacks: u64,
-    /// The framings chosen, in order (more than one after a switch).
+    /// The framings chosen, in order (more than one after a switch): at most
+    /// [`MAX_FRAMINGS`], the first ones and the latest.
     pub framings: Vec<(Framing, Reason)>,
+    /// Choices left out of `framings` (a stream switching back and forth).
+    pub framings_omitted: u64,
 }
 
 impl Default for Stats {
@@ -189,7 +92,19 @@ impl Default for Stats {
             repeats: 0,
             nacks: 0,
             framings: Vec::new(),
+            framings_omitted: 0,
         }
+    }
+}
+
+impl Stats {
+    /// Records a framing choice (the list stays bounded).
+    pub fn chose(&mut self, framing: Framing, reason: Reason) {
+        if self.framings.len() >= MAX_FRAMINGS {
+            self.framings.pop();
+            self.framings_omitted += 1;
+        }
+        self.framings.push((framing, reason));
     }
 }
 
@@ -208,7 +123,10 @@ impl Stats {
         if self.framings.is_empty() {
             let _ = writeln!(s, "framing: not decided (no input)");
         }
-        for (framing, reason) in &self.framings {
+        for (i, (framing, reason)) in self.framings.iter().enumerate() {
+            if self.framings_omitted > 0 && i + 1 == self.framings.len() {
+                let _ = writeln!(s, "… {} more framing switches", self.framings_omitted);
+            }
             let mut line = String::new();
             reason.describe(*framing, &mut line);
             let _ = writeln!(s, "{line}");
@@ -366,68 +284,6 @@ impl Stats {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn buckets_are_monotonic_and_tight() {
-        let mut last = 0;
-        for v in [
-            0,
-            1,
-            999,
-            1000,
-            1009,
-            1010,
-            9999,
-            10_000,
-            123_456,
-            999_999_999,
-            1 << 40,
-        ] {
-            let b = bucket(v);
-            assert!(b >= last, "{v}");
-            last = b;
-            let low = bucket_low(b);
-            assert!(low <= v, "{v}: {low}");
-            if v < TOP {
-                // three significant digits
-                assert!(v - low <= v / 100, "{v}: {low}");
-            }
-        }
-        assert_eq!(bucket(u64::MAX), BUCKETS - 1);
-        for i in 0..BUCKETS {
-            assert_eq!(bucket(bucket_low(i)), i, "{i}");
-        }
-    }
-
-    #[test]
-    fn median_min_max() {
-        let mut t = Times::default();
-        assert_eq!(t.median(), None);
-        for v in [500, 100, 300, 2_345, 12_345] {
-            t.add(v);
-        }
-        assert_eq!((t.min, t.max, t.count), (100, 12_345, 5));
-        assert_eq!(t.median(), Some((500, true)));
-        t.add(1_234);
-        // Lower median of 100 300 500 1234 2345 12345.
-        assert_eq!(t.median(), Some((500, true)));
-        t.add(1_215);
-        t.add(1_215);
-        assert_eq!(t.median(), Some((1_215, true)));
-    }
-
-    #[test]
-    fn median_beyond_the_exact_samples() {
-        let mut t = Times::default();
-        for i in 0..EXACT_SAMPLES as u64 + 1001 {
-            t.add(1_000 + i % 2_000);
-        }
-        let (m, exact) = t.median().unwrap();
-        assert!(!exact);
-        // True median 1999 or 2000; three significant digits.
-        assert!((1_980..=2_000).contains(&m), "{m}");
-        assert_eq!((t.min, t.max), (1_000, 2_999));
-    }
 
     #[test]
     fn nack_codes_sorted() {

@@ -1105,3 +1105,33 @@ fn every_stray_length_byte_before_the_modm_test_frames() {
     }
     assert!(lost_to_chance <= 2, "{lost_to_chance}");
 }
+
+#[test]
+fn framing_switches_back_and_forth_keep_a_bounded_list() {
+    // 300 blocks of 8 frames, alternating framings: a switch at every block.
+    let mut w = Vec::new();
+    for b in 0..300u32 {
+        for i in 0..8u8 {
+            if b % 2 == 0 {
+                sync::encode(&mut w, 0x05, i, &[i]);
+            } else {
+                hdlc::encode(&mut w, 0x05, i, &[i]);
+            }
+        }
+    }
+    let (_, d) = decode(&opts(FramingChoice::Auto), &w);
+    let c = d.counters();
+    assert!(
+        c.framings.len() <= stats::MAX_FRAMINGS,
+        "{}",
+        c.framings.len()
+    );
+    assert!(c.framings_omitted > 250, "{}", c.framings_omitted);
+    assert_eq!(
+        c.framings.len() as u64 + c.framings_omitted,
+        300,
+        "every choice is listed or counted"
+    );
+    let report = d.stats();
+    assert!(report.contains(" more framing switches"), "{report}");
+}

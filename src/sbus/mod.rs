@@ -21,7 +21,9 @@ use crate::fmt::{push_fixed, push_hex, push_u64};
 use crate::pcap::{PcapError, PcapStream};
 use crate::row::{Class, Row};
 use commands::Expect;
-use pairing::{Answer, EtherPairing, Outstanding, RequestKind, SerialPairing, TimeoutWhy};
+use pairing::{
+    Answer, EtherPairing, Expired, Outstanding, RequestKind, SerialPairing, TableSizes, TimeoutWhy,
+};
 use serial::{BreakFramer, CrcCheck, DataFramer, Event, Frame, Tele};
 use telegram::{BROADCAST, CrcBasis, ReqInfo};
 
@@ -47,6 +49,10 @@ pub const PROTOCOL: Protocol = Protocol {
 pub const DEFAULT_PORT: u16 = 5050;
 /// Default Ether-S-Bus timeout (ms): no standard value is documented; 1 s is our choice.
 pub const DEFAULT_ETHER_TIMEOUT_MS: u64 = 1000;
+/// Ether-S-Bus PLCs with their own `--stats` row; the rest share one row (`other PLCs (N)`).
+pub const MAX_PLCS: usize = 256;
+/// Addresses of PLCs beyond [`MAX_PLCS`] remembered to count them once.
+const MERGED_PLCS_KEPT: usize = 4_096;
 /// Bytes an auto-detecting decoder looks at for a data-mode telegram before it settles on
 /// break/parity mode.
 pub const DETECT_BYTES: usize = 4096;
@@ -194,8 +200,8 @@ pub struct StationStats {
     pub mismatched: u64,
     pub seq_gaps: u64,
     pub seq_missing: u64,
-    /// Response times in µs.
-    pub times: Vec<u32>,
+    /// Response times in µs (bounded: exact up to a cap, then a histogram).
+    pub times: crate::summary::Times,
 }
 
 impl StationStats {
@@ -208,17 +214,14 @@ impl StationStats {
     }
 
     fn time(&mut self, us: u64) {
-        self.times.push(us.min(u32::MAX as u64) as u32);
+        self.times.add(us);
     }
 
-    /// (min, median, max) response time in µs.
-    pub fn response_times(&self) -> Option<(u32, u32, u32)> {
-        if self.times.is_empty() {
-            return None;
-        }
-        let mut t = self.times.clone();
-        t.sort_unstable();
-        Some((t[0], t[t.len() / 2], t[t.len() - 1]))
+    /// (min, median, max) response time in µs; the median is the upper one for an even count
+    /// and `false` when it comes from the histogram (three significant digits).
+    pub fn response_times(&self) -> Option<(u64, (u64, bool), u64)> {
+        let median = self.times.median_upper()?;
+        Some((self.times.min, median, self.times.max))
     }
 }
 
@@ -249,13 +252,21 @@ pub struct Totals {
     pub seq_gaps: u64,
     /// Requests still waiting for an answer when the input ended.
     pub unanswered_at_end: u64,
+    /// Ether-S-Bus conversations seen, forgotten after a minute without a packet, dropped at
+    /// the cap ([`pairing::MAX_CONVERSATIONS`]); requests given up at
+    /// [`pairing::MAX_OUTSTANDING`]; PLCs beyond [`MAX_PLCS`] counted in one row.
+    pub conversations: u64,
+    pub conversations_expired: u64,
+    pub conversations_dropped: u64,
+    pub requests_dropped: u64,
+    pub plcs_merged: u64,
     /// The capture container itself is broken (message).
     pub pcap_error: Option<String>,
 }
 
-fn ms_text(us: u32) -> String {
+fn ms_text(us: u64) -> String {
     let mut s = String::new();
-    push_fixed(&mut s, (us as i64 + 50) / 100, 1);
+    push_fixed(&mut s, (us.min(i64::MAX as u64 - 50) as i64 + 50) / 100, 1);
     s
 }
 
@@ -289,8 +300,13 @@ fn stats_table(rows: &[(String, String, &StationStats)], ether: bool) -> String 
             let _ = write!(s, " {:>6}", st.seq_gaps);
         }
         match st.response_times() {
-            Some((a, m, b)) => {
-                let _ = writeln!(s, " {:>8} {:>8} {:>8}", ms_text(a), ms_text(m), ms_text(b));
+            Some((a, (m, exact), b)) => {
+                let m = if exact {
+                    ms_text(m)
+                } else {
+                    format!("~{}", ms_text(m))
+                };
+                let _ = writeln!(s, " {:>8} {:>8} {:>8}", ms_text(a), m, ms_text(b));
             }
             None => {
                 let _ = writeln!(s, " {:>8} {:>8} {:>8}", "-", "-", "-");
@@ -341,6 +357,20 @@ fn totals_line(t: &Totals, ether: bool) -> String {
              unparsable packets {}, other link types {}, sequence gaps {}",
             t.packets, t.datagrams, t.not_sbus, t.fragments, t.malformed, t.other_links, t.seq_gaps
         );
+        let _ = write!(
+            s,
+            "\nconversations {}, forgotten after {} s idle {}, dropped at the cap of {} {}, \
+             requests given up at the cap of {} {}, PLCs beyond {} counted together {}",
+            t.conversations,
+            pairing::CONVERSATION_IDLE / 1_000_000,
+            t.conversations_expired,
+            pairing::MAX_CONVERSATIONS,
+            t.conversations_dropped,
+            pairing::MAX_OUTSTANDING,
+            t.requests_dropped,
+            MAX_PLCS,
+            t.plcs_merged
+        );
     } else {
         let _ = write!(
             s,
@@ -378,6 +408,20 @@ fn problems_line(t: &Totals) -> Option<String> {
     }
     if t.naks > 0 {
         parts.push(plural(t.naks, "NAK", "NAKs"));
+    }
+    if t.conversations_dropped > 0 {
+        parts.push(format!(
+            "{} dropped (more than {} at once)",
+            plural(t.conversations_dropped, "conversation", "conversations"),
+            pairing::MAX_CONVERSATIONS
+        ));
+    }
+    if t.requests_dropped > 0 {
+        parts.push(format!(
+            "{} given up (more than {} waiting)",
+            plural(t.requests_dropped, "request", "requests"),
+            pairing::MAX_OUTSTANDING
+        ));
     }
     if t.not_sbus > 0 {
         parts.push(plural(
@@ -557,6 +601,16 @@ fn timeout_note(sc: &mut Scratch, why: TimeoutWhy, timeout_us: u64) {
         TimeoutWhy::NextRequest => n.push_str("no answer before the next request"),
         TimeoutWhy::Retry => n.push_str("no answer before the retry"),
         TimeoutWhy::End => n.push_str("no answer before the end of the capture"),
+        TimeoutWhy::Dropped => {
+            n.push_str("given up: conversation dropped (more than ");
+            push_u64(n, pairing::MAX_CONVERSATIONS as u64);
+            n.push_str(" at once)");
+        }
+        TimeoutWhy::Overflow => {
+            n.push_str("given up: more than ");
+            push_u64(n, pairing::MAX_OUTSTANDING as u64);
+            n.push_str(" requests waiting");
+        }
     });
 }
 
@@ -1488,15 +1542,18 @@ pub struct EtherDecoder {
 struct EtherCore {
     port: u16,
     first_ts: Option<i64>,
-    pairing: EtherPairing,
-    convs: pairing::FastMap<(SocketAddr, SocketAddr), u32>,
-    /// Per conversation: index of its PLC.
-    conv_plc: Vec<usize>,
+    /// Conversations are keyed by (client, server); their tag is the PLC's index.
+    pairing: EtherPairing<(SocketAddr, SocketAddr)>,
+    /// At most [`MAX_PLCS`] + 1 (the last one: every other PLC).
     plcs: Vec<Plc>,
     plc_index: pairing::FastMap<SocketAddr, usize>,
+    /// PLCs beyond [`MAX_PLCS`] (at most [`MERGED_PLCS_KEPT`], to count them once).
+    merged: pairing::FastMap<SocketAddr, ()>,
+    /// The Device column for a PLC beyond [`MAX_PLCS`].
+    device: String,
     totals: Totals,
     sc: Scratch,
-    expired: Vec<Outstanding>,
+    expired: Vec<Expired>,
     last_micros: u64,
     /// Packets whose link type is a serial recording: reported once.
     serial_link_noted: bool,
@@ -1513,10 +1570,10 @@ impl EtherDecoder {
                 pairing: EtherPairing::new(
                     opts.timeout_ms.unwrap_or(DEFAULT_ETHER_TIMEOUT_MS) * 1000,
                 ),
-                convs: pairing::FastMap::default(),
-                conv_plc: Vec::new(),
                 plcs: Vec::new(),
                 plc_index: pairing::FastMap::default(),
+                merged: pairing::FastMap::default(),
+                device: String::new(),
                 totals: Totals::default(),
                 sc: Scratch::default(),
                 expired: Vec::new(),
@@ -1529,6 +1586,15 @@ impl EtherDecoder {
 
     pub fn totals(&self) -> &Totals {
         &self.core.totals
+    }
+
+    /// Sizes of the decoder's tables (for tests of the bounds).
+    #[doc(hidden)]
+    pub fn table_sizes(&self) -> TableSizes {
+        TableSizes {
+            plcs: self.core.plcs.len(),
+            ..self.core.pairing.sizes()
+        }
     }
 
     /// (PLC name, statistics) for every PLC seen.
@@ -1561,24 +1627,92 @@ impl EtherCore {
         if let Some(&i) = self.plc_index.get(&addr) {
             return i;
         }
-        let i = self.plcs.len();
-        self.plcs.push(Plc {
-            name: addr.to_string(),
-            stats: StationStats::default(),
-        });
-        self.plc_index.insert(addr, i);
-        i
+        if self.plc_index.len() < MAX_PLCS {
+            let i = self.plcs.len();
+            self.plcs.push(Plc {
+                name: addr.to_string(),
+                stats: StationStats::default(),
+            });
+            self.plc_index.insert(addr, i);
+            return i;
+        }
+        // Every further PLC shares one statistics row.
+        if self.plcs.len() == MAX_PLCS {
+            self.plcs.push(Plc {
+                name: String::new(),
+                stats: StationStats::default(),
+            });
+        }
+        let new = if self.merged.len() < MERGED_PLCS_KEPT {
+            self.merged.insert(addr, ()).is_none()
+        } else {
+            !self.merged.contains_key(&addr)
+        };
+        if new {
+            self.totals.plcs_merged += 1;
+            let other = &mut self.plcs[MAX_PLCS].name;
+            other.clear();
+            let _ = write!(other, "other PLCs ({})", self.totals.plcs_merged);
+        }
+        MAX_PLCS
     }
 
-    fn conv(&mut self, client: SocketAddr, server: SocketAddr) -> u32 {
-        if let Some(&c) = self.convs.get(&(client, server)) {
-            return c;
+    /// The Device column for PLC `plc` (`server`: the name of a PLC beyond [`MAX_PLCS`]).
+    fn device<'a>(&'a self, plc: usize, server: &'a str) -> &'a str {
+        if plc < MAX_PLCS {
+            &self.plcs[plc].name
+        } else {
+            server
         }
-        let c = self.conv_plc.len() as u32;
-        let plc = self.plc(server);
-        self.conv_plc.push(plc);
-        self.convs.insert((client, server), c);
-        c
+    }
+
+    /// The conversation of `client` and `server` at `t`: its id and PLC. The open request of a
+    /// conversation dropped to make room gets its Timeout row here.
+    fn conv(
+        &mut self,
+        client: SocketAddr,
+        server: SocketAddr,
+        t: u64,
+        out: &mut dyn RowOut,
+    ) -> io::Result<(u32, usize)> {
+        let mut expired = std::mem::take(&mut self.expired);
+        let mut fresh = false;
+        let (conv, tag) = self.pairing.conversation(
+            (client, server),
+            t,
+            || {
+                fresh = true;
+                u32::MAX
+            },
+            &mut expired,
+        );
+        let plc = if fresh {
+            let i = self.plc(server);
+            self.pairing.set_tag((client, server), i as u32);
+            i
+        } else {
+            tag as usize
+        };
+        let r = self.timeout_rows(&expired, out);
+        expired.clear();
+        self.expired = expired;
+        r.map(|_| (conv, plc))
+    }
+
+    fn timeout_rows(&mut self, expired: &[Expired], out: &mut dyn RowOut) -> io::Result<()> {
+        for e in expired {
+            self.timeout_row(&e.req, e.why, e.at, out)?;
+        }
+        Ok(())
+    }
+
+    fn sync_forgotten(&mut self) {
+        let f = self.pairing.forgotten;
+        let t = &mut self.totals;
+        t.conversations = f.conversations;
+        t.conversations_expired = f.expired;
+        t.conversations_dropped = f.dropped;
+        t.requests_dropped = f.requests;
     }
 
     fn packet(&mut self, p: crate::pcap::Packet<'_>, out: &mut dyn RowOut) -> io::Result<()> {
@@ -1661,13 +1795,7 @@ impl EtherCore {
     fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
         let mut expired = std::mem::take(&mut self.expired);
         self.pairing.expire(now, &mut expired);
-        let mut r = Ok(());
-        for p in &expired {
-            if r.is_ok() {
-                let at = p.time + self.pairing.timeout;
-                r = self.timeout_row(p, TimeoutWhy::Deadline, at, out);
-            }
-        }
+        let r = self.timeout_rows(&expired, out);
         expired.clear();
         self.expired = expired;
         r
@@ -1755,8 +1883,11 @@ impl EtherCore {
         } else {
             (u.dst, u.src)
         };
-        let conv = self.conv(client, server);
-        let plc = self.conv_plc[conv as usize];
+        let (conv, plc) = self.conv(client, server, t, out)?;
+        if plc >= MAX_PLCS {
+            self.device.clear();
+            let _ = write!(self.device, "{server}");
+        }
         if !tele.crc_ok() {
             self.totals.crc_errors += 1;
             self.plcs[plc].stats.crc_errors += 1;
@@ -1793,7 +1924,7 @@ impl EtherCore {
                 &self.sc,
                 t,
                 id,
-                &self.plcs[plc].name,
+                self.device(plc, &self.device),
                 "BadCRC",
                 Class::Error,
                 sensor,
@@ -1819,7 +1950,7 @@ impl EtherCore {
                         &self.sc,
                         t,
                         None,
-                        &self.plcs[plc].name,
+                        self.device(plc, &self.device),
                         "Truncated",
                         Class::Error,
                         "",
@@ -1847,7 +1978,12 @@ impl EtherCore {
                 }
                 let mut req = Outstanding::new(info, t, true, Some(tele.seq));
                 req.tag = plc as u32;
-                let (kind, gap) = self.pairing.request(conv, tele.seq, req);
+                let mut expired = std::mem::take(&mut self.expired);
+                let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut expired);
+                let r = self.timeout_rows(&expired, out);
+                expired.clear();
+                self.expired = expired;
+                r?;
                 if let Some(g) = gap {
                     let st = &mut self.plcs[plc].stats;
                     st.seq_gaps += 1;
@@ -1887,7 +2023,7 @@ impl EtherCore {
                     &self.sc,
                     t,
                     Some(station as u32),
-                    &self.plcs[plc].name,
+                    self.device(plc, &self.device),
                     kind_name,
                     class,
                     telegram::command_name(cmd),
@@ -1968,7 +2104,7 @@ impl EtherCore {
                     &self.sc,
                     t,
                     info.map(|i| i.station as u32),
-                    &self.plcs[plc].name,
+                    self.device(plc, &self.device),
                     kind,
                     class,
                     sensor,
@@ -1995,6 +2131,7 @@ impl Decoder for EtherDecoder {
                 result = core.packet(p, out);
             }
         });
+        core.sync_forgotten();
         result?;
         if let Err(e) = r {
             self.pcap_failed(e, out)?;
@@ -2009,11 +2146,8 @@ impl Decoder for EtherDecoder {
             self.pcap_failed(e, out)?;
         }
         let c = &mut self.core;
-        let mut left = std::mem::take(&mut c.expired);
-        c.pairing.finish(&mut left);
-        c.totals.unanswered_at_end += left.len() as u64;
-        left.clear();
-        c.expired = left;
+        c.totals.unanswered_at_end += c.pairing.finish();
+        c.sync_forgotten();
         Ok(())
     }
 

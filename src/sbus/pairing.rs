@@ -100,6 +100,10 @@ pub enum TimeoutWhy {
     Retry,
     /// The capture ended.
     End,
+    /// Ether-S-Bus: its conversation was dropped (more than [`MAX_CONVERSATIONS`] at once).
+    Dropped,
+    /// Ether-S-Bus: given up (more than [`MAX_OUTSTANDING`] requests waiting).
+    Overflow,
 }
 
 /// How a new request relates to the previous ones.
@@ -239,12 +243,6 @@ impl SerialPairing {
     }
 }
 
-/// Per-conversation state of Ether-S-Bus pairing.
-#[derive(Clone, Copy, Debug, Default)]
-struct ConvState {
-    last_seq: Option<u16>,
-}
-
 /// A sequence gap seen on a conversation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SeqGap {
@@ -252,51 +250,245 @@ pub struct SeqGap {
     pub missing: Option<u16>,
 }
 
-/// Ether-S-Bus pairing by (conversation, sequence).
-#[derive(Debug)]
-pub struct EtherPairing {
-    map: FastMap<(u32, u16), Outstanding>,
-    deadlines: VecDeque<(u64, u32, u16, u64)>,
-    /// Recently timed-out requests, for late answers.
-    late: VecDeque<((u32, u16), Outstanding)>,
-    convs: Vec<ConvState>,
-    pub timeout: u64,
-}
-
-/// Requests kept at most (older ones are reported as timed out).
-const MAX_OUTSTANDING: usize = 1 << 16;
+/// Requests waiting for an answer kept at most: with more, the oldest is given up and
+/// reported as a timeout ([`TimeoutWhy::Overflow`]).
+pub const MAX_OUTSTANDING: usize = 1 << 16;
+/// Conversations (client and server address pairs) kept at most: with more, the least recently
+/// used one is dropped and its open request reported as a timeout ([`TimeoutWhy::Dropped`]).
+pub const MAX_CONVERSATIONS: usize = 4_096;
+/// A conversation without a packet for this long (µs, and at least twice the timeout) is
+/// forgotten: its requests have timed out long ago; a later packet starts it afresh.
+pub const CONVERSATION_IDLE: u64 = 60_000_000;
+/// Timed-out requests remembered for late answers.
 const LATE_KEPT: usize = 256;
 
-impl EtherPairing {
+/// A request given up, for a Timeout row at `at`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Expired {
+    pub req: Outstanding,
+    pub why: TimeoutWhy,
+    pub at: u64,
+}
+
+/// What the Ether-S-Bus tables forgot, for the summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Forgotten {
+    /// Conversations seen (each start, or restart after expiry, counts).
+    pub conversations: u64,
+    /// Conversations forgotten after [`CONVERSATION_IDLE`] without a packet.
+    pub expired: u64,
+    /// Conversations dropped at [`MAX_CONVERSATIONS`].
+    pub dropped: u64,
+    /// Requests given up at [`MAX_OUTSTANDING`].
+    pub requests: u64,
+}
+
+/// One conversation.
+#[derive(Clone, Copy, Debug)]
+struct Conv {
+    id: u32,
+    tag: u32,
+    /// Use stamp (for the least recently used order) and the time of the last packet.
+    stamp: u64,
+    time: u64,
+    /// The stamp of its entry in the use queue (older than `stamp` when used since).
+    queued: u64,
+}
+
+/// A deadline (the request's time + the timeout): `generation` tells whether the request it
+/// was made for is still the one waiting.
+#[derive(Clone, Copy, Debug)]
+struct Deadline {
+    key: (u32, u16),
+    generation: u32,
+}
+
+/// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
+/// and server addresses) and carry a tag for the decoder (the PLC's index). Every table is
+/// bounded: see [`MAX_OUTSTANDING`], [`MAX_CONVERSATIONS`] and [`CONVERSATION_IDLE`].
+#[derive(Debug)]
+pub struct EtherPairing<K> {
+    /// Waiting requests by (conversation, sequence): an index into `slots` (a compact map).
+    map: FastMap<(u32, u16), u32>,
+    /// The requests, with the generation of their deadline; `free` lists unused slots.
+    slots: Vec<(Outstanding, u32)>,
+    free: Vec<u32>,
+    /// In the order of insertion; entries whose request was answered or sent again are stale
+    /// and dropped lazily (and compacted when they outnumber the live ones).
+    deadlines: VecDeque<Deadline>,
+    /// Recently timed-out requests, for late answers.
+    late: VecDeque<((u32, u16), Outstanding)>,
+    convs: FastMap<K, Conv>,
+    /// The last sequence of each conversation (by id; a cheaper key than the addresses).
+    last_seq: FastMap<u32, u16>,
+    /// Every conversation once, in order of use when queued; an entry whose conversation was
+    /// used since is queued again when it reaches the front (so the front is the least
+    /// recently used one).
+    lru: VecDeque<(K, u64)>,
+    /// Capture time of the next sweep for idle conversations.
+    next_sweep: u64,
+    next_conv: u32,
+    stamp: u64,
+    generation: u32,
+    pub timeout: u64,
+    pub forgotten: Forgotten,
+}
+
+/// Sizes of the tables (for tests of the bounds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TableSizes {
+    pub conversations: usize,
+    pub outstanding: usize,
+    pub deadlines: usize,
+    pub late: usize,
+    pub plcs: usize,
+}
+
+impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     pub fn new(timeout: u64) -> Self {
         EtherPairing {
             map: FastMap::default(),
+            slots: Vec::new(),
+            free: Vec::new(),
             deadlines: VecDeque::new(),
             late: VecDeque::new(),
-            convs: Vec::new(),
+            convs: FastMap::default(),
+            last_seq: FastMap::default(),
+            lru: VecDeque::new(),
+            next_sweep: 0,
+            next_conv: 0,
+            stamp: 0,
+            generation: 0,
             timeout,
+            forgotten: Forgotten::default(),
         }
     }
 
-    fn conv(&mut self, conv: u32) -> &mut ConvState {
-        let i = conv as usize;
-        if self.convs.len() <= i {
-            self.convs.resize(i + 1, ConvState::default());
+    #[doc(hidden)]
+    pub fn sizes(&self) -> TableSizes {
+        TableSizes {
+            conversations: self.convs.len().max(self.last_seq.len()),
+            outstanding: self.map.len(),
+            deadlines: self.deadlines.len(),
+            late: self.late.len(),
+            plcs: 0,
         }
-        &mut self.convs[i]
     }
 
-    /// A request on conversation `conv` with sequence `seq`.
+    fn get(&self, key: (u32, u16)) -> Option<&Outstanding> {
+        self.map.get(&key).map(|&i| &self.slots[i as usize].0)
+    }
+
+    fn get_mut(&mut self, key: (u32, u16)) -> Option<&mut Outstanding> {
+        let i = *self.map.get(&key)?;
+        Some(&mut self.slots[i as usize].0)
+    }
+
+    fn remove(&mut self, key: (u32, u16)) -> Option<Outstanding> {
+        let i = self.map.remove(&key)?;
+        self.free.push(i);
+        Some(self.slots[i as usize].0)
+    }
+
+    /// Whether deadline `d` belongs to the request waiting now.
+    fn live(&self, d: &Deadline) -> bool {
+        self.map
+            .get(&d.key)
+            .is_some_and(|&i| self.slots[i as usize].1 == d.generation)
+    }
+
+    fn idle_limit(&self) -> u64 {
+        CONVERSATION_IDLE.max(self.timeout.saturating_mul(2))
+    }
+
+    /// The conversation `key` at `now`: its id and tag (`tag()` for a new one). When the table
+    /// is full the least recently used conversation is dropped and its open request goes to
+    /// `out`.
+    pub fn conversation(
+        &mut self,
+        key: K,
+        now: u64,
+        tag: impl FnOnce() -> u32,
+        out: &mut Vec<Expired>,
+    ) -> (u32, u32) {
+        self.stamp += 1;
+        let stamp = self.stamp;
+        if let Some(c) = self.convs.get_mut(&key) {
+            c.stamp = stamp;
+            c.time = now;
+            return (c.id, c.tag);
+        }
+        while self.convs.len() >= MAX_CONVERSATIONS {
+            let Some((k, s)) = self.lru.pop_front() else {
+                break;
+            };
+            match self.convs.get_mut(&k) {
+                Some(c) if c.queued == s && c.stamp != s => {
+                    // Used since it was queued: not the least recently used one.
+                    c.queued = c.stamp;
+                    self.lru.push_back((k, c.stamp));
+                }
+                Some(c) if c.queued == s => {
+                    self.forgotten.dropped += 1;
+                    self.drop_conversation(k, now, TimeoutWhy::Dropped, out);
+                }
+                _ => {}
+            }
+        }
+        let id = self.next_conv;
+        self.next_conv = self.next_conv.wrapping_add(1);
+        self.forgotten.conversations += 1;
+        let c = Conv {
+            id,
+            tag: tag(),
+            stamp,
+            time: now,
+            queued: stamp,
+        };
+        self.convs.insert(key, c);
+        self.lru.push_back((key, stamp));
+        (id, c.tag)
+    }
+
+    /// Sets the tag of conversation `key`.
+    pub fn set_tag(&mut self, key: K, tag: u32) {
+        if let Some(c) = self.convs.get_mut(&key) {
+            c.tag = tag;
+        }
+    }
+
+    /// Forgets a conversation; its last request, if still waiting, goes to `out`.
+    fn drop_conversation(&mut self, key: K, now: u64, why: TimeoutWhy, out: &mut Vec<Expired>) {
+        let Some(c) = self.convs.remove(&key) else {
+            return;
+        };
+        if let Some(seq) = self.last_seq.remove(&c.id)
+            && let Some(mut r) = self.remove((c.id, seq))
+        {
+            r.timeout_reported = true;
+            if !r.bad_answer {
+                out.push(Expired {
+                    req: r,
+                    why,
+                    at: now,
+                });
+            }
+        }
+    }
+
+    /// A request with sequence `seq` on conversation `conv` (an id from
+    /// [`Self::conversation`], just now). When more than [`MAX_OUTSTANDING`] requests wait,
+    /// the oldest go to `out`.
     pub fn request(
         &mut self,
         conv: u32,
         seq: u16,
         req: Outstanding,
+        out: &mut Vec<Expired>,
     ) -> (RequestKind, Option<SeqGap>) {
-        let last = self.conv(conv).last_seq;
-        self.conv(conv).last_seq = Some(seq);
+        let last = self.last_seq.insert(conv, seq);
         if last == Some(seq) {
-            let prev = self.map.get(&(conv, seq)).copied().or_else(|| {
+            let prev = self.get((conv, seq)).copied().or_else(|| {
                 self.late
                     .iter()
                     .rev()
@@ -307,7 +499,7 @@ impl EtherPairing {
                 let mut next = req;
                 next.first = p.first;
                 next.sends = p.sends.saturating_add(1);
-                self.insert(conv, seq, next);
+                self.insert(conv, seq, next, out);
                 return (
                     RequestKind::Retry {
                         n: p.sends,
@@ -326,32 +518,74 @@ impl EtherPairing {
             }
             _ => None,
         };
-        self.insert(conv, seq, req);
+        self.insert(conv, seq, req, out);
         (RequestKind::New, gap)
     }
 
-    fn insert(&mut self, conv: u32, seq: u16, req: Outstanding) {
-        if self.map.len() >= MAX_OUTSTANDING {
-            // Forget the oldest entries (their deadlines are in order).
+    fn insert(&mut self, conv: u32, seq: u16, req: Outstanding, out: &mut Vec<Expired>) {
+        let key = (conv, seq);
+        if !self.map.contains_key(&key) {
             while self.map.len() >= MAX_OUTSTANDING {
-                match self.deadlines.pop_front() {
-                    Some((_, c, s, _)) => {
-                        self.map.remove(&(c, s));
+                // Give up the oldest request (deadlines are in order of insertion).
+                let Some(d) = self.deadlines.pop_front() else {
+                    break;
+                };
+                if self.live(&d) {
+                    let mut r = self.remove(d.key).expect("live");
+                    r.timeout_reported = true;
+                    self.forgotten.requests += 1;
+                    if !r.bad_answer {
+                        out.push(Expired {
+                            req: r,
+                            why: TimeoutWhy::Overflow,
+                            at: req.time.max(r.time),
+                        });
                     }
-                    None => {
-                        self.map.clear();
-                    }
+                    self.remember_late(d.key, r);
                 }
             }
         }
-        self.map.insert((conv, seq), req);
-        self.deadlines
-            .push_back((req.time.saturating_add(self.timeout), conv, seq, req.time));
+        self.generation = self.generation.wrapping_add(1);
+        let entry = (req, self.generation);
+        match self.map.get(&key) {
+            Some(&i) => self.slots[i as usize] = entry,
+            None => {
+                let i = match self.free.pop() {
+                    Some(i) => {
+                        self.slots[i as usize] = entry;
+                        i
+                    }
+                    None => {
+                        self.slots.push(entry);
+                        (self.slots.len() - 1) as u32
+                    }
+                };
+                self.map.insert(key, i);
+            }
+        }
+        self.deadlines.push_back(Deadline {
+            key,
+            generation: self.generation,
+        });
+        // Answered and repeated requests leave stale deadlines behind: drop them when they
+        // outnumber a quarter of the live ones.
+        if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
+            let mut deadlines = std::mem::take(&mut self.deadlines);
+            deadlines.retain(|d| self.live(d));
+            self.deadlines = deadlines;
+        }
+    }
+
+    fn remember_late(&mut self, key: (u32, u16), r: Outstanding) {
+        if self.late.len() == LATE_KEPT {
+            self.late.pop_front();
+        }
+        self.late.push_back((key, r));
     }
 
     /// An answer on conversation `conv` with sequence `seq` at `time`.
     pub fn answer(&mut self, conv: u32, seq: u16, time: u64) -> Answer {
-        let req = match self.map.remove(&(conv, seq)) {
+        let req = match self.remove((conv, seq)) {
             Some(r) => r,
             None => match self.late.iter().rposition(|(k, _)| *k == (conv, seq)) {
                 Some(i) => self.late.remove(i).map(|e| e.1).expect("index in range"),
@@ -368,46 +602,78 @@ impl EtherPairing {
 
     /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
     pub fn bad_answer(&mut self, conv: u32, seq: u16) {
-        if let Some(r) = self.map.get_mut(&(conv, seq)) {
+        if let Some(r) = self.get_mut((conv, seq)) {
             r.bad_answer = true;
         }
     }
 
-    /// Requests whose timeout passed at `now`, oldest first.
-    pub fn expire(&mut self, now: u64, out: &mut Vec<Outstanding>) {
-        while let Some(&(deadline, conv, seq, sent)) = self.deadlines.front() {
-            if deadline >= now {
+    /// Requests whose timeout passed at `now`, oldest first; conversations idle for longer
+    /// than [`CONVERSATION_IDLE`] are forgotten.
+    pub fn expire(&mut self, now: u64, out: &mut Vec<Expired>) {
+        while let Some(&d) = self.deadlines.front() {
+            if !self.live(&d) {
+                self.deadlines.pop_front();
+                continue;
+            }
+            let at = self
+                .get(d.key)
+                .expect("live")
+                .time
+                .saturating_add(self.timeout);
+            if at >= now {
                 break;
             }
             self.deadlines.pop_front();
-            if let Some(r) = self.map.get(&(conv, seq))
-                && r.time == sent
-            {
-                let mut r = self.map.remove(&(conv, seq)).expect("present");
-                r.timeout_reported = true;
-                if !r.bad_answer {
-                    out.push(r);
+            let mut r = self.remove(d.key).expect("live");
+            r.timeout_reported = true;
+            if !r.bad_answer {
+                out.push(Expired {
+                    req: r,
+                    why: TimeoutWhy::Deadline,
+                    at,
+                });
+            }
+            self.remember_late(d.key, r);
+        }
+        if now < self.next_sweep {
+            return;
+        }
+        let idle = self.idle_limit();
+        self.next_sweep = now.saturating_add(idle / 8);
+        while let Some(&(k, s)) = self.lru.front() {
+            match self.convs.get_mut(&k) {
+                Some(c) if c.queued == s => {
+                    if c.time.saturating_add(idle) < now {
+                        self.lru.pop_front();
+                        self.forgotten.expired += 1;
+                        self.drop_conversation(k, now, TimeoutWhy::Deadline, out);
+                    } else if c.stamp != s {
+                        c.queued = c.stamp;
+                        let stamp = c.stamp;
+                        self.lru.pop_front();
+                        self.lru.push_back((k, stamp));
+                    } else {
+                        break;
+                    }
                 }
-                if self.late.len() == LATE_KEPT {
-                    self.late.pop_front();
+                _ => {
+                    self.lru.pop_front();
                 }
-                self.late.push_back(((conv, seq), r));
             }
         }
     }
 
-    /// End of input: every request still waiting, oldest first.
-    pub fn finish(&mut self, out: &mut Vec<Outstanding>) {
-        while let Some((_, conv, seq, sent)) = self.deadlines.pop_front() {
-            if let Some(r) = self.map.get(&(conv, seq))
-                && r.time == sent
-            {
-                if !r.bad_answer {
-                    out.push(*r);
-                }
-                self.map.remove(&(conv, seq));
+    /// End of input: forgets every request still waiting; returns how many there were (not
+    /// counting those whose answer came with a bad CRC).
+    pub fn finish(&mut self) -> u64 {
+        let mut n = 0;
+        while let Some(d) = self.deadlines.pop_front() {
+            if self.live(&d) {
+                let r = self.remove(d.key).expect("live");
+                n += u64::from(!r.bad_answer);
             }
         }
+        n
     }
 }
 
@@ -484,35 +750,47 @@ mod tests {
 
     #[test]
     fn ether_pairing_by_sequence() {
-        let mut p = EtherPairing::new(1_000_000);
+        let mut p: EtherPairing<u8> = EtherPairing::new(1_000_000);
+        let mut out = Vec::new();
         let r = |t| Outstanding::new(info(75), t, true, None);
-        assert_eq!(p.request(0, 1, r(0)), (RequestKind::New, None));
-        assert_eq!(p.request(1, 1, r(10)), (RequestKind::New, None));
+        let (c0, _) = p.conversation(0, 0, || 0, &mut out);
+        assert_eq!(p.request(c0, 1, r(0), &mut out), (RequestKind::New, None));
+        let (c1, _) = p.conversation(1, 10, || 0, &mut out);
+        assert_eq!(p.request(c1, 1, r(10), &mut out), (RequestKind::New, None));
         assert!(matches!(
-            p.answer(1, 1, 50),
+            p.answer(c1, 1, 50),
             Answer::Paired { elapsed: 40, .. }
         ));
         assert_eq!(
-            p.request(0, 1, r(500)),
+            p.request(c0, 1, r(500), &mut out),
             (RequestKind::Retry { n: 1, since: 500 }, None)
         );
         assert!(matches!(
-            p.answer(0, 1, 600),
+            p.answer(c0, 1, 600),
             Answer::Paired { elapsed: 100, .. }
         ));
-        assert_eq!(p.answer(0, 1, 700), Answer::NoRequest);
-        let (k, gap) = p.request(0, 5, r(800));
+        assert_eq!(p.answer(c0, 1, 700), Answer::NoRequest);
+        let (k, gap) = p.request(c0, 5, r(800), &mut out);
         assert_eq!(k, RequestKind::New);
         assert_eq!(gap, Some(SeqGap { missing: Some(3) }));
-        let mut out = Vec::new();
         p.expire(1_000_000, &mut out);
         assert!(out.is_empty());
         p.expire(1_900_000, &mut out);
         assert_eq!(out.len(), 1);
+        assert_eq!((out[0].why, out[0].at), (TimeoutWhy::Deadline, 1_000_800));
         // late answer still pairs
         assert!(matches!(
-            p.answer(0, 5, 2_000_000),
+            p.answer(c0, 5, 2_000_000),
             Answer::Paired { late: true, .. }
         ));
+        // idle conversations are forgotten, and start afresh
+        out.clear();
+        p.expire(70_000_000, &mut out);
+        assert_eq!(p.sizes().conversations, 0);
+        assert_eq!(p.forgotten.expired, 2);
+        let (c2, _) = p.conversation(0, 70_000_001, || 0, &mut out);
+        assert_ne!(c2, c0);
+        assert_eq!(p.request(c2, 9, r(70_000_001), &mut out).1, None);
+        assert!(out.is_empty());
     }
 }

@@ -10,8 +10,11 @@ pub mod serial;
 use std::fs::File;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread;
+use std::time::Duration;
 
 use crate::exit::Failure;
 use crate::protocol::Kind;
@@ -80,6 +83,9 @@ pub enum Message {
         micros: u64,
         path: PathBuf,
     },
+    /// Sent by [`spawn`] after each `Data` of a file or stream: the input had been read up to
+    /// this many bytes when that batch was made (its bytes and everything before them).
+    ReadUpTo(u64),
     /// The source ended normally.
     End,
     /// The source failed.
@@ -160,18 +166,79 @@ pub struct Opened {
     pub name: String,
 }
 
-/// Opens a file or standard input and detects its kind.
-pub fn open(input: &Input) -> Result<Opened, Failure> {
-    let (mut reader, name, path): (Box<dyn Read + Send>, String, Option<&Path>) = match input {
-        Input::Stdin => (Box::new(io::stdin()), "standard input".into(), None),
-        Input::File(p) | Input::Device(p) => {
-            let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
-            if meta.is_dir() {
-                return Err(Failure::IsDirectory(p.clone()));
+/// How far a file or stream has been read, shared with the reader thread.
+#[derive(Clone, Debug, Default)]
+pub struct Progress {
+    /// Bytes read from the input so far (detection prefix included).
+    read: Arc<AtomicU64>,
+    /// The input's size, when it is a regular file.
+    pub size: Option<u64>,
+}
+
+impl Progress {
+    /// Bytes read from the input so far.
+    pub fn read(&self) -> u64 {
+        self.read.load(Ordering::Relaxed)
+    }
+}
+
+/// A reader that counts the bytes it hands out.
+struct Counted {
+    inner: Box<dyn Read + Send>,
+    read: Arc<AtomicU64>,
+}
+
+impl Read for Counted {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.read.fetch_add(n as u64, Ordering::Relaxed);
+        Ok(n)
+    }
+}
+
+/// Opens a file or standard input and detects its kind. A FIFO is opened without waiting for
+/// its writer, and every wait for the first bytes (a FIFO without a writer yet, a silent pipe)
+/// ends on SIGINT/SIGTERM with [`Failure::Signal`] (see [`wait_readable`]).
+pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
+    use std::os::unix::io::AsRawFd;
+    let (reader, name, path, size, fd): (Box<dyn Read + Send>, String, Option<&Path>, _, _) =
+        match input {
+            Input::Stdin => (
+                Box::new(io::stdin()),
+                "standard input".into(),
+                None,
+                regular_size(0),
+                Some(0),
+            ),
+            Input::File(p) | Input::Device(p) => {
+                let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
+                if meta.is_dir() {
+                    return Err(Failure::IsDirectory(p.clone()));
+                }
+                let f = open_file(p, &meta).map_err(|e| Failure::from_input_io(p, &e))?;
+                let size = meta.is_file().then_some(meta.len());
+                let fd = (!meta.is_file()).then(|| f.as_raw_fd());
+                (
+                    Box::new(f),
+                    p.display().to_string(),
+                    Some(p.as_path()),
+                    size,
+                    fd,
+                )
             }
-            let f = File::open(p).map_err(|e| Failure::from_input_io(p, &e))?;
-            (Box::new(f), p.display().to_string(), Some(p.as_path()))
-        }
+        };
+    let progress = Progress {
+        read: Arc::default(),
+        size,
+    };
+    let mut reader: Box<dyn Read + Send> = Box::new(Counted {
+        inner: reader,
+        read: progress.read.clone(),
+    });
+    let fail = |e: io::Error| match (crate::run::Stop::received(), path) {
+        (Some(sig), _) => Failure::Signal(crate::exit::Interrupt::new(sig)),
+        (None, Some(p)) => Failure::from_input_io(p, &e),
+        (None, None) => Failure::Input(format!("cannot read standard input: {e}")),
     };
     let mut prefix = Vec::with_capacity(DETECT_LEN);
     let mut buf = [0u8; DETECT_LEN];
@@ -182,25 +249,92 @@ pub fn open(input: &Input) -> Result<Opened, Failure> {
         if prefix.len() >= DETECT_LEN {
             break detect(&prefix, true).unwrap_or(Kind::Raw);
         }
+        if let Some(fd) = fd {
+            wait_readable(fd).map_err(fail)?;
+        }
         let want = DETECT_LEN - prefix.len();
         match reader.read(&mut buf[..want]) {
             Ok(0) => break detect(&prefix, true).unwrap_or(Kind::Raw),
             Ok(n) => prefix.extend_from_slice(&buf[..n]),
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => {
-                return Err(match path {
-                    Some(p) => Failure::from_input_io(p, &e),
-                    None => Failure::Input(format!("cannot read standard input: {e}")),
-                });
-            }
+            Err(e) => return Err(fail(e)),
         }
     };
-    Ok(Opened {
-        kind,
-        prefix,
-        reader,
-        name,
-    })
+    Ok((
+        Opened {
+            kind,
+            prefix,
+            reader,
+            name,
+        },
+        progress,
+    ))
+}
+
+/// The size of descriptor `fd` when it is a regular file (standard input redirected from one).
+fn regular_size(fd: i32) -> Option<u64> {
+    let mut st: libc::stat = unsafe { std::mem::zeroed() };
+    if unsafe { libc::fstat(fd, &mut st) } != 0 || st.st_mode & libc::S_IFMT != libc::S_IFREG {
+        return None;
+    }
+    // What is left from the current offset (`busnoop - < file` starts at 0).
+    let pos = unsafe { libc::lseek(fd, 0, libc::SEEK_CUR) };
+    Some((st.st_size as u64).saturating_sub(pos.max(0) as u64))
+}
+
+/// Opens `path` for reading. A FIFO is opened non-blocking (a plain open waits for a writer
+/// inside the kernel, where no signal can end it), then set back to blocking reads; the wait
+/// for its writer is then [`wait_readable`]'s.
+fn open_file(path: &Path, meta: &std::fs::Metadata) -> io::Result<File> {
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    use std::os::unix::io::AsRawFd;
+    if !meta.file_type().is_fifo() {
+        return File::open(path);
+    }
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)?;
+    let fd = f.as_raw_fd();
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK) } < 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(f)
+}
+
+/// How often a wait for input looks for a signal.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Waits until a read of `fd` will not block: data, end of input or an error. A FIFO without a
+/// writer would read as empty at once, but poll() waits in that case ("no writer yet" is not
+/// the end of the input; POLLHUP comes only after a writer has opened and closed it). The
+/// signal handlers restart interrupted reads, so this is what lets SIGINT/SIGTERM end the wait
+/// (with an `Interrupted` error; the caller reports the signal).
+fn wait_readable(fd: i32) -> io::Result<()> {
+    loop {
+        if crate::run::Stop::received().is_some() {
+            return Err(io::Error::new(
+                io::ErrorKind::Interrupted,
+                "stopped by a signal",
+            ));
+        }
+        let mut pfd = libc::pollfd {
+            fd,
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        match unsafe { libc::poll(&mut pfd, 1, SIGNAL_POLL.as_millis() as i32) } {
+            n if n > 0 => return Ok(()),
+            0 => {}
+            _ => {
+                let e = io::Error::last_os_error();
+                if e.kind() != io::ErrorKind::Interrupted {
+                    return Err(e);
+                }
+            }
+        }
+    }
 }
 
 /// Reads raw bytes without time.
@@ -240,17 +374,54 @@ impl ChunkReader for RawReader {
     }
 }
 
-/// Runs `reader` in a thread; batches arrive on the returned channel, followed by `End` or
-/// `Failed`. The channel is bounded so a fast reader waits for the decoder.
-pub fn spawn(mut reader: Box<dyn ChunkReader>) -> Receiver<Message> {
-    let (tx, rx) = sync_channel(16);
+/// An opened source: its kind, its reader, and for files and streams how far it was read.
+pub type Reading = (Kind, Box<dyn ChunkReader>, Option<Progress>);
+
+/// The receiving end of a reader thread.
+pub struct Feed {
+    pub rx: Receiver<Message>,
+    /// Set by the driver when it stops: the reader thread reads no more.
+    halt: Arc<AtomicBool>,
+    /// For files and streams: how far the input was read.
+    pub progress: Option<Progress>,
+}
+
+impl Feed {
+    /// Tells the reader thread to stop reading (it finishes the read it is in, if any).
+    pub fn halt(&self) {
+        self.halt.store(true, Ordering::Relaxed);
+    }
+}
+
+impl Drop for Feed {
+    fn drop(&mut self) {
+        self.halt();
+    }
+}
+
+/// Runs `reader` in a thread; batches arrive on the returned feed, each followed by
+/// `ReadUpTo` when `progress` is given, then `End` or `Failed`. The channel is bounded so a
+/// fast reader waits for the decoder; once the feed halts, the thread reads nothing more.
+pub fn spawn(mut reader: Box<dyn ChunkReader>, progress: Option<Progress>) -> Feed {
+    let (tx, rx) = sync_channel(32);
+    let halt = Arc::new(AtomicBool::new(false));
+    let feed = Feed {
+        rx,
+        halt: halt.clone(),
+        progress: progress.clone(),
+    };
     thread::Builder::new()
         .name("busnoop-reader".into())
         .spawn(move || {
-            loop {
+            while !halt.load(Ordering::Relaxed) {
                 match reader.next_batch(&tx) {
                     Ok(Some(b)) => {
                         if tx.send(Message::Data(b)).is_err() {
+                            return;
+                        }
+                        if let Some(p) = &progress
+                            && tx.send(Message::ReadUpTo(p.read())).is_err()
+                        {
                             return;
                         }
                     }
@@ -266,7 +437,7 @@ pub fn spawn(mut reader: Box<dyn ChunkReader>) -> Receiver<Message> {
             }
         })
         .expect("spawn reader thread");
-    rx
+    feed
 }
 
 #[cfg(test)]

@@ -25,6 +25,48 @@ const READ_BUF: usize = 4096;
 const RECONNECT_FIRST: Duration = Duration::from_millis(200);
 const RECONNECT_MAX: Duration = Duration::from_millis(1000);
 
+/// How to open a serial device: the protocol's line settings (with `--baud`) and what to do
+/// with the modem lines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SerialConfig {
+    pub line: Line,
+    pub lines: ModemLines,
+}
+
+/// What busnoop does with a serial device's DTR and RTS outputs (`--dtr-rts`). Opening a tty
+/// raises both (Linux does it inside open(), before any program can act); on an RS-485 adapter
+/// whose driver is enabled by RTS that could drive the bus.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModemLines {
+    /// Drop DTR and RTS right after opening and keep them low (they then stay low on close).
+    #[default]
+    Low,
+    /// Leave them as the driver sets them (Linux: raised on open, dropped on close when the
+    /// port's HUPCL is set), for adapters powered or enabled by DTR/RTS.
+    Keep,
+}
+
+/// The serialport crate's names for a line's character format.
+fn char_format(line: &Line) -> (DataBits, Parity, StopBits) {
+    let data_bits = match line.data_bits {
+        5 => DataBits::Five,
+        6 => DataBits::Six,
+        7 => DataBits::Seven,
+        _ => DataBits::Eight,
+    };
+    let parity = match line.parity {
+        LineParity::None => Parity::None,
+        LineParity::Odd => Parity::Odd,
+        LineParity::Even => Parity::Even,
+    };
+    let stop_bits = if line.stop_bits == 2 {
+        StopBits::Two
+    } else {
+        StopBits::One
+    };
+    (data_bits, parity, stop_bits)
+}
+
 /// True when `arg` names a serial device rather than a capture file: an existing character
 /// device, or a path that looks like one (`/dev/…`, `COMn`) even if it does not exist (so that a
 /// missing adapter gets the list of ports instead of "no such file").
@@ -180,31 +222,100 @@ pub fn is_not_a_tty(e: &serialport::Error) -> bool {
         && (e.description.contains("Inappropriate ioctl") || e.description.contains("typewriter"))
 }
 
+/// Opens and configures `path` for listening only: read-only (busnoop cannot write to the
+/// bus), exclusively (TIOCEXCL and flock, like the serialport crate), without waiting for a
+/// carrier (O_NONBLOCK open, CLOCAL), with DTR/RTS dropped at once unless `cfg.lines` is
+/// `Keep`. No other setting is changed that outlives busnoop (HUPCL stays as it was).
+#[cfg(unix)]
+pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    use serialport::{Error, ErrorKind};
+    use std::os::fd::{AsRawFd, FromRawFd, IntoRawFd, OwnedFd};
+    use std::os::unix::ffi::OsStrExt;
+    let os = |what: &str| {
+        let e = std::io::Error::last_os_error();
+        let kind = match e.raw_os_error() {
+            Some(libc::EBUSY | libc::EWOULDBLOCK) => ErrorKind::NoDevice,
+            Some(libc::ENOENT) => ErrorKind::Io(std::io::ErrorKind::NotFound),
+            Some(libc::EACCES | libc::EPERM) => ErrorKind::Io(std::io::ErrorKind::PermissionDenied),
+            // ENOTTY and the like: see is_not_a_tty.
+            _ => ErrorKind::Unknown,
+        };
+        Error::new(kind, format!("{what}: {e}"))
+    };
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| Error::new(ErrorKind::InvalidInput, "a device name with a NUL byte"))?;
+    let flags = libc::O_RDONLY | libc::O_NOCTTY | libc::O_NONBLOCK | libc::O_CLOEXEC;
+    let raw = unsafe { libc::open(c.as_ptr(), flags) };
+    if raw < 0 {
+        return Err(os("open"));
+    }
+    // Closed on every early return.
+    let fd = unsafe { OwnedFd::from_raw_fd(raw) };
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    if unsafe { libc::tcgetattr(fd.as_raw_fd(), &mut t) } != 0 {
+        return Err(os("tcgetattr"));
+    }
+    // Exclusive, so that a second capture program gets "in use" (before touching any line of
+    // a port that someone else holds).
+    if unsafe { libc::ioctl(fd.as_raw_fd(), libc::TIOCEXCL) } != 0 {
+        return Err(os("TIOCEXCL"));
+    }
+    if unsafe { libc::flock(fd.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+        return Err(os("the port is locked by another program"));
+    }
+    if cfg.lines == ModemLines::Low {
+        lower_dtr_rts(fd.as_raw_fd());
+    }
+    // Raw 8-bit input, no echo, no flow control, modem status ignored (CLOCAL: no carrier wait).
+    unsafe { libc::cfmakeraw(&mut t) };
+    t.c_cflag |= libc::CREAD | libc::CLOCAL;
+    t.c_cflag &= !libc::CRTSCTS;
+    t.c_iflag &= !(libc::IXON | libc::IXOFF | libc::IXANY);
+    if unsafe { libc::tcsetattr(fd.as_raw_fd(), libc::TCSANOW, &t) } != 0 {
+        return Err(os("tcsetattr"));
+    }
+    let fl = unsafe { libc::fcntl(fd.as_raw_fd(), libc::F_GETFL) };
+    if fl < 0 || unsafe { libc::fcntl(fd.as_raw_fd(), libc::F_SETFL, fl & !libc::O_NONBLOCK) } < 0 {
+        return Err(os("fcntl"));
+    }
+    // The crate sets speed (any rate, termios2 on Linux) and character format on our descriptor.
+    let mut port = unsafe { serialport::TTYPort::from_raw_fd(fd.into_raw_fd()) };
+    let (data_bits, parity, stop_bits) = char_format(&cfg.line);
+    port.set_baud_rate(cfg.line.baud)?;
+    port.set_data_bits(data_bits)?;
+    port.set_parity(parity)?;
+    port.set_stop_bits(stop_bits)?;
+    port.set_flow_control(FlowControl::None)?;
+    port.set_timeout(READ_TIMEOUT)?;
+    Ok(Box::new(port))
+}
+
+/// Drops DTR and RTS. Devices without modem lines (ptys, some USB bridges) refuse; that is fine.
+#[cfg(unix)]
+fn lower_dtr_rts(fd: i32) {
+    let bits: libc::c_int = libc::TIOCM_DTR | libc::TIOCM_RTS;
+    if unsafe { libc::ioctl(fd, libc::TIOCMBIC, &bits) } != 0 {
+        tracing::debug!(
+            "cannot drop DTR/RTS: {} (the device has no modem lines)",
+            std::io::Error::last_os_error()
+        );
+    }
+}
+
 /// Opens and configures `path`.
-pub fn open(path: &Path, line: &Line) -> Result<Box<dyn SerialPort>, serialport::Error> {
-    let data_bits = match line.data_bits {
-        5 => DataBits::Five,
-        6 => DataBits::Six,
-        7 => DataBits::Seven,
-        _ => DataBits::Eight,
-    };
-    let parity = match line.parity {
-        LineParity::None => Parity::None,
-        LineParity::Odd => Parity::Odd,
-        LineParity::Even => Parity::Even,
-    };
-    let stop_bits = if line.stop_bits == 2 {
-        StopBits::Two
-    } else {
-        StopBits::One
-    };
-    serialport::new(path.to_string_lossy(), line.baud)
+#[cfg(not(unix))]
+pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    let (data_bits, parity, stop_bits) = char_format(&cfg.line);
+    let builder = serialport::new(path.to_string_lossy(), cfg.line.baud)
         .data_bits(data_bits)
         .parity(parity)
         .stop_bits(stop_bits)
         .flow_control(FlowControl::None)
-        .timeout(READ_TIMEOUT)
-        .open()
+        .timeout(READ_TIMEOUT);
+    match cfg.lines {
+        ModemLines::Low => builder.dtr_on_open(false).open(),
+        ModemLines::Keep => builder.open(),
+    }
 }
 
 /// A warning when `dev` is an FTDI adapter whose latency timer holds bytes back for more than
@@ -280,7 +391,7 @@ impl Identity {
 /// Reads a serial port in the reader thread.
 pub struct SerialReader {
     path: PathBuf,
-    cfg: Line,
+    cfg: SerialConfig,
     port: Option<Box<dyn SerialPort>>,
     start: Instant,
     reconnect: bool,
@@ -291,12 +402,12 @@ pub struct SerialReader {
 
 impl SerialReader {
     /// Reads the port opened at `path` (see [`open`]).
-    pub fn new(path: &Path, port: Box<dyn SerialPort>, cfg: Line, reconnect: bool) -> Self {
+    pub fn new(path: &Path, port: Box<dyn SerialPort>, cfg: SerialConfig, reconnect: bool) -> Self {
         tracing::info!(
             "{}: {} baud, {} bits per character",
             path.display(),
-            cfg.baud,
-            cfg.bits_per_char()
+            cfg.line.baud,
+            cfg.line.bits_per_char()
         );
         SerialReader {
             path: path.to_owned(),

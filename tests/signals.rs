@@ -1,0 +1,251 @@
+//! Signals end busnoop promptly whatever it is doing: replaying a fast endless source, a large
+//! file, or waiting for a FIFO's writer. Every decoded row is kept, the output ends with a whole
+//! row, and stderr says how much input was left.
+
+use std::io::Write;
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// Generous bound for "stops at once": the old driver took 70-180 s here.
+const STOP_WITHIN: Duration = Duration::from_secs(5);
+
+fn busnoop() -> Command {
+    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
+    c.stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    c
+}
+
+fn mkfifo(path: &Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+}
+
+/// Kills the child if the test fails before it exited.
+struct Guard(Child);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Waits until the child has its signal handlers in place (so a signal is not fatal by default).
+fn wait_for_handlers(child: &Child) {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = format!("/proc/{}/status", child.id());
+    loop {
+        let text = std::fs::read_to_string(&status).unwrap_or_default();
+        let caught = text
+            .lines()
+            .find_map(|l| l.strip_prefix("SigCgt:"))
+            .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
+            .unwrap_or(0);
+        let mask = (1 << (libc::SIGINT - 1)) | (1 << (libc::SIGTERM - 1));
+        if caught & mask == mask {
+            return;
+        }
+        assert!(Instant::now() < deadline, "busnoop installed no handlers");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Waits until `path` holds at least `lines` lines.
+fn wait_for_rows(path: &Path, lines: usize) {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while std::fs::read(path)
+        .unwrap_or_default()
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        < lines
+    {
+        assert!(Instant::now() < deadline, "rows did not arrive");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Sends `sig` and waits for the exit; fails when busnoop is still running after `within`.
+fn signal_and_wait(guard: &mut Guard, sig: i32, within: Duration) -> (ExitStatus, String) {
+    unsafe { libc::kill(guard.0.id() as i32, sig) };
+    let sent = Instant::now();
+    let status = loop {
+        if let Some(s) = guard.0.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            sent.elapsed() < within,
+            "busnoop still running {within:?} after signal {sig}"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(guard.0.stderr.as_mut().unwrap(), &mut err).unwrap();
+    (status, err)
+}
+
+#[test]
+fn ctrl_c_stops_a_fast_endless_replay_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("feed");
+    let out = dir.path().join("out.tsv");
+    mkfifo(&fifo);
+    // An endless stream of 0x7E as fast as the pipe takes it, until busnoop closes its end.
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut f = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+            let buf = [0x7Eu8; 64 * 1024];
+            while f.write_all(&buf).is_ok() {}
+        })
+    };
+    let child = busnoop()
+        .args(["sport", "-f", "tsv", "-o"])
+        .arg(&out)
+        .arg(&fifo)
+        .spawn()
+        .unwrap();
+    let mut guard = Guard(child);
+    wait_for_rows(&out, 1000);
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGINT, STOP_WITHIN);
+    assert_eq!(status.code(), Some(130), "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.ends_with('\n'), "the output ends with a whole row");
+    let rows = text.lines().count() - 1;
+    let line = err
+        .lines()
+        .find(|l| l.contains("interrupted after"))
+        .unwrap_or_else(|| panic!("no interrupted line: {err}"));
+    assert!(line.contains(&format!("after {rows} rows")), "{line}");
+    // A pipe has no size: what was decoded, what was read and dropped, the rest never read.
+    assert!(line.contains("bytes of the input decoded"), "{line}");
+    assert!(line.contains("rest left unread"), "{line}");
+    writer.join().unwrap();
+}
+
+#[test]
+fn sigterm_stops_a_large_file_and_says_how_much_was_not_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let out = dir.path().join("out.csv");
+    // 1 GiB of zeros (sparse, so it costs nothing): garbage rows for a long time.
+    let size: u64 = 1 << 30;
+    std::fs::File::create(&big).unwrap().set_len(size).unwrap();
+    let child = busnoop()
+        .args(["sport", "-o"])
+        .arg(&out)
+        .arg(&big)
+        .spawn()
+        .unwrap();
+    let mut guard = Guard(child);
+    wait_for_rows(&out, 1000);
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGTERM, STOP_WITHIN);
+    assert_eq!(status.code(), Some(143), "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.ends_with("\r\n"), "the CSV ends with a whole row");
+    let line = err
+        .lines()
+        .find(|l| l.contains("interrupted after"))
+        .unwrap_or_else(|| panic!("no interrupted line: {err}"));
+    assert!(line.contains(&format!("of {size} bytes")), "{line}");
+    assert!(line.contains("not decoded"), "{line}");
+}
+
+#[test]
+fn a_fifo_without_a_writer_ends_on_a_signal() {
+    for (sig, code) in [(libc::SIGTERM, 143), (libc::SIGINT, 130)] {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("nobody-writes");
+        mkfifo(&fifo);
+        let child = busnoop().arg("sport").arg(&fifo).spawn().unwrap();
+        let mut guard = Guard(child);
+        wait_for_handlers(&guard.0);
+        std::thread::sleep(Duration::from_millis(200));
+        let (status, err) = signal_and_wait(&mut guard, sig, STOP_WITHIN);
+        assert_eq!(status.code(), Some(code), "signal {sig}: {err}");
+        assert!(!err.contains("panick"), "{err}");
+    }
+}
+
+#[test]
+fn a_fifo_waits_for_its_writer_and_ends_when_the_writer_closes() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("late");
+    mkfifo(&fifo);
+    let child = Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
+        .args(["sport", "-f", "tsv"])
+        .arg(&fifo)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut guard = Guard(child);
+    // No writer yet: busnoop waits instead of taking the FIFO for an empty input.
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(
+        guard.0.try_wait().unwrap().is_none(),
+        "busnoop did not wait"
+    );
+    let mut bytes = Vec::new();
+    for i in 0..5u32 {
+        busnoop::sport::wire::encode_frame(
+            &mut bytes,
+            busnoop::sport::wire::header_for(0),
+            0x10,
+            0x0100,
+            i,
+        );
+    }
+    let mut w = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
+    w.write_all(&bytes).unwrap();
+    drop(w);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = guard.0.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "busnoop did not end with its writer"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut text = String::new();
+    std::io::Read::read_to_string(guard.0.stdout.as_mut().unwrap(), &mut text).unwrap();
+    assert!(status.success(), "{status:?}");
+    assert_eq!(text.lines().count(), 6, "{text}");
+}
+
+#[test]
+fn the_wiring_hint_is_for_live_sources_only() {
+    // A slow replay of bytes that never make a frame, lasting longer than the hint's 3 s.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("slow");
+    mkfifo(&fifo);
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut f = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_millis(3400) {
+                f.write_all(&[0xA0, 0xA0, 0xE6, 0x57, 0x7F, 0x81].repeat(20))
+                    .unwrap();
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        })
+    };
+    let out = busnoop()
+        .args(["sport", "-f", "tsv"])
+        .arg(&fifo)
+        .output()
+        .unwrap();
+    writer.join().unwrap();
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("no valid S.Port frame"), "{err}");
+    assert!(err.contains("in 0 valid frames"), "{err}");
+}
