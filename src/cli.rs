@@ -6,13 +6,13 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::decoder::Decoder;
+use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::exit::{Failure, code};
 use crate::record::{Recorder, RecordingReader};
 use crate::run::{Context, Stop, drive};
 use crate::sink::{Format, Output, Table, TableOptions};
-use crate::source::serial::{self, SerialConfig, SerialReader};
-use crate::source::{self, ChunkReader, Input, Kind};
+use crate::source::serial::{self, SerialReader};
+use crate::source::{self, ChunkReader, Input};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -44,7 +44,7 @@ pub enum Command {
     /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
     /// requests paired with responses.
     #[command(visible_alias = "sab")]
-    Sab2(crate::sab::SabArgs),
+    Sab2(SabArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
 }
@@ -58,8 +58,8 @@ pub struct SbusArgs {
 
     /// Serial mode; auto picks data/secure mode when the stream uses 0xB5 framing, break mode
     /// otherwise.
-    #[arg(long, value_enum, default_value_t = crate::sbus::Mode::Auto)]
-    pub mode: crate::sbus::Mode,
+    #[arg(long, value_enum, default_value_t = SbusMode::Auto)]
+    pub mode: SbusMode,
 
     /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
     /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
@@ -79,6 +79,109 @@ pub struct SbusArgs {
     #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT,
           value_parser = clap::value_parser!(u16).range(1..=65_535))]
     pub port: u16,
+}
+
+/// `sbus --mode`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SbusMode {
+    /// Data/secure mode when the stream uses 0xB5 framing, break mode otherwise.
+    Auto,
+    /// SM2 data mode (0xB5 framing, DLE escaping); secure telegrams are read too.
+    Data,
+    /// SM2 secure data mode (`B5 10|11 LEN SEQ` + telegram); standard telegrams are read too.
+    Secure,
+    /// SM0 break mode: a break (read as 0x00) before each request.
+    Break,
+    /// SM1 parity mode: the 9th bit marks the address (lost by most UARTs).
+    Parity,
+}
+
+impl SbusArgs {
+    /// The decoder settings for a line at `baud` (`--baud` or the protocol's default).
+    fn options(&self, baud: u32) -> crate::sbus::Options {
+        use crate::sbus::Mode;
+        crate::sbus::Options {
+            mode: match self.mode {
+                SbusMode::Auto => Mode::Auto,
+                SbusMode::Data => Mode::Data,
+                SbusMode::Secure => Mode::Secure,
+                SbusMode::Break => Mode::Break,
+                SbusMode::Parity => Mode::Parity,
+            },
+            baud,
+            timeout_ms: self.timeout_ms,
+            gap_ms: self.gap_ms,
+            stations: self.stations.clone(),
+            port: self.port,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct SabArgs {
+    #[command(flatten)]
+    pub capture: CaptureArgs,
+
+    /// Framing on the wire: `sync` = SAB v1 (`54 LEN HDR CMD DATA CRC8`, what modm's
+    /// documentation describes), `hdlc` = SAB2 (`7E HDR CMD DATA CRC16 7E`, what modm's SAB2 code
+    /// sends), `auto` = detect it and say which one was chosen.
+    #[arg(long, value_enum, default_value_t = SabFraming::Auto)]
+    pub framing: SabFraming,
+
+    /// Name an address in the Device column (repeatable): `--device motor=5`,
+    /// `--device imu=0x12`.
+    #[arg(long, value_name = "NAME=ADDR", value_parser = crate::sab::parse_device)]
+    pub device: Vec<(String, u8)>,
+
+    /// Name a command in the Sensor column (repeatable): `--command speed=0x34`,
+    /// `--command reset=7`.
+    #[arg(long, value_name = "NAME=CODE", value_parser = crate::sab::parse_command)]
+    pub command: Vec<(String, u8)>,
+
+    /// Master timeout: a request without a response within this time gets a `Timeout` row.
+    #[arg(long, value_name = "MS", default_value_t = crate::sab::DEFAULT_TIMEOUT_MS,
+          value_parser = clap::value_parser!(u64).range(MS_RANGE))]
+    pub timeout_ms: u64,
+
+    /// SAB2 payload limit (modm's template parameter `N` of `sab2::Interface`): longer frames
+    /// are flagged as overlong.
+    #[arg(long, value_name = "BYTES", default_value_t = crate::sab::hdlc::DEFAULT_MAX_PAYLOAD as u16,
+          value_parser = clap::value_parser!(u16).range(1..=255))]
+    pub max_payload: u16,
+}
+
+/// `sab2 --framing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SabFraming {
+    /// Detect the framing from the stream (and say which one was chosen).
+    Auto,
+    /// SAB v1: `54 LEN HDR CMD DATA CRC8` (what modm's documentation describes).
+    #[value(alias = "sab1", alias = "v1")]
+    Sync,
+    /// SAB2: `7E HDR CMD DATA CRC16 7E`, byte-stuffed (what modm's SAB2 code sends).
+    #[value(alias = "sab2")]
+    Hdlc,
+}
+
+impl SabArgs {
+    /// The decoder settings for a line at `baud` (`--baud` or the protocol's default): raw
+    /// captures carry no time, busnoop reconstructs it from the byte position, 10 bits per byte
+    /// at this rate.
+    fn options(&self, baud: u32) -> crate::sab::Options {
+        use crate::sab::FramingChoice;
+        crate::sab::Options {
+            framing: match self.framing {
+                SabFraming::Auto => FramingChoice::Auto,
+                SabFraming::Sync => FramingChoice::Sync,
+                SabFraming::Hdlc => FramingChoice::Hdlc,
+            },
+            baud,
+            timeout_micros: self.timeout_ms * 1000,
+            max_payload: self.max_payload as usize,
+            devices: self.device.clone(),
+            commands: self.command.clone(),
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -253,45 +356,23 @@ fn init_tracing(verbose: u8) {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
-        Command::Sport(args) => {
-            run_capture(
-                &args.capture,
-                &crate::sport::PROTOCOL,
-                |kind, _| match kind {
-                    Kind::Pcap | Kind::Pcapng => Err(unusable(
-                        kind,
-                        "S.Port",
-                        "raw wire bytes, EdgeTX logs or busnoop recordings",
-                    )),
-                    _ => Ok(Box::new(crate::sport::SportDecoder::new())),
-                },
-            )
-        }
-        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, cfg| {
-            sbus_decoder(&args, kind, cfg)
+        Command::Sport(args) => run_capture(&args.capture, &crate::sport::PROTOCOL, |_, _| {
+            crate::sport::decoder()
         }),
-        Command::Sab2(args) => {
-            run_capture(
-                &args.capture,
-                &crate::sab::PROTOCOL,
-                |kind, cfg| match kind {
-                    Kind::Pcap | Kind::Pcapng | Kind::EdgeTxLog => Err(unusable(
-                        kind,
-                        "SAB",
-                        "raw wire bytes or busnoop recordings",
-                    )),
-                    _ => Ok(Box::new(crate::sab::SabDecoder::new(
-                        args.options(cfg.baud),
-                    ))),
-                },
-            )
+        Command::Sbus(args) => {
+            run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
+                crate::sbus::decoder(args.options(line.baud), kind)
+            })
         }
+        Command::Sab2(args) => run_capture(&args.capture, &crate::sab::PROTOCOL, |_, line| {
+            crate::sab::decoder(args.options(line.baud))
+        }),
         Command::Ports => list_ports(),
     }
 }
 
-/// The failure for an input of a kind `protocol` cannot read; `accepted` says what it reads.
-fn unusable(kind: Kind, protocol: &str, accepted: &str) -> Failure {
+/// The failure for an input of a kind `protocol` cannot read.
+fn unusable(kind: Kind, protocol: &Protocol) -> Failure {
     let what = match kind {
         Kind::Pcap | Kind::Pcapng => "a pcap of network traffic",
         Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
@@ -299,36 +380,9 @@ fn unusable(kind: Kind, protocol: &str, accepted: &str) -> Failure {
         Kind::Raw | Kind::Serial => "raw serial data",
     };
     Failure::Input(format!(
-        "this is {what}; {protocol} captures are {accepted}"
+        "this is {what}; {} captures are {}",
+        protocol.name, protocol.accepts_text
     ))
-}
-
-/// The S-Bus decoder for an input kind: serial bytes (raw files, devices, busnoop recordings)
-/// or Ether-S-Bus captures.
-fn sbus_decoder(
-    args: &SbusArgs,
-    kind: Kind,
-    cfg: &SerialConfig,
-) -> Result<Box<dyn Decoder>, Failure> {
-    let opts = crate::sbus::Options {
-        mode: args.mode,
-        baud: cfg.baud,
-        timeout_ms: args.timeout_ms,
-        gap_ms: args.gap_ms,
-        stations: args.stations.clone(),
-        port: args.port,
-    };
-    match kind {
-        Kind::Raw | Kind::Serial | Kind::Recording => {
-            Ok(Box::new(crate::sbus::SerialDecoder::new(opts)))
-        }
-        Kind::Pcap | Kind::Pcapng => Ok(Box::new(crate::sbus::EtherDecoder::new(&opts))),
-        Kind::EdgeTxLog => Err(unusable(
-            kind,
-            "S-Bus",
-            "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
-        )),
-    }
 }
 
 /// Valid values of the millisecond options (`--timeout-ms`, `--gap-ms`): 1 ms to one hour.
@@ -343,21 +397,13 @@ fn is_dash(p: &Path) -> bool {
     p.as_os_str() == "-"
 }
 
-/// What a protocol tells the shared command-line code.
-pub struct Protocol {
-    /// Name in messages ("S.Port").
-    pub name: &'static str,
-    /// Character format and default speed of a live line.
-    pub serial: SerialConfig,
-}
-
 /// Opens SOURCE (a device, a file or standard input), picks the reader for its kind, asks
 /// `decoder_for` for the protocol decoder, decodes everything into the table and prints the
 /// summary.
 pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
-    decoder_for: impl FnOnce(Kind, &SerialConfig) -> Result<Box<dyn Decoder>, Failure>,
+    decoder_for: impl FnOnce(Kind, &Line) -> Box<dyn Decoder>,
 ) -> Result<(), Failure> {
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
@@ -386,14 +432,20 @@ pub fn run_capture(
     )?;
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
-    let mut cfg = protocol.serial;
+    let mut line = protocol.line;
     if let Some(b) = args.live.baud {
-        cfg.baud = b;
+        line.baud = b;
     }
-    cfg.lines = args.live.dtr_rts;
-    let (kind, reader, progress) = open_source(input, &cfg, args.live.reconnect)?;
+    let serial = serial::SerialConfig {
+        line,
+        lines: args.live.dtr_rts,
+    };
+    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
-    let mut decoder = decoder_for(kind, &cfg)?;
+    if !protocol.reads(kind) {
+        return Err(unusable(kind, protocol));
+    }
+    let mut decoder = decoder_for(kind, &line);
 
     let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
     let mut recorder = match &args.live.record {
@@ -438,7 +490,7 @@ pub fn run_capture(
 /// Opens SOURCE and returns its kind with the reader for it.
 fn open_source(
     input: Input,
-    cfg: &SerialConfig,
+    cfg: &serial::SerialConfig,
     reconnect: bool,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {

@@ -6,18 +6,20 @@
 //! [`run`] wires the three together and deals with signals, statistics and exit codes.
 
 pub mod cli;
-pub mod decoder;
 pub mod exit;
 pub mod fmt;
 pub mod pcap;
+pub mod protocol;
 pub mod record;
 pub mod row;
 pub mod run;
 pub mod sab;
 pub mod sbus;
+#[cfg(feature = "selfcheck")]
 #[doc(hidden)]
 pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;
+pub mod time;
 pub mod summary;

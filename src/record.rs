@@ -17,7 +17,7 @@ use std::sync::mpsc::SyncSender;
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
-use crate::sink::Anchor;
+use crate::time::Anchor;
 use crate::source::{Batch, ChunkReader, Message, Opened};
 
 /// pcap link type of the RTAC serial encapsulation.
@@ -603,7 +603,7 @@ mod tests {
 
     fn replay(bytes: Vec<u8>) -> Vec<Message> {
         let opened = Opened {
-            kind: crate::source::Kind::Recording,
+            kind: crate::protocol::Kind::Recording,
             prefix: Vec::new(),
             reader: Box::new(io::Cursor::new(bytes)),
             name: "rec.pcap".into(),

@@ -2,13 +2,38 @@
 //!
 //! The first eight columns follow the S-Port_Snoop sample exactly: `Counter, Millis, ID, Device,
 //! Type, Sensor #, Sensor, Data`. A protocol adds its own extra columns after them (see
-//! [`crate::decoder::Decoder::columns`]); the sinks add `Raw` (with `--raw`) and `Time` (with
+//! [`crate::protocol::Decoder::columns`]); the sinks add `Raw` (with `--raw`) and `Time` (with
 //! `--time abs`) last.
+
+use std::io;
 
 /// The eight fixed columns, in order.
 pub const BASE_COLUMNS: [&str; 8] = [
     "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data",
 ];
+
+/// The `Type` names every protocol shares. A protocol's own types (`Data`, `Poll`, `ACK`, …)
+/// are its business; these mean the same everywhere and filters and summaries rely on them.
+pub mod kind {
+    /// A frame whose check (CRC, checksum) fails.
+    pub const BAD_CRC: &str = "BadCRC";
+    /// A frame cut short (by the end of the input, a gap or the next frame start).
+    pub const TRUNCATED: &str = "Truncated";
+    /// Bytes between frames that belong to no frame.
+    pub const GARBAGE: &str = "Garbage";
+    /// A request the master's timeout passed without an answer.
+    pub const TIMEOUT: &str = "Timeout";
+    /// The adapter disappeared (live capture with `--reconnect`, or a recording of one).
+    pub const LINK_DOWN: &str = "LinkDown";
+    /// The adapter is back.
+    pub const LINK_UP: &str = "LinkUp";
+    /// The source's own clock went back (EdgeTX logs).
+    pub const TIME_JUMP: &str = "TimeJump";
+}
+
+/// Garbage is shown in rows of at most this many bytes, so that a long run of noise stays
+/// readable and every byte is still in exactly one row.
+pub const GARBAGE_ROW_MAX: usize = 64;
 
 /// How a row is styled in pretty output and counted in summaries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -62,5 +87,73 @@ impl<'a> Row<'a> {
             extra: &[],
             raw: &[],
         }
+    }
+}
+
+/// Receives the rows a decoder produces.
+pub trait RowOut {
+    fn row(&mut self, row: &Row<'_>) -> io::Result<()>;
+
+    /// The wall-clock time at which the capture started (µs 0), when a decoder learns it from
+    /// the data itself (pcap packet headers). Call it before the first row; used by `--time abs`.
+    fn anchor(&mut self, _anchor: crate::time::Anchor) {}
+}
+
+/// Collects rows as owned strings (tests, tools).
+#[derive(Default, Debug, Clone)]
+pub struct Collected {
+    pub rows: Vec<OwnedRow>,
+}
+
+/// An owned copy of a [`Row`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OwnedRow {
+    pub micros: Option<u64>,
+    pub id: Option<u32>,
+    pub device: String,
+    pub kind: String,
+    pub class: Class,
+    pub sensor_no: String,
+    pub sensor: String,
+    pub data: String,
+    pub extra: Vec<String>,
+    pub raw: Vec<u8>,
+}
+
+impl OwnedRow {
+    pub fn millis(&self) -> Option<u64> {
+        self.micros.map(|m| m / 1000)
+    }
+}
+
+impl RowOut for Collected {
+    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
+        self.rows.push(OwnedRow {
+            micros: row.micros,
+            id: row.id,
+            device: row.device.to_owned(),
+            kind: row.kind.to_owned(),
+            class: row.class,
+            sensor_no: row.sensor_no.to_owned(),
+            sensor: row.sensor.to_owned(),
+            data: row.data.to_owned(),
+            extra: row.extra.iter().map(|s| (*s).to_owned()).collect(),
+            raw: row.raw.to_vec(),
+        });
+        Ok(())
+    }
+}
+
+/// Counts rows and throws them away (decode-only benchmarks).
+#[derive(Default, Debug)]
+pub struct Discard {
+    pub rows: u64,
+}
+
+impl RowOut for Discard {
+    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
+        std::hint::black_box(row);
+        self.rows += 1;
+        Ok(())
     }
 }

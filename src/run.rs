@@ -7,7 +7,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
-use crate::decoder::{Decoder, RowOut};
+use crate::protocol::Decoder;
+use crate::row::RowOut;
 use crate::exit::{Failure, Interrupt};
 use crate::record::Recorder;
 use crate::row::{Class, Row};
@@ -242,7 +243,7 @@ impl Driver<'_> {
         }
     }
 
-    fn anchor(&mut self, a: crate::sink::Anchor) -> Result<(), Failure> {
+    fn anchor(&mut self, a: crate::time::Anchor) -> Result<(), Failure> {
         self.table.set_anchor(Some(a));
         if let Some(r) = self.recorder.as_deref_mut() {
             r.start(Some(a))?;

@@ -5,9 +5,11 @@
 use std::io::{self, Read};
 use std::sync::mpsc::sync_channel;
 
-use crate::decoder::{Collected, Decoder, OwnedRow};
+use crate::protocol::Decoder;
+use crate::row::{Collected, OwnedRow};
 use crate::row::Class;
-use crate::source::{Batch, ChunkReader, Kind, Message, Opened};
+use crate::protocol::Kind;
+use crate::source::{Batch, ChunkReader, Message, Opened};
 
 /// Split points derived from the data itself, so a fuzzer explores chunkings too.
 fn chunk_lengths(data: &[u8]) -> impl Iterator<Item = usize> + '_ {
@@ -210,7 +212,7 @@ pub fn sbus_serial(data: &[u8]) {
             {
                 assert_eq!(r.raw.first(), Some(&0xB5), "{r:?}");
             }
-            if r.kind == "Timeout" {
+            if r.kind == crate::row::kind::TIMEOUT {
                 assert!(r.raw.is_empty());
             }
             if r.class != Class::Error

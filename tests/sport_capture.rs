@@ -5,7 +5,7 @@ mod common;
 
 use std::collections::BTreeSet;
 
-use busnoop::decoder::OwnedRow;
+use busnoop::row::OwnedRow;
 use busnoop::source::edgetx::parse_line;
 use common::{decode, fixture};
 

@@ -3,7 +3,7 @@
 
 mod common;
 
-use busnoop::decoder::OwnedRow;
+use busnoop::row::OwnedRow;
 use busnoop::row::Class;
 use busnoop::sport::{SportDecoder, wire};
 use common::{decode, sport_rows};

@@ -2,7 +2,7 @@
 
 mod common;
 
-use busnoop::decoder::OwnedRow;
+use busnoop::row::OwnedRow;
 use busnoop::fmt::parse_hex;
 use busnoop::row::Class;
 use common::{read_tsv, sport_rows};

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use busnoop::decoder::{Decoder, Discard};
+use busnoop::protocol::Decoder;
+use busnoop::row::Discard;
 
 /// A tiny deterministic PRNG (xorshift), so generated captures are the same on every run.
 pub struct Rng(pub u64);

@@ -1,20 +1,18 @@
 //! SAB settings: line defaults, the table's extra columns, `--framing` and the decoder options.
 
 use super::hdlc;
+use crate::protocol::{Kind, Line, Protocol};
 
 /// SAB runs at 115200 baud 8N1.
 pub const DEFAULT_BAUD: u32 = 115_200;
 
 /// What the shared command-line code needs to know about SAB.
-pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+pub const PROTOCOL: Protocol = Protocol {
     name: "SAB",
-    serial: crate::source::serial::SerialConfig {
-        baud: DEFAULT_BAUD,
-        data_bits: serialport::DataBits::Eight,
-        parity: serialport::Parity::None,
-        stop_bits: serialport::StopBits::One,
-        lines: crate::source::serial::ModemLines::Low,
-    },
+    command: "sab2",
+    line: Line::n81(DEFAULT_BAUD),
+    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    accepts_text: "raw wire bytes or busnoop recordings",
 };
 
 /// modm's `sab::Master` waits 10 ms for a response.
@@ -25,15 +23,13 @@ pub const BITS_PER_BYTE: u64 = 10;
 pub const COLUMNS: &[&str] = &["Addr", "Resp ms", "Framing", "Note"];
 
 /// `--framing`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FramingChoice {
     /// Detect the framing from the stream (and say which one was chosen).
     Auto,
     /// SAB v1: `54 LEN HDR CMD DATA CRC8` (what modm's documentation describes).
-    #[value(alias = "sab1", alias = "v1")]
     Sync,
     /// SAB2: `7E HDR CMD DATA CRC16 7E`, byte-stuffed (what modm's SAB2 code sends).
-    #[value(alias = "sab2")]
     Hdlc,
 }
 

@@ -9,7 +9,8 @@ use super::frame::{self, Event, Framing};
 use super::map::Mapper;
 use super::stats::Stats;
 use super::{hdlc, sync};
-use crate::decoder::{Decoder, RowOut};
+use crate::protocol::Decoder;
+use crate::row::RowOut;
 
 /// One byte into a reassembler (lets the detection loops be monomorphised per framing pair).
 trait Stepper {

@@ -30,8 +30,7 @@ pub const DEFAULT_MAX_PAYLOAD: usize = 32;
 pub const STORE_MAX: usize = OVERHEAD + 255;
 /// Wire bytes kept at most for a row.
 pub const WIRE_MAX: usize = 2 + 2 * STORE_MAX;
-/// Garbage (bytes before the first flag) is reported in rows of at most this many bytes.
-pub const GARBAGE_ROW_MAX: usize = 64;
+use crate::row::GARBAGE_ROW_MAX;
 
 const CRC16: Crc<u16> = Crc::<u16>::new(&CRC_16_MODBUS);
 

@@ -11,7 +11,7 @@ use super::names::Names;
 use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::{hdlc, sync};
-use crate::decoder::RowOut;
+use crate::row::RowOut;
 use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
 use crate::row::{Class, Row};
 
@@ -230,7 +230,7 @@ impl Mapper {
                 micros: x.at / 1000,
                 id: Some(r.address),
                 command: Some(r.command),
-                kind: "Timeout",
+                kind: crate::row::kind::TIMEOUT,
                 class: Class::Warning,
                 framing,
                 raw: &[],
@@ -447,7 +447,7 @@ impl Mapper {
                 micros: start,
                 id: addr,
                 command: ev.command(),
-                kind: "BadCRC",
+                kind: crate::row::kind::BAD_CRC,
                 class: Class::Error,
                 framing: ev.framing,
                 raw: ev.wire,
@@ -492,7 +492,7 @@ impl Mapper {
                     push_u64(n, ev.bad_lengths as u64);
                     n.push_str(" 0x54 followed by a LENGTH above 32");
                 }
-                "Garbage"
+                crate::row::kind::GARBAGE
             }
             EventKind::Truncated => {
                 st.truncated += 1;
@@ -507,7 +507,7 @@ impl Mapper {
                     n.push_str(" of ");
                     push_u64(n, len as u64 + sync::OVERHEAD as u64);
                 }
-                "Truncated"
+                crate::row::kind::TRUNCATED
             }
             EventKind::Runt => {
                 st.runts += 1;
@@ -557,7 +557,7 @@ impl Mapper {
             EventKind::Frame | EventKind::BadCrc => {
                 // Only reached for a frame too short to have a command (cannot happen).
                 push_hex(&mut sc.data, ev.wire);
-                "Garbage"
+                crate::row::kind::GARBAGE
             }
         };
         self.put(

@@ -10,7 +10,6 @@
 //!
 //! The table mapping, the timing rules and the options are documented in `docs/sab.md`.
 
-pub mod args;
 mod config;
 mod decoder;
 pub mod detect;
@@ -24,11 +23,16 @@ pub mod sample;
 pub mod stats;
 pub mod sync;
 
-pub use args::SabArgs;
+pub use names::{parse_command, parse_device};
 pub use config::{
     BITS_PER_BYTE, COLUMNS, DEFAULT_BAUD, DEFAULT_TIMEOUT_MS, FramingChoice, Options, PROTOCOL,
 };
 pub use decoder::SabDecoder;
+
+/// The SAB decoder (every input kind [`PROTOCOL`] accepts is a byte stream).
+pub fn decoder(opts: Options) -> Box<dyn crate::protocol::Decoder> {
+    Box::new(SabDecoder::new(opts))
+}
 
 #[cfg(test)]
 mod tests;

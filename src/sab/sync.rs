@@ -38,8 +38,7 @@ pub const OVERHEAD: usize = 5;
 pub const MAX_FRAME: usize = MAX_PAYLOAD + OVERHEAD;
 /// Bytes held at most (see the module documentation).
 pub const CAPACITY: usize = 2 * MAX_FRAME;
-/// Garbage is reported in rows of at most this many bytes.
-pub const GARBAGE_ROW_MAX: usize = 64;
+use crate::row::GARBAGE_ROW_MAX;
 
 const CRC8: Crc<u8> = Crc::<u8>::new(&CRC_8_MAXIM_DOW);
 

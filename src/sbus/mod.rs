@@ -15,7 +15,8 @@ use std::fmt::Write as _;
 use std::io;
 use std::net::SocketAddr;
 
-use crate::decoder::{Decoder, RowOut};
+use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::row::RowOut;
 use crate::fmt::{push_fixed, push_hex, push_u64};
 use crate::pcap::{PcapError, PcapStream};
 use crate::row::{Class, Row};
@@ -30,15 +31,18 @@ use telegram::{BROADCAST, CrcBasis, ReqInfo};
 pub const DEFAULT_BAUD: u32 = 9600;
 /// What the shared command-line code needs to know: name and serial line format (8N1; a
 /// parity-mode line has a 9th bit that a standard UART cannot follow, see docs/sbus.md).
-pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+pub const PROTOCOL: Protocol = Protocol {
     name: "S-Bus",
-    serial: crate::source::serial::SerialConfig {
-        baud: DEFAULT_BAUD,
-        data_bits: serialport::DataBits::Eight,
-        parity: serialport::Parity::None,
-        stop_bits: serialport::StopBits::One,
-        lines: crate::source::serial::ModemLines::Low,
-    },
+    command: "sbus",
+    line: Line::n81(DEFAULT_BAUD),
+    accepts: &[
+        Kind::Raw,
+        Kind::Serial,
+        Kind::Recording,
+        Kind::Pcap,
+        Kind::Pcapng,
+    ],
+    accepts_text: "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
 };
 
 /// Ether-S-Bus server port.
@@ -57,7 +61,7 @@ pub const DETECT_BYTES: usize = 4096;
 pub const COLUMNS: &[&str] = &["Resp ms", "Seq", "Note"];
 
 /// Serial mode.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
     /// Data/secure mode when the stream uses 0xB5 framing, break mode otherwise.
     Auto,
@@ -95,6 +99,17 @@ impl Default for Options {
             gap_ms: None,
             stations: Vec::new(),
             port: DEFAULT_PORT,
+        }
+    }
+}
+
+/// The S-Bus decoder for an input of `kind` (one that [`PROTOCOL`] accepts): serial bytes
+/// (raw files, devices, busnoop recordings) or Ether-S-Bus captures (pcap, pcapng).
+pub fn decoder(opts: Options, kind: Kind) -> Box<dyn Decoder> {
+    match kind {
+        Kind::Pcap | Kind::Pcapng => Box::new(EtherDecoder::new(&opts)),
+        Kind::Raw | Kind::Serial | Kind::Recording | Kind::EdgeTxLog => {
+            Box::new(SerialDecoder::new(opts))
         }
     }
 }
@@ -1704,7 +1719,7 @@ impl EtherCore {
         self.totals.packets += 1;
         let first = *self.first_ts.get_or_insert_with(|| {
             if let Some(t) = chrono::DateTime::from_timestamp_micros(p.ts_micros) {
-                out.anchor(crate::sink::Anchor::Instant(t));
+                out.anchor(crate::time::Anchor::Instant(t));
             }
             p.ts_micros
         });

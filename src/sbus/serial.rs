@@ -24,8 +24,7 @@ pub use readings::MAX_SEARCH_BODY;
 use super::commands::{self, Expect};
 use super::telegram::{AT_ACKNAK, AT_REQUEST, AT_RESPONSE, BROADCAST, CrcBasis};
 
-/// Garbage is reported in runs of at most this many bytes.
-pub const GARBAGE_ROW_MAX: usize = 64;
+use crate::row::GARBAGE_ROW_MAX;
 
 /// How a telegram's CRC turned out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

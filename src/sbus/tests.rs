@@ -9,7 +9,8 @@ use super::telegram::{
     encode_secure, push_dle,
 };
 use super::*;
-use crate::decoder::{Collected, Decoder, OwnedRow};
+use crate::protocol::Decoder;
+use crate::row::{Collected, OwnedRow};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum SMode {

@@ -5,10 +5,11 @@ pub mod output;
 use std::io::{self, Write as _};
 use std::path::Path;
 
-use chrono::{DateTime, Local, NaiveDateTime, Utc};
+use chrono::{DateTime, Local};
 use owo_colors::{OwoColorize, Style};
 
-use crate::decoder::RowOut;
+use crate::row::RowOut;
+use crate::time::Anchor;
 use crate::fmt::push_hex_bytes;
 use crate::row::{BASE_COLUMNS, Class, Row};
 pub use output::{Output, WriteError};
@@ -38,15 +39,6 @@ impl Format {
             _ => return None,
         })
     }
-}
-
-/// The wall-clock time at the start of the capture (for `--time abs`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Anchor {
-    /// A real instant (live capture, pcap).
-    Instant(DateTime<Utc>),
-    /// A local time without zone, as logged by a radio.
-    Naive(NaiveDateTime),
 }
 
 /// How the table is written.

@@ -13,7 +13,7 @@ use chrono::NaiveDateTime;
 
 use super::{Batch, ChunkReader, Message, Opened};
 use crate::exit::Failure;
-use crate::sink::Anchor;
+use crate::time::Anchor;
 
 /// Length of the `YYYY-MM-DD,HH:MM:SS.mmm:` stamp.
 const STAMP_LEN: usize = 24;
@@ -172,7 +172,7 @@ impl EdgeTxReader {
                     self.anchor = Some(new_anchor);
                     let _ = tx.send(Message::Note {
                         micros: Some(self.last),
-                        kind: "TimeJump",
+                        kind: crate::row::kind::TIME_JUMP,
                         class: crate::row::Class::Warning,
                         data: format!(
                             "the log's time goes back {:.3} s ({} -> {}) at line {}",

@@ -17,7 +17,8 @@ use std::thread;
 use std::time::Duration;
 
 use crate::exit::Failure;
-use crate::sink::Anchor;
+use crate::protocol::Kind;
+use crate::time::Anchor;
 
 /// Read size for raw inputs.
 pub const READ_SIZE: usize = 64 * 1024;
@@ -95,23 +96,6 @@ pub enum Message {
 pub trait ChunkReader: Send {
     /// The next batch, or `None` at the end of the input.
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure>;
-}
-
-/// What an input turned out to be.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    /// Bytes exactly as they were on the wire, without time.
-    Raw,
-    /// EdgeTX/OpenTX debug log: `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 …`.
-    EdgeTxLog,
-    /// Classic pcap (by its magic number) of network traffic.
-    Pcap,
-    /// A busnoop recording: classic pcap with link type RTAC serial (250) or USER0 (147).
-    Recording,
-    /// A live serial device.
-    Serial,
-    /// pcapng (by its section header block).
-    Pcapng,
 }
 
 /// Bytes read at most to tell the kinds apart (leading blank lines of a log included).

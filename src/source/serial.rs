@@ -13,7 +13,8 @@ use serialport::{DataBits, FlowControl, Parity, SerialPort, SerialPortType, Stop
 
 use super::{Batch, ChunkReader, Message};
 use crate::exit::Failure;
-use crate::sink::Anchor;
+use crate::protocol::{Line, Parity as LineParity};
+use crate::time::Anchor;
 
 /// Read timeout: how long a read waits for data before the reader looks around (the crate's
 /// default of 0 would make every read return at once).
@@ -24,13 +25,11 @@ const READ_BUF: usize = 4096;
 const RECONNECT_FIRST: Duration = Duration::from_millis(200);
 const RECONNECT_MAX: Duration = Duration::from_millis(1000);
 
-/// Character format and speed, and what to do with the modem lines.
+/// How to open a serial device: the protocol's line settings (with `--baud`) and what to do
+/// with the modem lines.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SerialConfig {
-    pub baud: u32,
-    pub data_bits: DataBits,
-    pub parity: Parity,
-    pub stop_bits: StopBits,
+    pub line: Line,
     pub lines: ModemLines,
 }
 
@@ -47,34 +46,25 @@ pub enum ModemLines {
     Keep,
 }
 
-impl SerialConfig {
-    /// 8N1 at `baud`.
-    pub fn n81(baud: u32) -> Self {
-        SerialConfig {
-            baud,
-            data_bits: DataBits::Eight,
-            parity: Parity::None,
-            stop_bits: StopBits::One,
-            lines: ModemLines::Low,
-        }
-    }
-
-    /// Bits per character on the wire (start + data + parity + stop).
-    pub fn bits_per_char(&self) -> u32 {
-        let data = match self.data_bits {
-            DataBits::Five => 5,
-            DataBits::Six => 6,
-            DataBits::Seven => 7,
-            DataBits::Eight => 8,
-        };
-        let parity = if self.parity == Parity::None { 0 } else { 1 };
-        let stop = if self.stop_bits == StopBits::Two {
-            2
-        } else {
-            1
-        };
-        1 + data + parity + stop
-    }
+/// The serialport crate's names for a line's character format.
+fn char_format(line: &Line) -> (DataBits, Parity, StopBits) {
+    let data_bits = match line.data_bits {
+        5 => DataBits::Five,
+        6 => DataBits::Six,
+        7 => DataBits::Seven,
+        _ => DataBits::Eight,
+    };
+    let parity = match line.parity {
+        LineParity::None => Parity::None,
+        LineParity::Odd => Parity::Odd,
+        LineParity::Even => Parity::Even,
+    };
+    let stop_bits = if line.stop_bits == 2 {
+        StopBits::Two
+    } else {
+        StopBits::One
+    };
+    (data_bits, parity, stop_bits)
 }
 
 /// True when `arg` names a serial device rather than a capture file: an existing character
@@ -178,15 +168,8 @@ pub fn ports_hint() -> String {
 fn group_of(path: &Path) -> Option<String> {
     use std::os::unix::fs::MetadataExt;
     let gid = std::fs::metadata(path).ok()?.gid();
-    let mut grp: libc::group = unsafe { std::mem::zeroed() };
-    let mut buf = vec![0 as libc::c_char; 4096];
-    let mut result: *mut libc::group = std::ptr::null_mut();
-    let rc = unsafe { libc::getgrgid_r(gid, &mut grp, buf.as_mut_ptr(), buf.len(), &mut result) };
-    if rc != 0 || result.is_null() {
-        return None;
-    }
-    let name = unsafe { std::ffi::CStr::from_ptr(grp.gr_name) };
-    Some(name.to_string_lossy().into_owned())
+    let group = nix::unistd::Group::from_gid(nix::unistd::Gid::from_raw(gid)).ok()??;
+    Some(group.name)
 }
 
 #[cfg(not(unix))]
@@ -297,10 +280,11 @@ pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, seri
     }
     // The crate sets speed (any rate, termios2 on Linux) and character format on our descriptor.
     let mut port = unsafe { serialport::TTYPort::from_raw_fd(fd.into_raw_fd()) };
-    port.set_baud_rate(cfg.baud)?;
-    port.set_data_bits(cfg.data_bits)?;
-    port.set_parity(cfg.parity)?;
-    port.set_stop_bits(cfg.stop_bits)?;
+    let (data_bits, parity, stop_bits) = char_format(&cfg.line);
+    port.set_baud_rate(cfg.line.baud)?;
+    port.set_data_bits(data_bits)?;
+    port.set_parity(parity)?;
+    port.set_stop_bits(stop_bits)?;
     port.set_flow_control(FlowControl::None)?;
     port.set_timeout(READ_TIMEOUT)?;
     Ok(Box::new(port))
@@ -321,10 +305,11 @@ fn lower_dtr_rts(fd: i32) {
 /// Opens and configures `path`.
 #[cfg(not(unix))]
 pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, serialport::Error> {
-    let builder = serialport::new(path.to_string_lossy(), cfg.baud)
-        .data_bits(cfg.data_bits)
-        .parity(cfg.parity)
-        .stop_bits(cfg.stop_bits)
+    let (data_bits, parity, stop_bits) = char_format(&cfg.line);
+    let builder = serialport::new(path.to_string_lossy(), cfg.line.baud)
+        .data_bits(data_bits)
+        .parity(parity)
+        .stop_bits(stop_bits)
         .flow_control(FlowControl::None)
         .timeout(READ_TIMEOUT);
     match cfg.lines {
@@ -421,8 +406,8 @@ impl SerialReader {
         tracing::info!(
             "{}: {} baud, {} bits per character",
             path.display(),
-            cfg.baud,
-            cfg.bits_per_char()
+            cfg.line.baud,
+            cfg.line.bits_per_char()
         );
         SerialReader {
             path: path.to_owned(),
@@ -525,16 +510,6 @@ mod tests {
         assert!(!is_device_path(Path::new("COM")));
         assert!(!is_device_path(Path::new("capture.bin")));
         assert!(is_device_path(Path::new("/dev/null")), "a character device");
-    }
-
-    #[test]
-    fn bits_per_char() {
-        assert_eq!(SerialConfig::n81(9600).bits_per_char(), 10);
-        let parity = SerialConfig {
-            parity: Parity::Even,
-            ..SerialConfig::n81(9600)
-        };
-        assert_eq!(parity.bits_per_char(), 11);
     }
 
     #[test]

@@ -10,7 +10,8 @@ pub mod wire;
 use std::fmt::Write as _;
 use std::io;
 
-use crate::decoder::{Decoder, RowOut};
+use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::row::RowOut;
 use crate::fmt::{push_hex, push_u64};
 use crate::row::{Class, Row};
 use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
@@ -23,15 +24,12 @@ pub const DEFAULT_BAUD: u32 = 57_600;
 
 /// What the command line needs to know: 57600 baud 8N1 (inverted on the wire: the adapter must
 /// invert, see docs/live.md).
-pub const PROTOCOL: crate::cli::Protocol = crate::cli::Protocol {
+pub const PROTOCOL: Protocol = Protocol {
     name: "S.Port",
-    serial: crate::source::serial::SerialConfig {
-        baud: DEFAULT_BAUD,
-        data_bits: serialport::DataBits::Eight,
-        parity: serialport::Parity::None,
-        stop_bits: serialport::StopBits::One,
-        lines: crate::source::serial::ModemLines::Low,
-    },
+    command: "sport",
+    line: Line::n81(DEFAULT_BAUD),
+    accepts: &[Kind::Raw, Kind::Serial, Kind::EdgeTxLog, Kind::Recording],
+    accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
 };
 
 /// Extra columns after the eight base columns.
@@ -129,6 +127,11 @@ impl SportDecoder {
     }
 }
 
+/// The S.Port decoder (every input kind [`PROTOCOL`] accepts is a byte stream).
+pub fn decoder() -> Box<dyn Decoder> {
+    Box::new(SportDecoder::new())
+}
+
 impl Mapper {
     /// Writes the row of one event; after a write error, later events are dropped and the
     /// first error is kept in `result`.
@@ -171,7 +174,7 @@ impl Mapper {
                     sc.note,
                     "{len} of {BODY_LEN} bytes before the frame was cut"
                 );
-                "Truncated"
+                crate::row::kind::TRUNCATED
             }
             Body::Complete(b) => {
                 ps.answers += 1;
@@ -216,7 +219,7 @@ impl Mapper {
                             b[7]
                         );
                         sc.note(&note);
-                        "BadCRC"
+                        crate::row::kind::BAD_CRC
                     } else {
                         match names::frame_type(b[0]) {
                             Some(n) => {
@@ -292,7 +295,7 @@ impl Mapper {
             micros: Some(micros),
             id: None,
             device: "",
-            kind: "Garbage",
+            kind: crate::row::kind::GARBAGE,
             class: Class::Error,
             sensor_no: "",
             sensor: "",

@@ -12,8 +12,7 @@ pub const ESCAPE: u8 = 0x7D;
 pub const BODY_LEN: usize = 8;
 /// Longest slot on the wire: 7E, header, 8 bytes each possibly stuffed.
 pub const MAX_WIRE: usize = 2 + 2 * BODY_LEN;
-/// Garbage is reported in rows of at most this many bytes.
-pub const GARBAGE_ROW_MAX: usize = 64;
+use crate::row::GARBAGE_ROW_MAX;
 
 /// Header byte for a physical ID (0..31): ID in bits 0-4 plus three check bits.
 pub const fn header_for(phys: u8) -> u8 {

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 
 pub mod pty;
 
-use busnoop::decoder::{Collected, Decoder, OwnedRow};
+use busnoop::protocol::Decoder;
+use busnoop::row::{Collected, OwnedRow};
 
 /// Path of a file in `fixtures/`.
 pub fn fixture(name: &str) -> PathBuf {

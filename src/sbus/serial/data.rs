@@ -362,7 +362,7 @@ const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
 
 #[cfg(test)]
 mod tests {
-    use super::super::GARBAGE_ROW_MAX;
+    use crate::row::GARBAGE_ROW_MAX;
     use super::super::testing::{Ev, T, bytewise};
     use super::*;
     use crate::sbus::telegram::{encode_data, encode_secure};

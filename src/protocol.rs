@@ -1,0 +1,178 @@
+//! What every protocol provides, and the table of protocols.
+//!
+//! A protocol lives in a folder of its own (`src/<protocol>/`): its wire format and pure
+//! reassembler, its name tables, the mapping of frames onto the log table ([`crate::row`]) and
+//! its [`Protocol`] descriptor. It implements [`Decoder`], the one interface the driver
+//! ([`crate::run`]) sees. A protocol never imports the command line, the sinks or the sources:
+//! everything it learns comes in through its options, [`Line`] and the input [`Kind`].
+//!
+//! ## The reassembler contract
+//!
+//! Every decoder wraps a reassembler that is **pure** (bytes and times in, frames out, no I/O)
+//! and **chunk-invariant**: feeding the same bytes with the same times in any split gives the
+//! same rows (`push` once or byte by byte). The three entry points are
+//!
+//! * [`Decoder::push`]: bytes that arrived at a time; every frame they complete is emitted at
+//!   once, nothing is held back that is already known to be whole;
+//! * [`Decoder::idle`]: time passed on a live line without bytes (timeouts, end-of-frame
+//!   gaps), never called for files;
+//! * [`Decoder::finish`]: the end of the input, or a gap (an unplugged adapter); whatever is open
+//!   comes out (a truncated frame, trailing garbage, unanswered requests), and the decoder must
+//!   be ready for more bytes after it.
+//!
+//! A decoder never panics on any input; broken input becomes rows of [`crate::row::kind`]
+//! `BadCRC`, `Truncated`, `Garbage` and counts. Memory stays bounded whatever the input.
+//!
+//! ## Adding a protocol
+//!
+//! See `docs/architecture.md`: a folder, one entry in [`PROTOCOLS`], a subcommand in `cli.rs`.
+
+use std::io;
+
+use crate::row::RowOut;
+
+/// Parity of a serial line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parity {
+    None,
+    Odd,
+    Even,
+}
+
+/// Character format and speed of a serial line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Line {
+    pub baud: u32,
+    /// 5 to 8.
+    pub data_bits: u8,
+    pub parity: Parity,
+    /// 1 or 2.
+    pub stop_bits: u8,
+}
+
+impl Line {
+    /// 8N1 at `baud`.
+    pub const fn n81(baud: u32) -> Self {
+        Line {
+            baud,
+            data_bits: 8,
+            parity: Parity::None,
+            stop_bits: 1,
+        }
+    }
+
+    /// Bits per character on the wire (start + data + parity + stop).
+    pub fn bits_per_char(&self) -> u32 {
+        let parity = u32::from(self.parity != Parity::None);
+        1 + u32::from(self.data_bits) + parity + u32::from(self.stop_bits)
+    }
+}
+
+/// What an input turned out to be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Bytes exactly as they were on the wire, without time.
+    Raw,
+    /// EdgeTX/OpenTX debug log: `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 …`.
+    EdgeTxLog,
+    /// Classic pcap (by its magic number) of network traffic.
+    Pcap,
+    /// A busnoop recording: classic pcap with link type RTAC serial (250) or USER0 (147).
+    Recording,
+    /// A live serial device.
+    Serial,
+    /// pcapng (by its section header block).
+    Pcapng,
+}
+
+/// What a protocol tells the shared code: its name, its line and the inputs it reads.
+#[derive(Debug)]
+pub struct Protocol {
+    /// Name in messages ("S.Port").
+    pub name: &'static str,
+    /// The subcommand ("sport").
+    pub command: &'static str,
+    /// Character format and default speed of a live line.
+    pub line: Line,
+    /// The input kinds its decoder reads.
+    pub accepts: &'static [Kind],
+    /// The same in words, for the message that refuses another kind ("raw wire bytes, EdgeTX
+    /// logs or busnoop recordings").
+    pub accepts_text: &'static str,
+}
+
+impl Protocol {
+    /// Whether this protocol's decoder reads inputs of `kind`.
+    pub fn reads(&self, kind: Kind) -> bool {
+        self.accepts.contains(&kind)
+    }
+}
+
+/// Every protocol busnoop decodes, in the order of the command line's subcommands.
+pub const PROTOCOLS: &[&Protocol] = &[
+    &crate::sport::PROTOCOL,
+    &crate::sbus::PROTOCOL,
+    &crate::sab::PROTOCOL,
+];
+
+/// A protocol decoder as the driver sees it.
+pub trait Decoder {
+    /// Extra column names that follow the eight base columns.
+    fn columns(&self) -> &'static [&'static str];
+
+    /// Feeds bytes that arrived at `time` (microseconds since the capture started; `None` for
+    /// sources without time). Rows for every frame completed by these bytes are emitted at once.
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()>;
+
+    /// Time passed without data on a live serial source; `now` is the current capture time
+    /// (µs since the capture started). Lets a decoder report timeouts promptly.
+    fn idle(&mut self, _now: u64, _out: &mut dyn RowOut) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// End of input, or a gap in a live capture (adapter unplugged): emits whatever is still open
+    /// (a truncated frame, trailing garbage, unanswered requests). After a gap, `push` is called
+    /// again with the bytes that follow it, so the decoder must be ready to go on.
+    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()>;
+
+    /// Frames with a valid check decoded so far.
+    fn valid_frames(&self) -> u64;
+
+    /// The `--stats` report (several lines, no trailing newline).
+    fn stats(&self) -> String;
+
+    /// One line naming what went wrong (CRC errors, truncated frames, garbage), or `None` when
+    /// everything decoded cleanly.
+    fn problems(&self) -> Option<String>;
+
+    /// A hint printed once when bytes keep arriving but no frame is found (live sources).
+    fn no_frames_hint(&self) -> &'static str {
+        "check the baud rate and the wiring"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bits_per_char() {
+        assert_eq!(Line::n81(9600).bits_per_char(), 10);
+        let parity = Line {
+            parity: Parity::Even,
+            ..Line::n81(9600)
+        };
+        assert_eq!(parity.bits_per_char(), 11);
+    }
+
+    #[test]
+    fn every_protocol_reads_raw_bytes_and_live_lines_and_has_its_own_command() {
+        let mut commands: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();
+        commands.sort_unstable();
+        commands.dedup();
+        assert_eq!(commands.len(), PROTOCOLS.len());
+        for p in PROTOCOLS {
+            assert!(p.reads(Kind::Raw) && p.reads(Kind::Serial), "{}", p.name);
+        }
+    }
+}
