@@ -172,8 +172,8 @@ impl fmt::Display for Failure {
     }
 }
 
-impl From<crate::sink::WriteError> for Failure {
-    fn from(e: crate::sink::WriteError) -> Self {
+impl From<crate::row::OutputError> for Failure {
+    fn from(e: crate::row::OutputError) -> Self {
         // A closed pipe is a closed pipe whether it is standard output or `-o /dev/stdout`
         // (or a FIFO): the reader went away, quietly.
         if e.error.kind() == std::io::ErrorKind::BrokenPipe {

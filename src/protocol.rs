@@ -27,9 +27,7 @@
 //!
 //! See `docs/architecture.md`: a folder, one entry in [`PROTOCOLS`], a subcommand in `cli.rs`.
 
-use std::io;
-
-use crate::row::RowOut;
+use crate::row::{RowOut, RowResult};
 
 /// Parity of a serial line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -122,18 +120,18 @@ pub trait Decoder {
 
     /// Feeds bytes that arrived at `time` (microseconds since the capture started; `None` for
     /// sources without time). Rows for every frame completed by these bytes are emitted at once.
-    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()>;
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult;
 
     /// Time passed without data on a live serial source; `now` is the current capture time
     /// (µs since the capture started). Lets a decoder report timeouts promptly.
-    fn idle(&mut self, _now: u64, _out: &mut dyn RowOut) -> io::Result<()> {
+    fn idle(&mut self, _now: u64, _out: &mut dyn RowOut) -> RowResult {
         Ok(())
     }
 
     /// End of input, or a gap in a live capture (adapter unplugged): emits whatever is still open
     /// (a truncated frame, trailing garbage, unanswered requests). After a gap, `push` is called
     /// again with the bytes that follow it, so the decoder must be ready to go on.
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()>;
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult;
 
     /// Frames with a valid check decoded so far.
     fn valid_frames(&self) -> u64;

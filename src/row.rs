@@ -5,8 +5,6 @@
 //! [`crate::protocol::Decoder::columns`]); the sinks add `Raw` (with `--raw`) and `Time` (with
 //! `--time abs`) last.
 
-use std::io;
-
 /// The eight fixed columns, in order.
 pub const BASE_COLUMNS: [&str; 8] = [
     "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data",
@@ -90,9 +88,37 @@ impl<'a> Row<'a> {
     }
 }
 
-/// Receives the rows a decoder produces.
+/// Writing a row failed: the table's output (a file or standard output) and the error, intact,
+/// so that the driver can report it as it happened.
+#[derive(Debug)]
+pub struct OutputError {
+    /// `None` for standard output.
+    pub path: Option<std::path::PathBuf>,
+    pub error: std::io::Error,
+}
+
+impl std::fmt::Display for OutputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.path {
+            Some(p) => write!(f, "cannot write to {}: {}", p.display(), self.error),
+            None => write!(f, "cannot write to standard output: {}", self.error),
+        }
+    }
+}
+
+impl std::error::Error for OutputError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
+
+/// What writing rows gives back.
+pub type RowResult = Result<(), OutputError>;
+
+/// Receives the rows a decoder produces. An error ends the run: the decoder stops writing and
+/// hands the error back unchanged (`?`), the driver reports it.
 pub trait RowOut {
-    fn row(&mut self, row: &Row<'_>) -> io::Result<()>;
+    fn row(&mut self, row: &Row<'_>) -> RowResult;
 
     /// The wall-clock time at which the capture started (µs 0), when a decoder learns it from
     /// the data itself (pcap packet headers). Call it before the first row; used by `--time abs`.
@@ -127,7 +153,7 @@ impl OwnedRow {
 }
 
 impl RowOut for Collected {
-    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
         self.rows.push(OwnedRow {
             micros: row.micros,
             id: row.id,
@@ -151,9 +177,53 @@ pub struct Discard {
 }
 
 impl RowOut for Discard {
-    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
         std::hint::black_box(row);
         self.rows += 1;
         Ok(())
+    }
+}
+
+/// Passes rows on to `out` until the first write error, then drops the rest and keeps that
+/// error, whole, for [`Latch::result`]. For reassemblers whose frame callbacks cannot return
+/// an error: the decoder maps each frame through the latch, and returns `latch.result()` from
+/// `push`/`finish`. Once stopped, no row is formatted any more.
+pub struct Latch<'a> {
+    out: &'a mut dyn RowOut,
+    error: Option<OutputError>,
+}
+
+impl<'a> Latch<'a> {
+    pub fn new(out: &'a mut dyn RowOut) -> Self {
+        Latch { out, error: None }
+    }
+
+    /// A write failed: later rows are dropped.
+    pub fn stopped(&self) -> bool {
+        self.error.is_some()
+    }
+
+    /// The first write error, if any.
+    pub fn result(self) -> RowResult {
+        match self.error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
+impl RowOut for Latch<'_> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        if self.error.is_some() {
+            return Ok(());
+        }
+        if let Err(e) = self.out.row(row) {
+            self.error = Some(e);
+        }
+        Ok(())
+    }
+
+    fn anchor(&mut self, anchor: crate::time::Anchor) {
+        self.out.anchor(anchor);
     }
 }

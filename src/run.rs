@@ -7,10 +7,10 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
-use crate::protocol::Decoder;
-use crate::row::RowOut;
 use crate::exit::{Failure, Interrupt};
+use crate::protocol::Decoder;
 use crate::record::Recorder;
+use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::sink::Table;
 use crate::source::{Batch, Feed, Message};
@@ -227,9 +227,7 @@ impl Driver<'_> {
                         && let Some(zero) = self.clock
                     {
                         let now = zero.elapsed().as_micros() as u64;
-                        self.decoder
-                            .idle(now, self.table)
-                            .map_err(|_| output_error(self.table))?;
+                        self.decoder.idle(now, self.table).map_err(Failure::from)?;
                     }
                     self.watch();
                     self.flush()?;
@@ -302,7 +300,7 @@ impl Driver<'_> {
         }
         self.decoder
             .push(bytes, time, self.table)
-            .map_err(|_| output_error(self.table))
+            .map_err(Failure::from)
     }
 
     /// Bytes keep arriving but nothing decodes: say so once, with the likely causes.
@@ -337,9 +335,7 @@ impl Driver<'_> {
             r.link(false, micros)?;
         }
         // Close what the unplug cut off; the decoder goes on after the gap.
-        self.decoder
-            .finish(self.table)
-            .map_err(|_| output_error(self.table))?;
+        self.decoder.finish(self.table).map_err(Failure::from)?;
         self.down_at = Some(micros);
         let data = format!(
             "adapter disconnected after {}; waiting for it",
@@ -376,9 +372,7 @@ impl Driver<'_> {
         gap: bool,
     ) -> Result<(), Failure> {
         if gap {
-            self.decoder
-                .finish(self.table)
-                .map_err(|_| output_error(self.table))?;
+            self.decoder.finish(self.table).map_err(Failure::from)?;
         }
         let row = Row {
             kind,
@@ -386,7 +380,7 @@ impl Driver<'_> {
             data,
             ..Row::empty(micros)
         };
-        self.table.row(&row).map_err(|_| output_error(self.table))
+        self.table.row(&row).map_err(Failure::from)
     }
 
     /// A row busnoop itself adds to the log (gaps).
@@ -397,14 +391,6 @@ impl Driver<'_> {
             data,
             ..Row::empty(Some(micros))
         };
-        self.table.row(&row).map_err(|_| output_error(self.table))
-    }
-}
-
-/// The error a table stored when a row could not be written.
-fn output_error(table: &mut Table) -> Failure {
-    match table.flush() {
-        Err(e) => e.into(),
-        Ok(()) => Failure::Internal("a row could not be written".into()),
+        self.table.row(&row).map_err(Failure::from)
     }
 }

@@ -1,8 +1,6 @@
 //! The SAB decoder: framing detection, the reassembler of the chosen framing with the other one
 //! read in the background (see [`super::detect`]), and the [`Decoder`] implementation.
 
-use std::io;
-
 use super::config::{COLUMNS, FramingChoice, Options};
 use super::detect::{self, Held, Reason};
 use super::frame::{self, Event, Framing};
@@ -10,7 +8,7 @@ use super::map::Mapper;
 use super::stats::Stats;
 use super::{hdlc, sync};
 use crate::protocol::Decoder;
-use crate::row::RowOut;
+use crate::row::{Latch, RowOut, RowResult};
 
 /// One byte into a reassembler (lets the detection loops be monomorphised per framing pair).
 trait Stepper {
@@ -342,7 +340,9 @@ impl Decoder for SabDecoder {
         COLUMNS
     }
 
-    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
+        let mut latch = Latch::new(out);
+        let out: &mut dyn RowOut = &mut latch;
         if time.is_some() {
             self.last_time = time;
         }
@@ -368,10 +368,12 @@ impl Decoder for SabDecoder {
                 }
             }
         }
-        self.map.take_error()
+        latch.result()
     }
 
-    fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
+        let mut latch = Latch::new(out);
+        let out: &mut dyn RowOut = &mut latch;
         if let Mode::Undecided(u) = &self.mode
             && !u.held.is_empty()
             && u.held
@@ -393,17 +395,19 @@ impl Decoder for SabDecoder {
                 map.timeout_row(&x, framing, out);
             }
         }
-        self.map.take_error()
+        latch.result()
     }
 
     /// End of the input, or a gap in a live capture (the driver calls `push` again after a
     /// gap): decides the framing if still undecided, closes what is open, and reports the
     /// request still waiting for a response. Decoding goes on with the next `push`.
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
+        let mut latch = Latch::new(out);
+        let out: &mut dyn RowOut = &mut latch;
         if let Mode::Undecided(u) = &self.mode {
             let (s, h) = (u.sync_valid, u.hdlc_valid);
             if self.pos == 0 {
-                return self.map.take_error();
+                return latch.result();
             }
             self.decide(
                 detect::majority(s, h),
@@ -422,7 +426,7 @@ impl Decoder for SabDecoder {
                 sh.since = 0;
             }
         }
-        self.map.take_error()
+        latch.result()
     }
 
     fn valid_frames(&self) -> u64 {

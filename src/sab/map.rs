@@ -1,8 +1,6 @@
 //! The table mapping: reassembler events in, rows out. Pairs requests with responses, writes
 //! the notes and keeps the statistics (`docs/sab.md` documents the columns and notes).
 
-use std::io;
-
 use super::config::{BITS_PER_BYTE, Options};
 use super::detect::Reason;
 use super::frame::{Event, EventKind, Framing};
@@ -11,8 +9,8 @@ use super::names::Names;
 use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::{hdlc, sync};
-use crate::row::RowOut;
 use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
+use crate::row::RowOut;
 use crate::row::{Class, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
@@ -93,8 +91,6 @@ pub(super) struct Mapper {
     scratch: Scratch,
     /// Said on the next row: how the framing was chosen.
     framing_note: Option<String>,
-    /// First output error; later rows are dropped.
-    error: Option<io::Error>,
 }
 
 impl Mapper {
@@ -107,7 +103,6 @@ impl Mapper {
             stats: Stats::default(),
             scratch: Scratch::default(),
             framing_note: None,
-            error: None,
         }
     }
 
@@ -142,17 +137,8 @@ impl Mapper {
         self.stats.chose(framing, reason);
     }
 
-    pub(super) fn take_error(&mut self) -> io::Result<()> {
-        match self.error.take() {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
-    }
-
+    /// Writes one row; `out` is the decoder's [`crate::row::Latch`], which keeps a write error.
     fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
-        if self.error.is_some() {
-            return;
-        }
         let sc = &mut self.scratch;
         if let Some(n) = self.framing_note.take() {
             if sc.note.is_empty() {
@@ -196,9 +182,7 @@ impl Mapper {
             extra: &extra,
             raw: p.raw,
         };
-        if let Err(e) = out.row(&row) {
-            self.error = Some(e);
-        }
+        let _ = out.row(&row);
     }
 
     pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut dyn RowOut) {

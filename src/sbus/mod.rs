@@ -12,14 +12,13 @@ pub mod serial;
 pub mod telegram;
 
 use std::fmt::Write as _;
-use std::io;
 use std::net::SocketAddr;
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
-use crate::row::RowOut;
 use crate::fmt::{push_fixed, push_hex, push_u64};
 use crate::pcap::{PcapError, PcapStream};
+use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::{Class, Row};
+use crate::row::{Latch, RowOut, RowResult};
 use commands::Expect;
 use pairing::{
     Answer, EtherPairing, Expired, Outstanding, RequestKind, SerialPairing, TableSizes, TimeoutWhy,
@@ -524,7 +523,7 @@ fn put_row(
     class: Class,
     sensor: &str,
     raw: &[u8],
-) -> io::Result<()> {
+) -> RowResult {
     let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
     out.row(&Row {
         micros: Some(micros),
@@ -764,7 +763,7 @@ impl SerialDecoder {
         &self.core.per[station as usize]
     }
 
-    fn settle(&mut self, data_mode: bool, out: &mut dyn RowOut) -> io::Result<()> {
+    fn settle(&mut self, data_mode: bool, out: &mut dyn RowOut) -> RowResult {
         let Framer::Detect { segments, .. } = &mut self.framer else {
             return Ok(());
         };
@@ -788,20 +787,18 @@ impl SerialDecoder {
         Ok(())
     }
 
-    fn feed(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn feed(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
         let core = &mut self.core;
-        let mut result = Ok(());
+        let mut latch = Latch::new(out);
         let mut emit = |ev: &Event<'_>| {
-            if result.is_ok() {
-                result = core.event(ev, out);
-            }
+            let _ = core.event(ev, &mut latch);
         };
         match &mut self.framer {
             Framer::Data(f) => f.push(data, time, &mut emit),
             Framer::Break(f) => f.push(data, time, &mut emit),
             Framer::Detect { .. } => unreachable!("feed after settle"),
         }
-        result
+        latch.result()
     }
 }
 
@@ -828,7 +825,7 @@ impl SerialCore {
         }
     }
 
-    fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) -> RowResult {
         match ev {
             Event::Frame(f) => self.frame(f, out),
             Event::Garbage(g) => {
@@ -858,7 +855,7 @@ impl SerialCore {
         }
     }
 
-    fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         if let Some(p) = self.pairing.expire(now) {
             let at = p.time + self.pairing.timeout;
             self.timeout_row(&p, TimeoutWhy::Deadline, at, out)?;
@@ -872,7 +869,7 @@ impl SerialCore {
         why: TimeoutWhy,
         at: u64,
         out: &mut dyn RowOut,
-    ) -> io::Result<()> {
+    ) -> RowResult {
         self.totals.timeouts += 1;
         self.per[p.info.station as usize].timeouts += 1;
         let sc = &mut self.tsc;
@@ -900,7 +897,7 @@ impl SerialCore {
         )
     }
 
-    fn frame(&mut self, f: &Frame<'_>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn frame(&mut self, f: &Frame<'_>, out: &mut dyn RowOut) -> RowResult {
         let t = self.micros(f.time, f.offset);
         let timed = f.time.is_some();
         self.expire(t, out)?;
@@ -990,7 +987,7 @@ impl SerialCore {
         timed: bool,
         seq: Option<u16>,
         out: &mut dyn RowOut,
-    ) -> io::Result<()> {
+    ) -> RowResult {
         let (id, sensor) = match f.tele {
             Tele::Request { station, cmd, body } => {
                 let text = telegram::describe_request(
@@ -1069,7 +1066,7 @@ impl SerialCore {
         seq: Option<u16>,
         mut class: Class,
         out: &mut dyn RowOut,
-    ) -> io::Result<()> {
+    ) -> RowResult {
         match f.tele {
             Tele::Request { station, cmd, body } => {
                 let text = telegram::describe_request(
@@ -1223,7 +1220,7 @@ impl SerialCore {
     }
 
     /// A telegram cut short (or otherwise broken): its bytes, counted.
-    fn truncated_row(&mut self, wire: &[u8], t: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn truncated_row(&mut self, wire: &[u8], t: u64, out: &mut dyn RowOut) -> RowResult {
         self.totals.broken += 1;
         push_hex(&mut self.sc.data, wire);
         put_row(
@@ -1336,7 +1333,7 @@ impl Decoder for SerialDecoder {
         COLUMNS
     }
 
-    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
         if let Framer::Detect {
             segments,
             len,
@@ -1389,7 +1386,7 @@ impl Decoder for SerialDecoder {
         self.feed(data, time, out)
     }
 
-    fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         // Auto mode on a live line that went quiet after a few telegrams: decide with what was
         // seen rather than wait for more.
         if let Framer::Detect {
@@ -1424,22 +1421,20 @@ impl Decoder for SerialDecoder {
             self.settle(d, out)?;
         }
         let core = &mut self.core;
-        let mut result = Ok(());
+        let mut latch = Latch::new(out);
         let mut emit = |ev: &Event<'_>| {
-            if result.is_ok() {
-                result = core.event(ev, out);
-            }
+            let _ = core.event(ev, &mut latch);
         };
         match &mut self.framer {
             Framer::Data(f) => f.idle(now, &mut emit),
             Framer::Break(f) => f.idle(now, &mut emit),
             Framer::Detect { .. } => {}
         }
-        result?;
+        latch.result()?;
         self.core.expire(now, out)
     }
 
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
         if let Framer::Detect {
             trial,
             trial_break,
@@ -1473,18 +1468,16 @@ impl Decoder for SerialDecoder {
             self.settle(d, out)?;
         }
         let core = &mut self.core;
-        let mut result = Ok(());
+        let mut latch = Latch::new(out);
         let mut emit = |ev: &Event<'_>| {
-            if result.is_ok() {
-                result = core.event(ev, out);
-            }
+            let _ = core.event(ev, &mut latch);
         };
         match &mut self.framer {
             Framer::Data(f) => f.finish(&mut emit),
             Framer::Break(f) => f.finish(&mut emit),
             Framer::Detect { .. } => {}
         }
-        result?;
+        latch.result()?;
         self.core.finish();
         Ok(())
     }
@@ -1602,7 +1595,7 @@ impl EtherDecoder {
         self.core.plcs.iter().map(|p| (p.name.as_str(), &p.stats))
     }
 
-    fn pcap_failed(&mut self, e: PcapError, out: &mut dyn RowOut) -> io::Result<()> {
+    fn pcap_failed(&mut self, e: PcapError, out: &mut dyn RowOut) -> RowResult {
         let c = &mut self.core;
         c.failed = true;
         c.totals.pcap_error = Some(e.to_string());
@@ -1674,7 +1667,7 @@ impl EtherCore {
         server: SocketAddr,
         t: u64,
         out: &mut dyn RowOut,
-    ) -> io::Result<(u32, usize)> {
+    ) -> Result<(u32, usize), crate::row::OutputError> {
         let mut expired = std::mem::take(&mut self.expired);
         let mut fresh = false;
         let (conv, tag) = self.pairing.conversation(
@@ -1699,7 +1692,7 @@ impl EtherCore {
         r.map(|_| (conv, plc))
     }
 
-    fn timeout_rows(&mut self, expired: &[Expired], out: &mut dyn RowOut) -> io::Result<()> {
+    fn timeout_rows(&mut self, expired: &[Expired], out: &mut dyn RowOut) -> RowResult {
         for e in expired {
             self.timeout_row(&e.req, e.why, e.at, out)?;
         }
@@ -1715,7 +1708,7 @@ impl EtherCore {
         t.requests_dropped = f.requests;
     }
 
-    fn packet(&mut self, p: crate::pcap::Packet<'_>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn packet(&mut self, p: crate::pcap::Packet<'_>, out: &mut dyn RowOut) -> RowResult {
         self.totals.packets += 1;
         let first = *self.first_ts.get_or_insert_with(|| {
             if let Some(t) = chrono::DateTime::from_timestamp_micros(p.ts_micros) {
@@ -1792,7 +1785,7 @@ impl EtherCore {
         }
     }
 
-    fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         let mut expired = std::mem::take(&mut self.expired);
         self.pairing.expire(now, &mut expired);
         let r = self.timeout_rows(&expired, out);
@@ -1807,7 +1800,7 @@ impl EtherCore {
         why: TimeoutWhy,
         at: u64,
         out: &mut dyn RowOut,
-    ) -> io::Result<()> {
+    ) -> RowResult {
         self.totals.timeouts += 1;
         let plc = p.tag as usize;
         self.sc.clear();
@@ -1838,7 +1831,7 @@ impl EtherCore {
         )
     }
 
-    fn datagram(&mut self, u: ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> io::Result<()> {
+    fn datagram(&mut self, u: ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
         self.sc.clear();
         let tele = match ether::parse(u.payload) {
             Ok(tele) => tele,
@@ -2120,26 +2113,24 @@ impl Decoder for EtherDecoder {
         COLUMNS
     }
 
-    fn push(&mut self, data: &[u8], _time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
+    fn push(&mut self, data: &[u8], _time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
         if self.core.failed {
             return Ok(());
         }
         let core = &mut self.core;
-        let mut result = Ok(());
+        let mut latch = Latch::new(out);
         let r = self.pcap.push(data, &mut |p| {
-            if result.is_ok() {
-                result = core.packet(p, out);
-            }
+            let _ = core.packet(p, &mut latch);
         });
         core.sync_forgotten();
-        result?;
+        latch.result()?;
         if let Err(e) = r {
             self.pcap_failed(e, out)?;
         }
         Ok(())
     }
 
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
         if !self.core.failed
             && let Err(e) = self.pcap.finish()
         {

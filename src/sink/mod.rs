@@ -8,11 +8,13 @@ use std::path::Path;
 use chrono::{DateTime, Local};
 use owo_colors::{OwoColorize, Style};
 
-use crate::row::RowOut;
-use crate::time::Anchor;
 use crate::fmt::push_hex_bytes;
+use crate::row::RowOut;
 use crate::row::{BASE_COLUMNS, Class, Row};
-pub use output::{Output, WriteError};
+use crate::time::Anchor;
+pub use output::Output;
+
+use crate::row::{OutputError, RowResult};
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -68,7 +70,7 @@ pub struct Table {
     csv_buf: SharedBuf,
     scratch: String,
     hex: Vec<u8>,
-    error: Option<WriteError>,
+    error: Option<OutputError>,
 }
 
 /// A byte buffer shared between the csv writer and the table.
@@ -128,7 +130,7 @@ impl Table {
     }
 
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
-    pub fn header(&mut self) -> Result<(), WriteError> {
+    pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
             return Ok(());
         }
@@ -164,7 +166,7 @@ impl Table {
     }
 
     /// Writes one row.
-    pub fn write(&mut self, row: &Row<'_>) -> Result<(), WriteError> {
+    pub fn write(&mut self, row: &Row<'_>) -> Result<(), OutputError> {
         if !self.header_written {
             self.header()?;
         }
@@ -179,7 +181,7 @@ impl Table {
     }
 
     /// Writes everything buffered (live output after each chunk; end of run).
-    pub fn flush(&mut self) -> Result<(), WriteError> {
+    pub fn flush(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
@@ -187,7 +189,7 @@ impl Table {
     }
 
     /// Flushes and closes the output.
-    pub fn close(&mut self) -> Result<(), WriteError> {
+    pub fn close(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
@@ -303,7 +305,7 @@ impl Table {
     fn move_csv(&mut self) {
         if let Err(e) = self.csv.flush() {
             // Flushing into a Vec cannot fail; keep the error if it ever does.
-            self.error.get_or_insert(WriteError {
+            self.error.get_or_insert(OutputError {
                 path: None,
                 error: e,
             });
@@ -458,16 +460,8 @@ impl RowOut for Table {
         }
     }
 
-    fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
-        match self.write(row) {
-            Ok(()) => Ok(()),
-            Err(e) => {
-                let kind = e.error.kind();
-                let msg = e.to_string();
-                self.error = Some(e);
-                Err(io::Error::new(kind, msg))
-            }
-        }
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        self.write(row)
     }
 }
 

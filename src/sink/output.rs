@@ -8,6 +8,8 @@ use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use crate::row::OutputError;
+
 /// Flush the buffer once it holds this much.
 const HIGH_WATER: usize = 64 * 1024;
 
@@ -20,23 +22,6 @@ enum Dest {
         regular: bool,
     },
     Memory(Vec<u8>),
-}
-
-/// A write failed.
-#[derive(Debug)]
-pub struct WriteError {
-    /// `None` for standard output.
-    pub path: Option<PathBuf>,
-    pub error: io::Error,
-}
-
-impl std::fmt::Display for WriteError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match &self.path {
-            Some(p) => write!(f, "cannot write to {}: {}", p.display(), self.error),
-            None => write!(f, "cannot write to standard output: {}", self.error),
-        }
-    }
 }
 
 /// A buffered destination that only ever writes complete rows.
@@ -87,7 +72,7 @@ impl Output {
 
     /// A complete row is in the buffer: write out when enough has gathered.
     #[inline]
-    pub fn row_done(&mut self) -> Result<(), WriteError> {
+    pub fn row_done(&mut self) -> Result<(), OutputError> {
         if self.buf.len() >= HIGH_WATER {
             self.flush()
         } else {
@@ -105,7 +90,7 @@ impl Output {
     }
 
     /// Writes every buffered row.
-    pub fn flush(&mut self) -> Result<(), WriteError> {
+    pub fn flush(&mut self) -> Result<(), OutputError> {
         if self.failed {
             self.buf.clear();
             return Ok(());
@@ -149,13 +134,13 @@ impl Output {
                     }
                     _ => None,
                 };
-                Err(WriteError { path, error })
+                Err(OutputError { path, error })
             }
         }
     }
 
     /// Flushes, and syncs a regular file to disk.
-    pub fn close(&mut self) -> Result<(), WriteError> {
+    pub fn close(&mut self) -> Result<(), OutputError> {
         self.flush()?;
         if let Dest::File {
             file,
@@ -164,7 +149,7 @@ impl Output {
         } = &mut self.dest
             && !self.failed
         {
-            file.sync_data().map_err(|error| WriteError {
+            file.sync_data().map_err(|error| OutputError {
                 path: Some(path.clone()),
                 error,
             })?;

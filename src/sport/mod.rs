@@ -8,12 +8,11 @@ pub mod values;
 pub mod wire;
 
 use std::fmt::Write as _;
-use std::io;
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
-use crate::row::RowOut;
 use crate::fmt::{push_hex, push_u64};
+use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::{Class, Row};
+use crate::row::{Latch, RowOut, RowResult};
 use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
 
 /// Poll slot length used to reconstruct Millis for sources without time.
@@ -133,19 +132,18 @@ pub fn decoder() -> Box<dyn Decoder> {
 }
 
 impl Mapper {
-    /// Writes the row of one event; after a write error, later events are dropped and the
-    /// first error is kept in `result`.
-    fn event(&mut self, ev: Event<'_>, out: &mut dyn RowOut, result: &mut io::Result<()>) {
-        if result.is_err() {
+    /// Writes the row of one event (a write error stays in the latch).
+    fn event(&mut self, ev: Event<'_>, out: &mut Latch<'_>) {
+        if out.stopped() {
             return;
         }
-        *result = match ev {
+        let _ = match ev {
             Event::Slot(s) => self.slot_row(s, out),
             Event::Garbage(g) => self.garbage_row(g, out),
         };
     }
 
-    fn slot_row(&mut self, s: &Slot, out: &mut dyn RowOut) -> io::Result<()> {
+    fn slot_row(&mut self, s: &Slot, out: &mut dyn RowOut) -> RowResult {
         let micros = s.time.unwrap_or(s.index * SLOT_MICROS);
         let phys = s.phys();
         let sc = &mut self.scratch;
@@ -271,7 +269,7 @@ impl Mapper {
         })
     }
 
-    fn garbage_row(&mut self, g: &Garbage, out: &mut dyn RowOut) -> io::Result<()> {
+    fn garbage_row(&mut self, g: &Garbage, out: &mut dyn RowOut) -> RowResult {
         let micros = g
             .time
             .unwrap_or(g.after_slot.map_or(0, |i| i * SLOT_MICROS));
@@ -387,19 +385,18 @@ impl Decoder for SportDecoder {
         COLUMNS
     }
 
-    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> io::Result<()> {
-        let mut result = Ok(());
+    fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
+        let mut out = Latch::new(out);
         let table = &mut self.table;
-        self.re
-            .push(data, time, &mut |e| table.event(e, out, &mut result));
-        result
+        self.re.push(data, time, &mut |e| table.event(e, &mut out));
+        out.result()
     }
 
-    fn finish(&mut self, out: &mut dyn RowOut) -> io::Result<()> {
-        let mut result = Ok(());
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
+        let mut out = Latch::new(out);
         let table = &mut self.table;
-        self.re.finish(&mut |e| table.event(e, out, &mut result));
-        result
+        self.re.finish(&mut |e| table.event(e, &mut out));
+        out.result()
     }
 
     fn valid_frames(&self) -> u64 {
