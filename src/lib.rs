@@ -5,6 +5,8 @@
 //! table ([`row::Row`]), and a [`sink`] formats the rows as pretty text, TSV, CSV or JSON Lines.
 //! [`run`] wires the three together and deals with signals, statistics and exit codes.
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 pub mod cli;
 pub mod exit;
 pub mod fmt;
@@ -18,6 +20,7 @@ pub mod sbus;
 #[cfg(feature = "selfcheck")]
 #[doc(hidden)]
 pub mod selfcheck;
+pub mod signal;
 pub mod sink;
 pub mod source;
 pub mod sport;

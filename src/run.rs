@@ -1,9 +1,6 @@
 //! The protocol-independent driver: messages from a source → decoder → table (and recording),
 //! with signals, adapter gaps and the "no frames" hint.
 
-use std::sync::Arc;
-use std::sync::OnceLock;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
@@ -12,6 +9,7 @@ use crate::protocol::Decoder;
 use crate::record::Recorder;
 use crate::row::RowOut;
 use crate::row::{Class, Row};
+use crate::signal::Stop;
 use crate::sink::Table;
 use crate::source::{Batch, Feed, Message};
 
@@ -27,47 +25,6 @@ const NO_FRAMES_BYTES: u64 = 256;
 /// them, so that one large batch cannot delay the stop (decoders give the same rows however
 /// their input is cut).
 const UNIT: usize = 4096;
-
-/// SIGINT/SIGTERM catcher. The first signal asks busnoop to stop cleanly; a second one of the
-/// same kind ends the process at once. Signals are process-wide, so there is one catcher.
-#[derive(Clone)]
-pub struct Stop {
-    signal: Arc<AtomicUsize>,
-}
-
-static STOP: OnceLock<Stop> = OnceLock::new();
-
-impl Stop {
-    /// Installs the handlers (once per process; later calls return the same catcher).
-    pub fn install() -> std::io::Result<Stop> {
-        if let Some(s) = STOP.get() {
-            return Ok(s.clone());
-        }
-        let signal = Arc::new(AtomicUsize::new(0));
-        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-            let armed = Arc::new(AtomicBool::new(false));
-            // Second signal: exit immediately with the conventional code.
-            signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())?;
-            signal_hook::flag::register(sig, armed)?;
-            signal_hook::flag::register_usize(sig, signal.clone(), sig as usize)?;
-        }
-        Ok(STOP.get_or_init(|| Stop { signal }).clone())
-    }
-
-    /// The signal received, if any.
-    pub fn signal(&self) -> Option<i32> {
-        match self.signal.load(Ordering::Relaxed) {
-            0 => None,
-            s => Some(s as i32),
-        }
-    }
-
-    /// The signal received, if the handlers are installed and one came (for waits outside the
-    /// driver, such as opening a FIFO).
-    pub fn received() -> Option<i32> {
-        STOP.get().and_then(Stop::signal)
-    }
-}
 
 /// What the driver needs besides the decoder and the table.
 pub struct Context<'a> {

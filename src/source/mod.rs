@@ -200,15 +200,18 @@ impl Read for Counted {
 /// its writer, and every wait for the first bytes (a FIFO without a writer yet, a silent pipe)
 /// ends on SIGINT/SIGTERM with [`Failure::Signal`] (see [`wait_readable`]).
 pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
-    use std::os::unix::io::AsRawFd;
+    use std::os::fd::AsFd;
+    // A duplicate of the descriptor to wait on (a FIFO or a pipe), so that the reader can own
+    // the original.
+    let dup = |fd: std::os::fd::BorrowedFd<'_>| fd.try_clone_to_owned().ok();
     let (reader, name, path, size, fd): (Box<dyn Read + Send>, String, Option<&Path>, _, _) =
         match input {
             Input::Stdin => (
                 Box::new(io::stdin()),
                 "standard input".into(),
                 None,
-                regular_size(0),
-                Some(0),
+                regular_size(io::stdin().as_fd()),
+                dup(io::stdin().as_fd()),
             ),
             Input::File(p) | Input::Device(p) => {
                 let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
@@ -217,7 +220,7 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
                 }
                 let f = open_file(p, &meta).map_err(|e| Failure::from_input_io(p, &e))?;
                 let size = meta.is_file().then_some(meta.len());
-                let fd = (!meta.is_file()).then(|| f.as_raw_fd());
+                let fd = if meta.is_file() { None } else { dup(f.as_fd()) };
                 (
                     Box::new(f),
                     p.display().to_string(),
@@ -235,7 +238,7 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
         inner: reader,
         read: progress.read.clone(),
     });
-    let fail = |e: io::Error| match (crate::run::Stop::received(), path) {
+    let fail = |e: io::Error| match (crate::signal::Stop::received(), path) {
         (Some(sig), _) => Failure::Signal(crate::exit::Interrupt::new(sig)),
         (None, Some(p)) => Failure::from_input_io(p, &e),
         (None, None) => Failure::Input(format!("cannot read standard input: {e}")),
@@ -249,8 +252,8 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
         if prefix.len() >= DETECT_LEN {
             break detect(&prefix, true).unwrap_or(Kind::Raw);
         }
-        if let Some(fd) = fd {
-            wait_readable(fd).map_err(fail)?;
+        if let Some(fd) = &fd {
+            wait_readable(fd.as_fd()).map_err(fail)?;
         }
         let want = DETECT_LEN - prefix.len();
         match reader.read(&mut buf[..want]) {
@@ -272,13 +275,14 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
 }
 
 /// The size of descriptor `fd` when it is a regular file (standard input redirected from one).
-fn regular_size(fd: i32) -> Option<u64> {
-    let mut st: libc::stat = unsafe { std::mem::zeroed() };
-    if unsafe { libc::fstat(fd, &mut st) } != 0 || st.st_mode & libc::S_IFMT != libc::S_IFREG {
+fn regular_size(fd: std::os::fd::BorrowedFd<'_>) -> Option<u64> {
+    use nix::sys::stat::{SFlag, fstat};
+    let st = fstat(fd).ok()?;
+    if SFlag::from_bits_truncate(st.st_mode) & SFlag::S_IFMT != SFlag::S_IFREG {
         return None;
     }
     // What is left from the current offset (`busnoop - < file` starts at 0).
-    let pos = unsafe { libc::lseek(fd, 0, libc::SEEK_CUR) };
+    let pos = nix::unistd::lseek(fd, 0, nix::unistd::Whence::SeekCur).unwrap_or(0);
     Some((st.st_size as u64).saturating_sub(pos.max(0) as u64))
 }
 
@@ -287,7 +291,6 @@ fn regular_size(fd: i32) -> Option<u64> {
 /// for its writer is then [`wait_readable`]'s.
 fn open_file(path: &Path, meta: &std::fs::Metadata) -> io::Result<File> {
     use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
-    use std::os::unix::io::AsRawFd;
     if !meta.file_type().is_fifo() {
         return File::open(path);
     }
@@ -295,12 +298,16 @@ fn open_file(path: &Path, meta: &std::fs::Metadata) -> io::Result<File> {
         .read(true)
         .custom_flags(libc::O_NONBLOCK)
         .open(path)?;
-    let fd = f.as_raw_fd();
-    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
-    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK) } < 0 {
-        return Err(io::Error::last_os_error());
-    }
+    set_blocking(&f)?;
     Ok(f)
+}
+
+/// Clears `O_NONBLOCK` on `fd` (opened non-blocking so that the open itself cannot hang).
+pub(crate) fn set_blocking(fd: impl std::os::fd::AsFd) -> io::Result<()> {
+    use nix::fcntl::{FcntlArg, OFlag, fcntl};
+    let flags = OFlag::from_bits_truncate(fcntl(&fd, FcntlArg::F_GETFL)?);
+    fcntl(&fd, FcntlArg::F_SETFL(flags - OFlag::O_NONBLOCK))?;
+    Ok(())
 }
 
 /// How often a wait for input looks for a signal.
@@ -311,28 +318,20 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 /// the end of the input; POLLHUP comes only after a writer has opened and closed it). The
 /// signal handlers restart interrupted reads, so this is what lets SIGINT/SIGTERM end the wait
 /// (with an `Interrupted` error; the caller reports the signal).
-fn wait_readable(fd: i32) -> io::Result<()> {
+fn wait_readable(fd: std::os::fd::BorrowedFd<'_>) -> io::Result<()> {
+    use nix::poll::{PollFd, PollFlags, poll};
     loop {
-        if crate::run::Stop::received().is_some() {
+        if crate::signal::Stop::received().is_some() {
             return Err(io::Error::new(
                 io::ErrorKind::Interrupted,
                 "stopped by a signal",
             ));
         }
-        let mut pfd = libc::pollfd {
-            fd,
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        match unsafe { libc::poll(&mut pfd, 1, SIGNAL_POLL.as_millis() as i32) } {
-            n if n > 0 => return Ok(()),
-            0 => {}
-            _ => {
-                let e = io::Error::last_os_error();
-                if e.kind() != io::ErrorKind::Interrupted {
-                    return Err(e);
-                }
-            }
+        let mut fds = [PollFd::new(fd, PollFlags::POLLIN)];
+        match poll(&mut fds, SIGNAL_POLL.as_millis() as u16) {
+            Ok(n) if n > 0 => return Ok(()),
+            Ok(_) | Err(nix::errno::Errno::EINTR) => {}
+            Err(e) => return Err(e.into()),
         }
     }
 }

@@ -228,57 +228,56 @@ pub fn is_not_a_tty(e: &serialport::Error) -> bool {
 /// `Keep`. No other setting is changed that outlives busnoop (HUPCL stays as it was).
 #[cfg(unix)]
 pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, serialport::Error> {
+    use nix::errno::Errno;
+    use nix::fcntl::OFlag;
+    use nix::sys::termios::{self, ControlFlags, InputFlags, SetArg};
     use serialport::{Error, ErrorKind};
-    use std::os::fd::{AsRawFd, FromRawFd, IntoRawFd, OwnedFd};
-    use std::os::unix::ffi::OsStrExt;
-    let os = |what: &str| {
-        let e = std::io::Error::last_os_error();
-        let kind = match e.raw_os_error() {
-            Some(libc::EBUSY | libc::EWOULDBLOCK) => ErrorKind::NoDevice,
-            Some(libc::ENOENT) => ErrorKind::Io(std::io::ErrorKind::NotFound),
-            Some(libc::EACCES | libc::EPERM) => ErrorKind::Io(std::io::ErrorKind::PermissionDenied),
+    use std::os::fd::{AsRawFd, FromRawFd, IntoRawFd};
+    let os = |what: &str, e: Errno| {
+        let kind = match e {
+            Errno::EBUSY | Errno::EWOULDBLOCK => ErrorKind::NoDevice,
+            Errno::ENOENT => ErrorKind::Io(std::io::ErrorKind::NotFound),
+            Errno::EACCES | Errno::EPERM => ErrorKind::Io(std::io::ErrorKind::PermissionDenied),
             // ENOTTY and the like: see is_not_a_tty.
             _ => ErrorKind::Unknown,
         };
-        Error::new(kind, format!("{what}: {e}"))
+        Error::new(kind, format!("{what}: {}", std::io::Error::from(e)))
     };
-    let c = std::ffi::CString::new(path.as_os_str().as_bytes())
-        .map_err(|_| Error::new(ErrorKind::InvalidInput, "a device name with a NUL byte"))?;
-    let flags = libc::O_RDONLY | libc::O_NOCTTY | libc::O_NONBLOCK | libc::O_CLOEXEC;
-    let raw = unsafe { libc::open(c.as_ptr(), flags) };
-    if raw < 0 {
-        return Err(os("open"));
-    }
+    let flags = OFlag::O_RDONLY | OFlag::O_NOCTTY | OFlag::O_NONBLOCK | OFlag::O_CLOEXEC;
     // Closed on every early return.
-    let fd = unsafe { OwnedFd::from_raw_fd(raw) };
-    let mut t: libc::termios = unsafe { std::mem::zeroed() };
-    if unsafe { libc::tcgetattr(fd.as_raw_fd(), &mut t) } != 0 {
-        return Err(os("tcgetattr"));
-    }
+    let fd =
+        nix::fcntl::open(path, flags, nix::sys::stat::Mode::empty()).map_err(|e| os("open", e))?;
+    let mut t = termios::tcgetattr(&fd).map_err(|e| os("tcgetattr", e))?;
     // Exclusive, so that a second capture program gets "in use" (before touching any line of
     // a port that someone else holds).
+    // SAFETY: TIOCEXCL takes no argument and `fd` is an open descriptor we own.
     if unsafe { libc::ioctl(fd.as_raw_fd(), libc::TIOCEXCL) } != 0 {
-        return Err(os("TIOCEXCL"));
+        return Err(os("TIOCEXCL", Errno::last()));
     }
+    // SAFETY: flock touches no memory; `fd` is open and stays open (owned) until the port
+    // closes it, which releases the lock.
     if unsafe { libc::flock(fd.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-        return Err(os("the port is locked by another program"));
+        return Err(os("the port is locked by another program", Errno::last()));
     }
     if cfg.lines == ModemLines::Low {
         lower_dtr_rts(fd.as_raw_fd());
     }
     // Raw 8-bit input, no echo, no flow control, modem status ignored (CLOCAL: no carrier wait).
-    unsafe { libc::cfmakeraw(&mut t) };
-    t.c_cflag |= libc::CREAD | libc::CLOCAL;
-    t.c_cflag &= !libc::CRTSCTS;
-    t.c_iflag &= !(libc::IXON | libc::IXOFF | libc::IXANY);
-    if unsafe { libc::tcsetattr(fd.as_raw_fd(), libc::TCSANOW, &t) } != 0 {
-        return Err(os("tcsetattr"));
-    }
-    let fl = unsafe { libc::fcntl(fd.as_raw_fd(), libc::F_GETFL) };
-    if fl < 0 || unsafe { libc::fcntl(fd.as_raw_fd(), libc::F_SETFL, fl & !libc::O_NONBLOCK) } < 0 {
-        return Err(os("fcntl"));
-    }
+    termios::cfmakeraw(&mut t);
+    t.control_flags |= ControlFlags::CREAD | ControlFlags::CLOCAL;
+    t.control_flags.remove(ControlFlags::CRTSCTS);
+    t.input_flags
+        .remove(InputFlags::IXON | InputFlags::IXOFF | InputFlags::IXANY);
+    termios::tcsetattr(&fd, SetArg::TCSANOW, &t).map_err(|e| os("tcsetattr", e))?;
+    super::set_blocking(&fd).map_err(|e| {
+        os(
+            "fcntl",
+            Errno::from_raw(e.raw_os_error().unwrap_or(libc::EIO)),
+        )
+    })?;
     // The crate sets speed (any rate, termios2 on Linux) and character format on our descriptor.
+    // SAFETY: the descriptor is an open tty that we own and give up here; the port owns and
+    // closes it from now on.
     let mut port = unsafe { serialport::TTYPort::from_raw_fd(fd.into_raw_fd()) };
     let (data_bits, parity, stop_bits) = char_format(&cfg.line);
     port.set_baud_rate(cfg.line.baud)?;
@@ -294,6 +293,8 @@ pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, seri
 #[cfg(unix)]
 fn lower_dtr_rts(fd: i32) {
     let bits: libc::c_int = libc::TIOCM_DTR | libc::TIOCM_RTS;
+    // SAFETY: TIOCMBIC reads one c_int through the pointer, which points at `bits` for the
+    // whole call; `fd` is an open descriptor of the caller's.
     if unsafe { libc::ioctl(fd, libc::TIOCMBIC, &bits) } != 0 {
         tracing::debug!(
             "cannot drop DTR/RTS: {} (the device has no modem lines)",

@@ -1,0 +1,46 @@
+//! SIGINT/SIGTERM: asked once, busnoop stops cleanly (every decoded row written); asked twice,
+//! it ends at once. The sources' waits and the driver both look here.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock};
+
+/// SIGINT/SIGTERM catcher. The first signal asks busnoop to stop cleanly; a second one of the
+/// same kind ends the process at once. Signals are process-wide, so there is one catcher.
+#[derive(Clone)]
+pub struct Stop {
+    signal: Arc<AtomicUsize>,
+}
+
+static STOP: OnceLock<Stop> = OnceLock::new();
+
+impl Stop {
+    /// Installs the handlers (once per process; later calls return the same catcher).
+    pub fn install() -> std::io::Result<Stop> {
+        if let Some(s) = STOP.get() {
+            return Ok(s.clone());
+        }
+        let signal = Arc::new(AtomicUsize::new(0));
+        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+            let armed = Arc::new(AtomicBool::new(false));
+            // Second signal: exit immediately with the conventional code.
+            signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())?;
+            signal_hook::flag::register(sig, armed)?;
+            signal_hook::flag::register_usize(sig, signal.clone(), sig as usize)?;
+        }
+        Ok(STOP.get_or_init(|| Stop { signal }).clone())
+    }
+
+    /// The signal received, if any.
+    pub fn signal(&self) -> Option<i32> {
+        match self.signal.load(Ordering::Relaxed) {
+            0 => None,
+            s => Some(s as i32),
+        }
+    }
+
+    /// The signal received, if the handlers are installed and one came (for waits outside the
+    /// driver, such as opening a FIFO).
+    pub fn received() -> Option<i32> {
+        STOP.get().and_then(Stop::signal)
+    }
+}
