@@ -686,6 +686,21 @@ mod tests {
     }
 
     #[test]
+    fn every_protocol_subcommand_is_in_the_protocol_table() {
+        use clap::CommandFactory;
+        let table: Vec<&str> = crate::protocols::PROTOCOLS
+            .iter()
+            .map(|p| p.command)
+            .collect();
+        let subcommands: Vec<String> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_owned())
+            .filter(|n| n != "ports")
+            .collect();
+        assert_eq!(subcommands, table);
+    }
+
+    #[test]
     fn format_defaults() {
         assert_eq!(args(&[]).table_options(true, false).format, Format::Pretty);
         assert_eq!(args(&[]).table_options(false, false).format, Format::Tsv);

@@ -12,6 +12,7 @@ pub mod exit;
 pub mod fmt;
 pub mod pcap;
 pub mod protocol;
+pub mod protocols;
 pub mod record;
 pub mod row;
 pub mod run;

@@ -25,7 +25,8 @@
 //!
 //! ## Adding a protocol
 //!
-//! See `docs/architecture.md`: a folder, one entry in [`PROTOCOLS`], a subcommand in `cli.rs`.
+//! See `docs/architecture.md`: a folder, one entry in [`crate::protocols::PROTOCOLS`], a
+//! subcommand in `cli.rs`.
 
 use crate::row::{RowOut, RowResult};
 
@@ -106,13 +107,6 @@ impl Protocol {
     }
 }
 
-/// Every protocol busnoop decodes, in the order of the command line's subcommands.
-pub const PROTOCOLS: &[&Protocol] = &[
-    &crate::sport::PROTOCOL,
-    &crate::sbus::PROTOCOL,
-    &crate::sab::PROTOCOL,
-];
-
 /// A protocol decoder as the driver sees it.
 pub trait Decoder {
     /// Extra column names that follow the eight base columns.
@@ -161,16 +155,5 @@ mod tests {
             ..Line::n81(9600)
         };
         assert_eq!(parity.bits_per_char(), 11);
-    }
-
-    #[test]
-    fn every_protocol_reads_raw_bytes_and_live_lines_and_has_its_own_command() {
-        let mut commands: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();
-        commands.sort_unstable();
-        commands.dedup();
-        assert_eq!(commands.len(), PROTOCOLS.len());
-        for p in PROTOCOLS {
-            assert!(p.reads(Kind::Raw) && p.reads(Kind::Serial), "{}", p.name);
-        }
     }
 }
