@@ -404,6 +404,19 @@ pub fn run_capture(
     protocol: &Protocol,
     decoder_for: impl FnOnce(Kind, &Line) -> Box<dyn Decoder>,
 ) -> Result<(), Failure> {
+    let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
+    if record_to_stdout && args.output.output_file().is_none() {
+        return Err(Failure::Usage(
+            "--record - needs -o FILE: standard output already carries the table".into(),
+        ));
+    }
+    // The clash with the input first: the capture-name hint below would point at it again.
+    let input = Input::parse(&args.source);
+    check_distinct(
+        &input,
+        args.output.output_file(),
+        args.live.record.as_deref(),
+    )?;
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
             ["pcap", "pcapng", "bin"]
@@ -417,18 +430,6 @@ pub fn run_capture(
             p.display()
         )));
     }
-    let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
-    if record_to_stdout && args.output.output_file().is_none() {
-        return Err(Failure::Usage(
-            "--record - needs -o FILE: standard output already carries the table".into(),
-        ));
-    }
-    let input = Input::parse(&args.source);
-    check_distinct(
-        &input,
-        args.output.output_file(),
-        args.live.record.as_deref(),
-    )?;
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut line = protocol.line;

@@ -88,6 +88,18 @@ fn output_onto_the_input_is_refused() {
         .unwrap();
     refused(&out, &cap, &bytes);
 
+    // A capture's own name (`-o a.bin` onto a.bin): the clash is named, not the hint to use
+    // --record a.bin, which would point at the input again.
+    let (bin, bin_bytes) = capture(dir.path(), "a.bin");
+    let out = busnoop()
+        .arg("sport")
+        .arg(&bin)
+        .arg("-o")
+        .arg(&bin)
+        .output()
+        .unwrap();
+    refused(&out, &bin, &bin_bytes);
+
     // Standard input is the file: `busnoop sport - -o cap < cap`.
     let out = busnoop()
         .args(["sport", "-", "-o"])
