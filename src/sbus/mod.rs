@@ -1553,6 +1553,8 @@ struct EtherCore {
     device: String,
     totals: Totals,
     sc: Scratch,
+    /// Scratch for Timeout rows, written while `sc` holds the current row.
+    tsc: Scratch,
     expired: Vec<Expired>,
     last_micros: u64,
     /// Packets whose link type is a serial recording: reported once.
@@ -1576,6 +1578,7 @@ impl EtherDecoder {
                 device: String::new(),
                 totals: Totals::default(),
                 sc: Scratch::default(),
+                tsc: Scratch::default(),
                 expired: Vec::new(),
                 last_micros: 0,
                 serial_link_noted: false,
@@ -1810,14 +1813,15 @@ impl EtherCore {
     ) -> io::Result<()> {
         self.totals.timeouts += 1;
         let plc = p.tag as usize;
-        self.sc.clear();
+        let sc = &mut self.tsc;
+        sc.clear();
         if let Some(e) = p.info.elem {
-            telegram::push_elem(&mut self.sc.sensor_no, e, p.info.block, p.info.addr);
+            telegram::push_elem(&mut sc.sensor_no, e, p.info.block, p.info.addr);
         }
         if let Some(s) = p.seq {
-            self.sc.seq(s);
+            sc.seq(s);
         }
-        timeout_note(&mut self.sc, why, self.pairing.timeout);
+        timeout_note(sc, why, self.pairing.timeout);
         let name = match self.plcs.get_mut(plc) {
             Some(pl) => {
                 pl.stats.timeouts += 1;
@@ -1827,7 +1831,7 @@ impl EtherCore {
         };
         put_row(
             out,
-            &self.sc,
+            &self.tsc,
             at,
             Some(p.info.station as u32),
             name,

@@ -1092,3 +1092,25 @@ fn ether_more_than_65536_waiting_requests_become_timeouts() {
         "{problems}"
     );
 }
+
+#[test]
+fn ether_timeout_rows_at_the_caps_leave_the_next_row_alone() {
+    // One conversation more than the cap: the dropped conversation's Timeout row comes just
+    // before the new request's row, which must still show its own sequence, data and notes.
+    let n = pairing::MAX_CONVERSATIONS + 1;
+    let mut cap = EtherCapture::new();
+    for i in 0..n {
+        let ip = [10, 1, (i >> 16) as u8, (i >> 8) as u8];
+        cap.packet(T0, (ip, i as u16), PLC, 7, 0);
+    }
+    let mut e = EtherDecoder::new(&Options::default());
+    let mut out = Collected::default();
+    e.push(&cap.bytes, None, &mut out).unwrap();
+    let rows = &out.rows;
+    let at = rows.iter().position(|r| r.kind == "Timeout").unwrap();
+    assert!(rows[at].extra[2].starts_with("given up"), "{:?}", rows[at]);
+    let next = &rows[at + 1];
+    assert_eq!(next.kind, "Request");
+    assert_eq!((next.data.as_str(), next.extra[1].as_str()), (rows[0].data.as_str(), "7"));
+    assert_eq!(next.extra[2], rows[0].extra[2], "{next:?}");
+}
