@@ -21,5 +21,6 @@ pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;
-pub mod time;
+pub mod stats;
 pub mod summary;
+pub mod time;
