@@ -11,8 +11,8 @@ use super::names::Names;
 use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::{hdlc, sync};
-use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
 use crate::row::RowOut;
+use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
 use crate::row::{Class, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.

@@ -282,11 +282,13 @@ mod tests {
 
     #[test]
     fn report_lines() {
-        let mut st = StationStats::default();
-        st.requests = 3;
-        st.responses = 2;
+        let mut st = StationStats {
+            requests: 3,
+            responses: 2,
+            broadcasts: 1,
+            ..StationStats::default()
+        };
         st.naks[nak_slot(2, false)] = 1;
-        st.broadcasts = 1;
         st.times.add(12_340);
         let t = Totals {
             valid: 6,
