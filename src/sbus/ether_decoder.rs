@@ -326,8 +326,17 @@ impl EtherCore {
                     n.push_str(why.text());
                     let _ = write!(n, " ({} -> {})", u.src, u.dst);
                 });
-                let m = &self.map;
-                return m.row(out, t, None, "", kind, Class::Error, "", u.payload);
+                return put_row(
+                    out,
+                    &self.map.sc,
+                    t,
+                    None,
+                    "",
+                    kind,
+                    Class::Error,
+                    "",
+                    u.payload,
+                );
             }
         };
         self.map.totals.datagrams += 1;
@@ -366,8 +375,17 @@ impl EtherCore {
             }
         };
         let device = self.device(plc, &self.device);
-        self.map
-            .row(out, t, id, device, kind, class, sensor, u.payload)
+        put_row(
+            out,
+            &self.map.sc,
+            t,
+            id,
+            device,
+            kind,
+            class,
+            sensor,
+            u.payload,
+        )
     }
 
     /// A telegram with a bad CRC: (ID, kind, class, Sensor) of its row.

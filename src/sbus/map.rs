@@ -210,22 +210,6 @@ impl Mapper {
         }
     }
 
-    /// One row from the scratch of the row being built.
-    #[allow(clippy::too_many_arguments)]
-    pub fn row(
-        &self,
-        out: &mut dyn RowOut,
-        micros: u64,
-        id: Option<u32>,
-        device: &str,
-        kind: &str,
-        class: Class,
-        sensor: &str,
-        raw: &[u8],
-    ) -> io::Result<()> {
-        put_row(out, &self.sc, micros, id, device, kind, class, sensor, raw)
-    }
-
     /// The Timeout row of request `p` at `at` (counted, also in `st`); the row being built is
     /// left alone.
     #[allow(clippy::too_many_arguments)]
@@ -472,8 +456,18 @@ mod tests {
             &mut out,
         )
         .unwrap();
-        m.row(&mut out, 2_000, Some(3), "PCD", "Request", class, "x", &[])
-            .unwrap();
+        put_row(
+            &mut out,
+            &m.sc,
+            2_000,
+            Some(3),
+            "PCD",
+            "Request",
+            class,
+            "x",
+            &[],
+        )
+        .unwrap();
         let [timeout, request] = &out.rows[..] else {
             panic!("{:?}", out.rows)
         };

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::io;
 
-use super::map::Mapper;
+use super::map::{Mapper, put_row};
 use super::pairing::{Outstanding, RequestKind, SerialPairing, TimeoutWhy};
 use super::serial::{BreakFramer, CrcCheck, DataFramer, Event, Frame, Tele};
 use super::stats::{self, StationStats, Totals};
@@ -317,7 +317,17 @@ impl SerialCore {
                     push_u64(n, g.bytes.len() as u64);
                     n.push_str(" bytes outside any telegram");
                 });
-                m.row(out, t, None, "", "Garbage", Class::Error, "", g.bytes)
+                put_row(
+                    out,
+                    &m.sc,
+                    t,
+                    None,
+                    "",
+                    "Garbage",
+                    Class::Error,
+                    "",
+                    g.bytes,
+                )
             }
         }
     }
@@ -478,8 +488,9 @@ impl SerialCore {
             }
         };
         let device = self.device(id);
-        self.map.row(
+        put_row(
             out,
+            &self.map.sc,
             t,
             id.map(u32::from),
             device,
@@ -533,23 +544,50 @@ impl SerialCore {
                 self.map.sc.note_with(|n| {
                     let _ = write!(n, "unknown attribute 0x{at:02X}");
                 });
-                let m = &self.map;
-                return m.row(out, t, None, "", "Unknown", Class::Warning, "", f.wire);
+                return put_row(
+                    out,
+                    &self.map.sc,
+                    t,
+                    None,
+                    "",
+                    "Unknown",
+                    Class::Warning,
+                    "",
+                    f.wire,
+                );
             }
             Tele::Broken => return self.truncated_row(f.wire, t, out),
         };
         let device = self.device(id);
         let id = id.map(u32::from);
-        self.map
-            .row(out, t, id, device, kind, class, sensor, f.wire)
+        put_row(
+            out,
+            &self.map.sc,
+            t,
+            id,
+            device,
+            kind,
+            class,
+            sensor,
+            f.wire,
+        )
     }
 
     /// A telegram cut short (or otherwise broken): its bytes, counted.
     fn truncated_row(&mut self, wire: &[u8], t: u64, out: &mut dyn RowOut) -> io::Result<()> {
         self.map.totals.broken += 1;
         push_hex(&mut self.map.sc.data, wire);
-        self.map
-            .row(out, t, None, "", "Truncated", Class::Error, "", wire)
+        put_row(
+            out,
+            &self.map.sc,
+            t,
+            None,
+            "",
+            "Truncated",
+            Class::Error,
+            "",
+            wire,
+        )
     }
 
     /// A request becomes the outstanding one; the one it replaces, if unanswered, gets its
