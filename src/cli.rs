@@ -661,7 +661,7 @@ fn report(
     }
     // When the output failed, the one line that matters is the write error (printed last).
     if !matches!(result, Err(Failure::Output(_)))
-        && let Some(p) = decoder.problems()
+        && let Some(p) = decoder.problems().line()
     {
         eprintln!("busnoop: {p}");
     }

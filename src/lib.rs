@@ -25,5 +25,6 @@ pub mod signal;
 pub mod sink;
 pub mod source;
 pub mod sport;
+pub mod stats;
 pub mod summary;
 pub mod time;

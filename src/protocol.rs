@@ -29,6 +29,7 @@
 //! subcommand in `cli.rs`.
 
 use crate::row::{RowOut, RowResult};
+use crate::stats::{Problems, Report};
 
 /// Parity of a serial line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,12 +131,12 @@ pub trait Decoder {
     /// Frames with a valid check decoded so far.
     fn valid_frames(&self) -> u64;
 
-    /// The `--stats` report (several lines, no trailing newline).
-    fn stats(&self) -> String;
+    /// The `--stats` report (the driver prints it).
+    fn stats(&self) -> Report;
 
-    /// One line naming what went wrong (CRC errors, truncated frames, garbage), or `None` when
-    /// everything decoded cleanly.
-    fn problems(&self) -> Option<String>;
+    /// What went wrong (CRC errors, truncated frames, garbage): the driver prints its one line
+    /// when it is not empty.
+    fn problems(&self) -> Problems;
 
     /// A hint printed once when bytes keep arriving but no frame is found (live sources).
     fn no_frames_hint(&self) -> &'static str {

@@ -9,6 +9,7 @@ use super::stats::Stats;
 use super::{hdlc, sync};
 use crate::protocol::Decoder;
 use crate::row::{Latch, RowOut, RowResult};
+use crate::stats::{Problems, Report};
 
 /// One byte into a reassembler (lets the detection loops be monomorphised per framing pair).
 trait Stepper {
@@ -436,22 +437,22 @@ impl Decoder for SabDecoder {
         }
     }
 
-    fn stats(&self) -> String {
+    fn stats(&self) -> Report {
         let names = &self.map.names;
-        let mut s = self.map.stats.report(|a| names.device(a).to_owned());
+        let mut r = self.map.stats.report(|a| names.device(a).to_owned());
         if let Mode::Undecided(u) = &self.mode {
-            s.insert_str(
+            r.head.insert(
                 0,
-                &format!(
-                    "framing: undecided ({} valid SAB v1 and {} valid SAB2 frames so far)\n",
+                format!(
+                    "framing: undecided ({} valid SAB v1 and {} valid SAB2 frames so far)",
                     u.sync_valid, u.hdlc_valid
                 ),
             );
         }
-        s
+        r
     }
 
-    fn problems(&self) -> Option<String> {
+    fn problems(&self) -> Problems {
         self.map.stats.problems()
     }
 

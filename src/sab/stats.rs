@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use super::detect::Reason;
 use super::frame::Framing;
 use super::header::{ADDRESSES, NackCode};
+use crate::stats::{Column, Problems, Report};
 
 pub use crate::summary::Times;
 
@@ -114,38 +115,46 @@ fn ms(micros: u64) -> String {
     s
 }
 
-use crate::exit::count as plural;
-
 impl Stats {
     /// The `--stats` report. `device` names an address (may be empty).
-    pub fn report(&self, device: impl Fn(u8) -> String) -> String {
-        let mut s = String::new();
+    pub fn report(&self, device: impl Fn(u8) -> String) -> Report {
+        let mut r = Report::new(&[
+            Column::right("Addr", 4),
+            Column::left("Device", 12).gap(2),
+            Column::right("Requests", 8),
+            Column::right("ACK", 8),
+            Column::right("NACK", 6),
+            Column::right("Timeouts", 8),
+            Column::right("Late", 5),
+            Column::right("BadCRC", 6),
+            Column::right("Resp min", 9),
+            Column::right("median", 9),
+            Column::right("max ms", 9),
+            Column::left("NACK codes", 0).gap(2),
+        ]);
         if self.framings.is_empty() {
-            let _ = writeln!(s, "framing: not decided (no input)");
+            r.head.push("framing: not decided (no input)".into());
         }
         for (i, (framing, reason)) in self.framings.iter().enumerate() {
             if self.framings_omitted > 0 && i + 1 == self.framings.len() {
-                let _ = writeln!(s, "… {} more framing switches", self.framings_omitted);
+                r.head
+                    .push(format!("… {} more framing switches", self.framings_omitted));
             }
             let mut line = String::new();
             reason.describe(*framing, &mut line);
-            let _ = writeln!(s, "{line}");
+            r.head.push(line);
         }
-        let _ = writeln!(
-            s,
-            "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6} {:>9} {:>9} {:>9}  NACK codes",
-            "Addr",
-            "Device",
-            "Requests",
-            "ACK",
-            "NACK",
-            "Timeouts",
-            "Late",
-            "BadCRC",
-            "Resp min",
-            "median",
-            "max ms",
-        );
+        let counts = |a: &AddrStats| {
+            [
+                a.requests + a.reserved,
+                a.acks,
+                a.nacks,
+                a.timeouts,
+                a.late,
+                a.bad_crc,
+            ]
+            .map(|n| n.to_string())
+        };
         let mut total = AddrStats::default();
         for (addr, a) in self.per.iter().enumerate() {
             if !a.used() {
@@ -176,37 +185,15 @@ impl Stats {
                 NackCode::of(code).push_name(&mut codes);
                 let _ = write!(codes, " {n}");
             }
-            let line = format!(
-                "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6} {:>9} {:>9} {:>9}  {}",
-                addr,
-                device(addr as u8),
-                a.requests + a.reserved,
-                a.acks,
-                a.nacks,
-                a.timeouts,
-                a.late,
-                a.bad_crc,
-                min,
-                median,
-                max,
-                codes
-            );
-            let _ = writeln!(s, "{}", line.trim_end());
+            let mut cells = vec![addr.to_string(), device(addr as u8)];
+            cells.extend(counts(a));
+            cells.extend([min, median, max, codes]);
+            r.row(cells);
         }
-        let _ = writeln!(
-            s,
-            "{:>4}  {:<12} {:>8} {:>8} {:>6} {:>8} {:>5} {:>6}",
-            "all",
-            "",
-            total.requests,
-            total.acks,
-            total.nacks,
-            total.timeouts,
-            total.late,
-            total.bad_crc
-        );
-        let _ = writeln!(
-            s,
+        let mut cells = vec!["all".to_owned(), String::new()];
+        cells.extend(counts(&total));
+        r.row(cells);
+        r.totals.push(format!(
             "bytes {}, valid frames {}, bad CRC {}, truncated {}, garbage {} bytes in {} runs",
             self.bytes,
             self.valid_frames,
@@ -214,70 +201,50 @@ impl Stats {
             self.truncated,
             self.garbage_bytes,
             self.garbage_runs
-        );
-        let _ = writeln!(
-            s,
+        ));
+        r.totals.push(format!(
             "SAB v1 resync: false 0x54 rescanned {}, 0x54 with LENGTH > 32 {}",
             self.false_syncs, self.bad_lengths
-        );
-        let _ = writeln!(
-            s,
+        ));
+        r.totals.push(format!(
             "SAB2: runts {}, aborts {}, overlong {}, unusual escapes {}",
             self.runts, self.aborts, self.overlong, self.odd_escapes
-        );
-        let _ = write!(
-            s,
+        ));
+        r.totals.push(format!(
             "pairing: timeouts {}, late responses {}, responses without request {}, repeated responses {}",
             self.timeouts, self.late, self.unpaired, self.repeats
-        );
-        s
+        ));
+        r
     }
 
-    /// One line when anything went wrong, `None` when everything decoded cleanly.
-    pub fn problems(&self) -> Option<String> {
-        let mut parts = Vec::new();
-        let mut add = |n: u64, one: &str, many: &str| {
-            if n > 0 {
-                parts.push(plural(n, one, many));
-            }
-        };
-        add(self.bad_crc, "CRC error", "CRC errors");
-        add(self.truncated, "truncated frame", "truncated frames");
-        add(self.timeouts, "timeout", "timeouts");
-        add(self.late, "late response", "late responses");
-        add(
-            self.unpaired,
-            "response without request",
-            "responses without request",
-        );
-        add(self.repeats, "repeated response", "repeated responses");
-        add(self.nacks, "NACK", "NACKs");
-        add(self.runts, "runt", "runts");
-        add(self.aborts, "aborted frame", "aborted frames");
-        add(self.overlong, "overlong frame", "overlong frames");
-        if self.garbage_bytes > 0 {
-            parts.push(format!(
-                "{} skipped ({})",
-                plural(self.garbage_bytes, "garbage byte", "garbage bytes"),
-                plural(self.garbage_runs, "run", "runs")
-            ));
+    /// What went wrong (empty when everything decoded cleanly).
+    pub fn problems(&self) -> Problems {
+        let mut p = Problems::new("SAB");
+        if self.valid_frames == 0 && self.bytes > 0 {
+            p.item("no valid frame");
         }
+        p.count(self.bad_crc, "CRC error", "CRC errors")
+            .count(self.truncated, "truncated frame", "truncated frames")
+            .count(self.timeouts, "timeout", "timeouts")
+            .count(self.late, "late response", "late responses")
+            .count(
+                self.unpaired,
+                "response without request",
+                "responses without request",
+            )
+            .count(self.repeats, "repeated response", "repeated responses")
+            .count(self.nacks, "NACK", "NACKs")
+            .count(self.runts, "runt", "runts")
+            .count(self.aborts, "aborted frame", "aborted frames")
+            .count(self.overlong, "overlong frame", "overlong frames")
+            .garbage(self.garbage_bytes, self.garbage_runs)
+            .in_valid(self.valid_frames, "valid frame", "valid frames");
         let framing = self
             .framings
             .last()
             .map_or("no framing", |(f, _)| f.protocol());
-        if self.valid_frames == 0 && self.bytes > 0 {
-            parts.insert(0, "no valid frame".into());
-        }
-        if parts.is_empty() {
-            None
-        } else {
-            Some(format!(
-                "SAB: {} in {} ({framing})",
-                parts.join(", "),
-                plural(self.valid_frames, "valid frame", "valid frames")
-            ))
-        }
+        p.tail(&format!(" ({framing})"));
+        p
     }
 }
 
@@ -298,14 +265,14 @@ mod tests {
     #[test]
     fn problems_line() {
         let mut s = Stats::default();
-        assert_eq!(s.problems(), None);
+        assert_eq!(s.problems().line(), None);
         s.valid_frames = 10;
         s.bytes = 100;
         s.timeouts = 1;
         s.bad_crc = 2;
         s.framings.push((Framing::Hdlc, Reason::Forced));
         assert_eq!(
-            s.problems().unwrap(),
+            s.problems().line().unwrap(),
             "SAB: 2 CRC errors, 1 timeout in 10 valid frames (SAB2)"
         );
     }

@@ -501,7 +501,7 @@ fn sab2_errors_become_rows() {
         (c.runts, c.aborts, c.overlong, c.truncated, c.garbage_bytes),
         (1, 1, 2, 1, 2)
     );
-    let p = d.problems().unwrap();
+    let p = d.problems().line().unwrap();
     assert!(
         p.contains("1 runt") && p.contains("2 overlong frames"),
         "{p}"
@@ -514,13 +514,13 @@ fn garbage_only_input_is_reported_not_fatal() {
     assert!(rows.iter().all(|r| r.kind == "Garbage"));
     assert_eq!(d.counters().garbage_bytes, 100);
     assert!(col(&rows[0], "Note").contains("no valid frame of either framing"));
-    let p = d.problems().unwrap();
+    let p = d.problems().line().unwrap();
     assert!(p.starts_with("SAB: no valid frame"), "{p}");
     // No input at all: no rows, no complaint.
     let (rows, d) = decode(&opts(FramingChoice::Auto), &[]);
     assert!(rows.is_empty());
-    assert_eq!(d.problems(), None);
-    assert!(d.stats().contains("not decided"));
+    assert_eq!(d.problems().line(), None);
+    assert!(d.stats().to_string().contains("not decided"));
 }
 
 #[test]
@@ -1132,6 +1132,6 @@ fn framing_switches_back_and_forth_keep_a_bounded_list() {
         300,
         "every choice is listed or counted"
     );
-    let report = d.stats();
+    let report = d.stats().to_string();
     assert!(report.contains(" more framing switches"), "{report}");
 }

@@ -579,7 +579,7 @@ fn session_statistics_count_what_happened() {
     let per: u64 = (0..=255u8).map(|s| d.station_stats(s).requests).sum();
     assert_eq!(per, count("Request") + count("Retry"));
     assert!(t.late > 0 || !rows.iter().any(|r| r.extra[2].contains("late")));
-    let stats = d.stats();
+    let stats = d.stats().to_string();
     assert!(stats.contains("Requests"), "{stats}");
     // the data mode's CRC basis is recorded
     assert!(
@@ -898,7 +898,7 @@ fn serial_response_times_stay_bounded() {
         times.heap_bytes()
     );
     // the median comes from the histogram now (three significant digits), marked with ~
-    let stats = d.stats();
+    let stats = d.stats().to_string();
     assert!(
         stats.contains(" ~10.5 ") || stats.contains(" ~10.4 "),
         "{stats}"
@@ -982,13 +982,17 @@ fn ether_many_conversations_are_capped_and_their_requests_time_out() {
     assert_eq!(t.conversations_dropped, extra as u64);
     assert_eq!(t.timeouts, extra as u64);
     assert_eq!(t.unanswered_at_end, pairing::MAX_CONVERSATIONS as u64);
-    let problems = e.problems().unwrap();
+    let problems = e.problems().line().unwrap();
     assert!(problems.contains("1000 timeouts"), "{problems}");
     assert!(
         problems.contains("1000 conversations dropped (more than 4096 at once)"),
         "{problems}"
     );
-    assert!(e.stats().contains("conversations 5096"), "{}", e.stats());
+    assert!(
+        e.stats().to_string().contains("conversations 5096"),
+        "{}",
+        e.stats().to_string()
+    );
 }
 
 #[test]
@@ -1010,7 +1014,7 @@ fn ether_idle_conversations_expire() {
     let t = e.totals();
     assert!(t.conversations_expired >= 1_300, "{t:?}");
     assert_eq!(t.conversations_dropped, 0);
-    assert_eq!(e.problems(), None, "idle expiry is not a problem");
+    assert_eq!(e.problems().line(), None, "idle expiry is not a problem");
 }
 
 #[test]
@@ -1038,7 +1042,11 @@ fn ether_many_plcs_are_counted_together_beyond_the_cap() {
     assert_eq!(name, "other PLCs (10)");
     assert_eq!((other.requests, other.responses), (10, 10));
     assert_eq!(e.totals().plcs_merged, 10);
-    assert!(e.stats().contains("other PLCs (10)"), "{}", e.stats());
+    assert!(
+        e.stats().to_string().contains("other PLCs (10)"),
+        "{}",
+        e.stats().to_string()
+    );
 }
 
 #[test]
@@ -1086,9 +1094,34 @@ fn ether_more_than_65536_waiting_requests_become_timeouts() {
     assert_eq!(t.requests_dropped, dropped as u64);
     assert_eq!(t.timeouts, dropped as u64);
     assert_eq!(t.unanswered_at_end, pairing::MAX_OUTSTANDING as u64);
-    let problems = e.problems().unwrap();
+    let problems = e.problems().line().unwrap();
     assert!(
         problems.contains("4464 requests given up (more than 65536 waiting)"),
         "{problems}"
     );
+}
+
+#[test]
+fn ether_timeout_rows_at_the_caps_leave_the_next_row_alone() {
+    // One conversation more than the cap: the dropped conversation's Timeout row comes just
+    // before the new request's row, which must still show its own sequence, data and notes.
+    let n = pairing::MAX_CONVERSATIONS + 1;
+    let mut cap = EtherCapture::new();
+    for i in 0..n {
+        let ip = [10, 1, (i >> 16) as u8, (i >> 8) as u8];
+        cap.packet(T0, (ip, i as u16), PLC, 7, 0);
+    }
+    let mut e = EtherDecoder::new(&Options::default());
+    let mut out = Collected::default();
+    e.push(&cap.bytes, None, &mut out).unwrap();
+    let rows = &out.rows;
+    let at = rows.iter().position(|r| r.kind == "Timeout").unwrap();
+    assert!(rows[at].extra[2].starts_with("given up"), "{:?}", rows[at]);
+    let next = &rows[at + 1];
+    assert_eq!(next.kind, "Request");
+    assert_eq!(
+        (next.data.as_str(), next.extra[1].as_str()),
+        (rows[0].data.as_str(), "7")
+    );
+    assert_eq!(next.extra[2], rows[0].extra[2], "{next:?}");
 }

@@ -13,6 +13,7 @@ use crate::fmt::{push_hex, push_u64};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::{Class, Row};
 use crate::row::{Latch, RowOut, RowResult};
+use crate::stats::{Column, Problems, Report};
 use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
 
 /// Poll slot length used to reconstruct Millis for sources without time.
@@ -403,24 +404,33 @@ impl Decoder for SportDecoder {
         self.table.stats.valid_frames
     }
 
-    fn stats(&self) -> String {
+    fn stats(&self) -> Report {
         let st = &self.table.stats;
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} {:>8} {:>8}",
-            "ID",
-            "Device",
-            "Polls",
-            "Answers",
-            "Null",
-            "Data",
-            "Other",
-            "BadCRC",
-            "Trunc",
-            "Mean ms",
-            "Max ms"
-        );
+        let mut r = Report::new(&[
+            Column::right("ID", 3),
+            Column::left("Device", 10).gap(2),
+            Column::right("Polls", 8),
+            Column::right("Answers", 8),
+            Column::right("Null", 8),
+            Column::right("Data", 8),
+            Column::right("Other", 6),
+            Column::right("BadCRC", 7),
+            Column::right("Trunc", 6),
+            Column::right("Mean ms", 8),
+            Column::right("Max ms", 8),
+        ]);
+        let counts = |p: &PhysStats| {
+            [
+                p.polls,
+                p.answers,
+                p.null,
+                p.data,
+                p.other,
+                p.crc_errors,
+                p.truncated,
+            ]
+            .map(|n| n.to_string())
+        };
         let mut total = PhysStats::default();
         for (phys, p) in st.per.iter().enumerate() {
             if p.polls == 0 {
@@ -441,37 +451,15 @@ impl Decoder for SportDecoder {
             } else {
                 ("-".into(), "-".into())
             };
-            let _ = writeln!(
-                s,
-                "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} {:>8} {:>8}",
-                phys,
-                names::device(phys as u8),
-                p.polls,
-                p.answers,
-                p.null,
-                p.data,
-                p.other,
-                p.crc_errors,
-                p.truncated,
-                mean,
-                max
-            );
+            let mut cells = vec![phys.to_string(), names::device(phys as u8).to_owned()];
+            cells.extend(counts(p));
+            cells.extend([mean, max]);
+            r.row(cells);
         }
-        let _ = writeln!(
-            s,
-            "{:>3}  {:<10} {:>8} {:>8} {:>8} {:>8} {:>6} {:>7} {:>6}",
-            "all",
-            "",
-            total.polls,
-            total.answers,
-            total.null,
-            total.data,
-            total.other,
-            total.crc_errors,
-            total.truncated
-        );
-        let _ = write!(
-            s,
+        let mut cells = vec!["all".to_owned(), String::new()];
+        cells.extend(counts(&total));
+        r.row(cells);
+        r.totals.push(format!(
             "valid frames {}, garbage {} bytes in {} runs, non-standard check bits {}, unusual escapes {}, repeated frames {}",
             st.valid_frames,
             st.garbage_bytes,
@@ -479,43 +467,20 @@ impl Decoder for SportDecoder {
             st.check_bits,
             st.unusual_escapes,
             st.repeats
-        );
-        s
+        ));
+        r
     }
 
-    fn problems(&self) -> Option<String> {
+    fn problems(&self) -> Problems {
         let st = &self.table.stats;
-        let mut parts = Vec::new();
-        let plural = crate::exit::count;
-        if st.crc_errors > 0 {
-            parts.push(plural(st.crc_errors, "CRC error", "CRC errors"));
-        }
-        if st.truncated > 0 {
-            parts.push(plural(st.truncated, "truncated frame", "truncated frames"));
-        }
-        if st.garbage_bytes > 0 {
-            parts.push(format!(
-                "{} skipped ({})",
-                plural(st.garbage_bytes, "garbage byte", "garbage bytes"),
-                plural(st.garbage_runs, "run", "runs")
-            ));
-        }
-        if st.unusual_escapes > 0 {
-            parts.push(plural(
-                st.unusual_escapes,
-                "unusual escape",
-                "unusual escapes",
-            ));
-        }
-        if parts.is_empty() {
-            None
-        } else {
-            Some(format!(
-                "S.Port: {} in {} valid frames",
-                parts.join(", "),
-                st.valid_frames
-            ))
-        }
+        let mut p = Problems::new("S.Port");
+        p.count(st.crc_errors, "CRC error", "CRC errors")
+            .count(st.truncated, "truncated frame", "truncated frames")
+            .garbage(st.garbage_bytes, st.garbage_runs)
+            .count(st.unusual_escapes, "unusual escape", "unusual escapes")
+            // "in 1 valid frames": the count is not made singular (as it always was).
+            .in_valid(st.valid_frames, "valid frames", "valid frames");
+        p
     }
 
     fn no_frames_hint(&self) -> &'static str {

@@ -1,0 +1,518 @@
+//! The one mapping of S-Bus telegrams onto the log table, shared by the serial front end
+//! ([`super::serial_decoder`]) and the Ether-S-Bus one ([`super::ether_decoder`]): the row
+//! being built, Timeout rows, requests and retries, answers (response time, late, unpaired),
+//! responses, ACK/NAK, CRC errors, and the counters they touch. The columns are documented in
+//! `docs/sbus.md`.
+
+use std::fmt::Write as _;
+
+use super::commands::{self, Expect};
+use super::pairing::{
+    Answer, MAX_CONVERSATIONS, MAX_OUTSTANDING, Outstanding, RequestKind, TimeoutWhy,
+};
+use super::stats::{StationStats, Totals, nak_slot};
+use super::telegram::{self, BROADCAST, ReqInfo};
+use crate::fmt::{push_fixed, push_hex, push_u64};
+use crate::row::{Class, Row, RowOut, RowResult};
+
+/// Scratch buffers reused for every row.
+#[derive(Default)]
+pub(super) struct Scratch {
+    pub sensor_no: String,
+    pub data: String,
+    resp: String,
+    seq: String,
+    note: String,
+}
+
+impl Scratch {
+    pub(super) fn clear(&mut self) {
+        self.sensor_no.clear();
+        self.data.clear();
+        self.resp.clear();
+        self.seq.clear();
+        self.note.clear();
+    }
+
+    pub(super) fn note(&mut self, text: &str) {
+        if !self.note.is_empty() {
+            self.note.push_str("; ");
+        }
+        self.note.push_str(text);
+    }
+
+    pub(super) fn note_with(&mut self, f: impl FnOnce(&mut String)) {
+        if !self.note.is_empty() {
+            self.note.push_str("; ");
+        }
+        f(&mut self.note);
+    }
+
+    pub(super) fn resp_time(&mut self, us: u64) {
+        push_fixed(&mut self.resp, (us as i64 + 50) / 100, 1);
+    }
+
+    pub(super) fn seq(&mut self, seq: u16) {
+        push_u64(&mut self.seq, seq as u64);
+    }
+}
+
+/// One row, from the scratch buffers.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn put_row(
+    out: &mut dyn RowOut,
+    sc: &Scratch,
+    micros: u64,
+    id: Option<u32>,
+    device: &str,
+    kind: &str,
+    class: Class,
+    sensor: &str,
+    raw: &[u8],
+) -> RowResult {
+    let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
+    out.row(&Row {
+        micros: Some(micros),
+        id,
+        device,
+        kind,
+        class,
+        sensor_no: &sc.sensor_no,
+        sensor,
+        data: &sc.data,
+        extra: &extra,
+        raw,
+    })
+}
+
+/// Notes for a request: layout problems, broadcast, security-relevant commands.
+fn request_notes(sc: &mut Scratch, t: &telegram::RequestText) -> Class {
+    let mut class = Class::Plain;
+    if let Some(p) = t.layout_problem {
+        sc.note(p);
+        class = Class::Warning;
+    }
+    let info = &t.info;
+    if info.station == BROADCAST {
+        sc.note("broadcast");
+        if !matches!(info.cmd, 0x30 | 0x39 | 0x44) {
+            sc.note("only run/stop/restart cold ALL may be broadcast");
+            class = Class::Warning;
+        }
+    }
+    if info.cmd == 0x51 {
+        sc.note("password write (0x51 write bytes can carry a login hash, CVE-2022-30320)");
+        class = Class::Warning;
+    }
+    if let Some(c) = info.command()
+        && c.pgu_change
+    {
+        sc.note("PGU command");
+        class = Class::Warning;
+    }
+    class
+}
+
+/// Response text for a paired request; returns whether the length fits.
+fn response_text(sc: &mut Scratch, req: &ReqInfo, data: &[u8]) -> bool {
+    let fits = req.expect.fits(data);
+    telegram::describe_response(req, data, &mut sc.sensor_no, &mut sc.data);
+    if !fits {
+        sc.note_with(|n| {
+            n.push_str("length ");
+            push_u64(n, data.len() as u64);
+            match req.expect {
+                Expect::Data(e) => {
+                    n.push_str(" does not fit the request (expects ");
+                    push_u64(n, e as u64);
+                    n.push(')');
+                }
+                Expect::AckNak => n.push_str(": the request expects an ACK/NAK"),
+                Expect::Nothing => n.push_str(": a broadcast expects no answer"),
+                _ => n.push_str(" does not fit the request"),
+            }
+        });
+    }
+    fits
+}
+
+fn timeout_note(sc: &mut Scratch, why: TimeoutWhy, timeout_us: u64) {
+    sc.note_with(|n| match why {
+        TimeoutWhy::Deadline => {
+            n.push_str("no answer within ");
+            push_u64(n, timeout_us / 1000);
+            n.push_str(" ms");
+        }
+        TimeoutWhy::NextRequest => n.push_str("no answer before the next request"),
+        TimeoutWhy::Retry => n.push_str("no answer before the retry"),
+        TimeoutWhy::End => n.push_str("no answer before the end of the capture"),
+        TimeoutWhy::Dropped => {
+            n.push_str("given up: conversation dropped (more than ");
+            push_u64(n, MAX_CONVERSATIONS as u64);
+            n.push_str(" at once)");
+        }
+        TimeoutWhy::Overflow => {
+            n.push_str("given up: more than ");
+            push_u64(n, MAX_OUTSTANDING as u64);
+            n.push_str(" requests waiting");
+        }
+    });
+}
+
+fn ack_text(sc: &mut Scratch, code: u16, short: Option<(u8, bool)>) -> &'static str {
+    match short {
+        Some((ch, two)) => {
+            sc.data.push_str(if ch == telegram::ACK_CHAR {
+                "ACK"
+            } else {
+                "NAK"
+            });
+            if two {
+                sc.note("sent as 2 bytes (character + 00)");
+            }
+        }
+        None => {
+            sc.data.push_str(commands::ack_nak_name(code));
+            sc.data.push_str(" (0x");
+            let mut b = [0u8; 2];
+            b.copy_from_slice(&code.to_be_bytes());
+            for x in b {
+                const HEX: &[u8; 16] = b"0123456789ABCDEF";
+                sc.data.push(HEX[(x >> 4) as usize] as char);
+                sc.data.push(HEX[(x & 15) as usize] as char);
+            }
+            sc.data.push(')');
+        }
+    }
+    if code == 0 { "ACK" } else { "NAK" }
+}
+
+/// The telegram-to-row mapper: the scratch of the row being built, the scratch of Timeout rows
+/// (written while a row is being built) and the totals. The front ends choose the station or
+/// PLC counters (`StationStats`) and the Device column; everything else is written here once.
+pub(super) struct Mapper {
+    pub sc: Scratch,
+    tsc: Scratch,
+    pub totals: Totals,
+    /// Note an ACK to a request that expects data (the serial decoder does, the Ether one
+    /// never did).
+    ack_expect_note: bool,
+}
+
+impl Mapper {
+    pub fn new(ack_expect_note: bool) -> Self {
+        Mapper {
+            sc: Scratch::default(),
+            tsc: Scratch::default(),
+            totals: Totals::default(),
+            ack_expect_note,
+        }
+    }
+
+    /// The Timeout row of request `p` at `at` (counted, also in `st`); the row being built is
+    /// left alone.
+    #[allow(clippy::too_many_arguments)]
+    pub fn timeout(
+        &mut self,
+        p: &Outstanding,
+        why: TimeoutWhy,
+        at: u64,
+        timeout_us: u64,
+        device: &str,
+        st: Option<&mut StationStats>,
+        out: &mut dyn RowOut,
+    ) -> RowResult {
+        self.totals.timeouts += 1;
+        if let Some(st) = st {
+            st.timeouts += 1;
+        }
+        let sc = &mut self.tsc;
+        sc.clear();
+        if let Some(e) = p.info.elem {
+            telegram::push_elem(&mut sc.sensor_no, e, p.info.block, p.info.addr);
+        }
+        if let Some(s) = p.seq {
+            sc.seq(s);
+        }
+        timeout_note(sc, why, timeout_us);
+        put_row(
+            out,
+            sc,
+            at,
+            Some(p.info.station as u32),
+            device,
+            crate::row::kind::TIMEOUT,
+            Class::Warning,
+            p.info.name(),
+            &[],
+        )
+    }
+
+    /// The Sensor and Data text of a request and its notes; counted in `st`. `class` becomes
+    /// the request's own class unless it is already set.
+    pub fn request(
+        &mut self,
+        station: u8,
+        cmd: u8,
+        body: &[u8],
+        st: &mut StationStats,
+        class: &mut Class,
+    ) -> ReqInfo {
+        let text = telegram::describe_request(
+            station,
+            cmd,
+            body,
+            &mut self.sc.sensor_no,
+            &mut self.sc.data,
+        );
+        let c = request_notes(&mut self.sc, &text);
+        if *class == Class::Plain {
+            *class = c;
+        }
+        st.requests += 1;
+        if text.info.expect == Expect::Nothing {
+            st.broadcasts += 1;
+        }
+        text.info
+    }
+
+    /// `Request`, or `Retry` (counted, with a note; `timed`: how long after the first).
+    pub fn request_kind(
+        &mut self,
+        kind: RequestKind,
+        timed: bool,
+        st: &mut StationStats,
+        class: &mut Class,
+    ) -> &'static str {
+        match kind {
+            RequestKind::New => "Request",
+            RequestKind::Retry { n, since } => {
+                self.totals.retries += 1;
+                st.retries += 1;
+                self.sc.note_with(|s| {
+                    s.push_str("retry ");
+                    push_u64(s, n as u64);
+                    if timed {
+                        s.push_str(", ");
+                        push_fixed(s, (since as i64 + 50) / 100, 1);
+                        s.push_str(" ms after the first");
+                    }
+                });
+                if *class == Class::Plain {
+                    *class = Class::Warning;
+                }
+                "Retry"
+            }
+        }
+    }
+
+    /// The response time (`timed`) and the late or unpaired note of an answer; `stats` gives
+    /// the counters of a paired request. Returns the request answered.
+    pub fn answer<'s>(
+        &mut self,
+        answer: &Answer,
+        timed: bool,
+        timeout_us: u64,
+        stats: impl FnOnce(&ReqInfo) -> &'s mut StationStats,
+        class: &mut Class,
+    ) -> Option<ReqInfo> {
+        match *answer {
+            Answer::Paired { req, elapsed, late } => {
+                let st = stats(&req.info);
+                if timed {
+                    st.times.add(elapsed);
+                    self.sc.resp_time(elapsed);
+                }
+                if late {
+                    st.late += 1;
+                    self.totals.late += 1;
+                    self.sc.note_with(|n| {
+                        n.push_str("late: after the ");
+                        push_u64(n, timeout_us / 1000);
+                        n.push_str(" ms timeout");
+                    });
+                    *class = Class::Warning;
+                }
+                Some(req.info)
+            }
+            Answer::SeqMismatch { req } => {
+                self.totals.no_request += 1;
+                self.sc.note_with(|n| {
+                    n.push_str("SEQ does not match the pending request's SEQ ");
+                    push_u64(n, req.seq.unwrap_or(0) as u64);
+                    n.push_str(" (a stale answer)");
+                });
+                *class = Class::Warning;
+                None
+            }
+            Answer::NoRequest => {
+                self.totals.no_request += 1;
+                self.sc.note("no request");
+                *class = Class::Warning;
+                None
+            }
+        }
+    }
+
+    /// The Data text of a response (hex without a request); a length that does not fit the
+    /// request is counted and noted.
+    pub fn response(
+        &mut self,
+        paired: Option<(&ReqInfo, &mut StationStats)>,
+        data: &[u8],
+        class: &mut Class,
+    ) {
+        match paired {
+            Some((req, st)) => {
+                st.responses += 1;
+                if !response_text(&mut self.sc, req, data) {
+                    self.totals.mismatched += 1;
+                    st.mismatched += 1;
+                    *class = Class::Warning;
+                }
+            }
+            None => push_hex(&mut self.sc.data, data),
+        }
+    }
+
+    /// The text of an ACK or NAK (`short`: the single character, and whether a 00 followed);
+    /// counted. Returns the row kind.
+    pub fn ack_nak(
+        &mut self,
+        code: u16,
+        short: Option<(u8, bool)>,
+        paired: Option<(&ReqInfo, &mut StationStats)>,
+        class: &mut Class,
+    ) -> &'static str {
+        let kind = ack_text(&mut self.sc, code, short);
+        if let Some((req, st)) = paired {
+            if let Some(e) = req.elem {
+                telegram::push_elem(&mut self.sc.sensor_no, e, req.block, req.addr);
+            }
+            if code == 0 {
+                st.acks += 1;
+                if self.ack_expect_note && req.expect != Expect::AckNak {
+                    self.sc.note("ACK to a request that expects data");
+                    *class = Class::Warning;
+                }
+            } else {
+                st.naks[nak_slot(code, short.is_some())] += 1;
+            }
+        }
+        if code != 0 {
+            self.totals.naks += 1;
+            if *class == Class::Plain {
+                *class = Class::Warning;
+            }
+        }
+        kind
+    }
+
+    /// A CRC error: counted and noted (`unescaped`: the other reading's CRC, when it differs).
+    pub fn bad_crc(&mut self, got: u16, want: u16, unescaped: Option<u16>) {
+        self.totals.crc_errors += 1;
+        self.sc.note_with(|n| {
+            let _ = write!(n, "CRC 0x{got:04X}, expected 0x{want:04X}");
+            if let Some(u) = unescaped {
+                let _ = write!(n, " (escaped) or 0x{u:04X} (unescaped)");
+            }
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::row::Collected;
+
+    fn read_request(station: u8) -> Outstanding {
+        let text = telegram::describe_request(
+            station,
+            0x06,
+            &[0, 0, 5],
+            &mut String::new(),
+            &mut String::new(),
+        );
+        Outstanding::new(text.info, 1_000, true, Some(7))
+    }
+
+    #[test]
+    fn a_timeout_row_leaves_the_row_being_built_alone() {
+        let mut m = Mapper::new(true);
+        let mut st = StationStats::default();
+        let mut class = Class::Plain;
+        m.sc.clear();
+        m.request(3, 0x06, &[0, 0, 5], &mut st, &mut class);
+        let mut out = Collected::default();
+        let p = read_request(4);
+        m.timeout(
+            &p,
+            TimeoutWhy::NextRequest,
+            2_000,
+            250_000,
+            "PCD",
+            None,
+            &mut out,
+        )
+        .unwrap();
+        put_row(
+            &mut out,
+            &m.sc,
+            2_000,
+            Some(3),
+            "PCD",
+            "Request",
+            class,
+            "x",
+            &[],
+        )
+        .unwrap();
+        let [timeout, request] = &out.rows[..] else {
+            panic!("{:?}", out.rows)
+        };
+        assert_eq!(timeout.kind, "Timeout");
+        assert_eq!(
+            timeout.extra,
+            ["", "7", "no answer before the next request"]
+        );
+        assert_eq!(request.extra, ["", "", ""]);
+        assert_eq!(
+            (request.sensor_no.as_str(), request.data.as_str()),
+            ("R5", "R5")
+        );
+        assert_eq!((m.totals.timeouts, st.requests), (1, 1));
+    }
+
+    #[test]
+    fn answers_count_in_the_paired_requests_station() {
+        let mut m = Mapper::new(true);
+        let mut st = StationStats::default();
+        let req = read_request(3);
+        let mut class = Class::Plain;
+        let answer = Answer::Paired {
+            req,
+            elapsed: 300_000,
+            late: true,
+        };
+        let info = m.answer(&answer, true, 250_000, |_| &mut st, &mut class);
+        assert_eq!(class, Class::Warning);
+        assert_eq!(m.sc.note, "late: after the 250 ms timeout");
+        assert_eq!(m.sc.resp, "300.0");
+        let kind = m.ack_nak(0, None, info.as_ref().map(|i| (i, &mut st)), &mut class);
+        assert_eq!(kind, "ACK");
+        assert!(m.sc.note.ends_with("; ACK to a request that expects data"));
+        assert_eq!((st.late, st.acks, st.times.count), (1, 1, 1));
+
+        let mut m = Mapper::new(false);
+        let mut class = Class::Plain;
+        assert_eq!(m.ack_nak(2, None, None, &mut class), "NAK");
+        assert_eq!(
+            (m.sc.note.as_str(), class, m.totals.naks),
+            ("", Class::Warning, 1)
+        );
+        assert_eq!(
+            m.sc.data,
+            "NAK password (0x0002)".replace("NAK password", commands::ack_nak_name(2))
+        );
+    }
+}
