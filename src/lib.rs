@@ -8,6 +8,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fmt;
+pub mod pairing;
 pub mod pcap;
 pub mod protocol;
 pub mod record;
@@ -21,5 +22,5 @@ pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;
-pub mod time;
 pub mod summary;
+pub mod time;

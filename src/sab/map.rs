@@ -11,8 +11,8 @@ use super::names::Names;
 use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::{hdlc, sync};
-use crate::row::RowOut;
 use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
+use crate::row::RowOut;
 use crate::row::{Class, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
@@ -214,13 +214,19 @@ impl Mapper {
                 push_ms_short(n, self.pairing.timeout() / 1000);
                 n.push_str(" ms");
             }
-            Why::NextRequest => {
+            Why::NextRequest | Why::Retry => {
                 n.push_str("no response before the next request (after ");
                 push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }
-            Why::EndOfCapture => {
+            Why::End => {
                 n.push_str("no response before the end of the capture (after ");
+                push_ms(n, x.waited / 1000);
+                n.push_str(" ms)");
+            }
+            // Not from SAB's pairing (one request open at a time, nothing to give up).
+            Why::Dropped | Why::Overflow => {
+                n.push_str("given up (after ");
                 push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }
