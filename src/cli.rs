@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::exit::{Failure, code};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::exit::{Failure, code};
 use crate::record::{Recorder, RecordingReader};
 use crate::run::{Context, Stop, drive};
 use crate::sink::{Format, Output, Table, TableOptions};
@@ -359,9 +359,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sport(args) => run_capture(&args.capture, &crate::sport::PROTOCOL, |_, _| {
             crate::sport::decoder()
         }),
-        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
-            crate::sbus::decoder(args.options(line.baud), kind)
-        }),
+        Command::Sbus(args) => {
+            run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
+                crate::sbus::decoder(args.options(line.baud), kind)
+            })
+        }
         Command::Sab2(args) => run_capture(&args.capture, &crate::sab::PROTOCOL, |_, line| {
             crate::sab::decoder(args.options(line.baud))
         }),

@@ -22,5 +22,5 @@ pub mod selfcheck;
 pub mod sink;
 pub mod source;
 pub mod sport;
-pub mod summary;
 pub mod time;
+pub mod summary;

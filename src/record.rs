@@ -17,8 +17,8 @@ use std::sync::mpsc::SyncSender;
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
-use crate::source::{Batch, ChunkReader, Message, Opened};
 use crate::time::Anchor;
+use crate::source::{Batch, ChunkReader, Message, Opened};
 
 /// pcap link type of the RTAC serial encapsulation.
 pub const LINKTYPE_RTAC_SERIAL: u32 = 250;

@@ -7,10 +7,10 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
-use crate::exit::{Failure, Interrupt};
 use crate::protocol::Decoder;
-use crate::record::Recorder;
 use crate::row::RowOut;
+use crate::exit::{Failure, Interrupt};
+use crate::record::Recorder;
 use crate::row::{Class, Row};
 use crate::sink::Table;
 use crate::source::{Batch, Feed, Message};

@@ -6,9 +6,9 @@ use std::io::{self, Read};
 use std::sync::mpsc::sync_channel;
 
 use crate::protocol::Decoder;
-use crate::protocol::Kind;
-use crate::row::Class;
 use crate::row::{Collected, OwnedRow};
+use crate::row::Class;
+use crate::protocol::Kind;
 use crate::source::{Batch, ChunkReader, Message, Opened};
 
 /// Split points derived from the data itself, so a fuzzer explores chunkings too.

@@ -3,8 +3,8 @@
 
 mod common;
 
-use busnoop::row::Class;
 use busnoop::row::OwnedRow;
+use busnoop::row::Class;
 use busnoop::sport::{SportDecoder, wire};
 use common::{decode, sport_rows};
 use proptest::prelude::*;

@@ -2,9 +2,9 @@
 
 mod common;
 
+use busnoop::row::OwnedRow;
 use busnoop::fmt::parse_hex;
 use busnoop::row::Class;
-use busnoop::row::OwnedRow;
 use common::{read_tsv, sport_rows};
 
 /// EdgeTX's labels in the canonical decode → busnoop's Sensor column (the sample's names).

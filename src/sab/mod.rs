@@ -23,11 +23,11 @@ pub mod sample;
 pub mod stats;
 pub mod sync;
 
+pub use names::{parse_command, parse_device};
 pub use config::{
     BITS_PER_BYTE, COLUMNS, DEFAULT_BAUD, DEFAULT_TIMEOUT_MS, FramingChoice, Options, PROTOCOL,
 };
 pub use decoder::SabDecoder;
-pub use names::{parse_command, parse_device};
 
 /// The SAB decoder (every input kind [`PROTOCOL`] accepts is a byte stream).
 pub fn decoder(opts: Options) -> Box<dyn crate::protocol::Decoder> {

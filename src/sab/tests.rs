@@ -8,10 +8,10 @@ use super::frame::{EventKind, Framing};
 use super::header::Flags;
 use super::map::push_payload;
 use super::*;
-use crate::fmt::{hex, parse_hex};
 use crate::protocol::Decoder;
-use crate::row::Class;
 use crate::row::{Collected, OwnedRow};
+use crate::fmt::{hex, parse_hex};
+use crate::row::Class;
 use frame::OwnedEvent;
 use proptest::prelude::*;
 

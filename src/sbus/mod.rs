@@ -15,10 +15,10 @@ use std::fmt::Write as _;
 use std::io;
 use std::net::SocketAddr;
 
-use crate::fmt::{push_fixed, push_hex, push_u64};
-use crate::pcap::{PcapError, PcapStream};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::RowOut;
+use crate::fmt::{push_fixed, push_hex, push_u64};
+use crate::pcap::{PcapError, PcapStream};
 use crate::row::{Class, Row};
 use commands::Expect;
 use pairing::{

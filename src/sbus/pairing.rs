@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 
 use crate::pairing::{Open, Table};
 
-pub use crate::pairing::{FastHasher, FastMap, Reason as TimeoutWhy};
+pub use crate::pairing::{FastMap, Reason as TimeoutWhy};
 
 use super::telegram::ReqInfo;
 

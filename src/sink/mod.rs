@@ -8,10 +8,10 @@ use std::path::Path;
 use chrono::{DateTime, Local};
 use owo_colors::{OwoColorize, Style};
 
-use crate::fmt::push_hex_bytes;
 use crate::row::RowOut;
-use crate::row::{BASE_COLUMNS, Class, Row};
 use crate::time::Anchor;
+use crate::fmt::push_hex_bytes;
+use crate::row::{BASE_COLUMNS, Class, Row};
 pub use output::{Output, WriteError};
 
 /// Output format.

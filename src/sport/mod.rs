@@ -10,9 +10,9 @@ pub mod wire;
 use std::fmt::Write as _;
 use std::io;
 
-use crate::fmt::{push_hex, push_u64};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::RowOut;
+use crate::fmt::{push_hex, push_u64};
 use crate::row::{Class, Row};
 use wire::{BODY_LEN, Body, Event, Garbage, Reassembler, Slot};
 

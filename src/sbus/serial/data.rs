@@ -362,9 +362,9 @@ const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
 
 #[cfg(test)]
 mod tests {
+    use crate::row::GARBAGE_ROW_MAX;
     use super::super::testing::{Ev, T, bytewise};
     use super::*;
-    use crate::row::GARBAGE_ROW_MAX;
     use crate::sbus::telegram::{encode_data, encode_secure};
     use crate::sbus::tests::{SMode, session};
 
