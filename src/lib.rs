@@ -10,6 +10,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fmt;
+pub mod pairing;
 pub mod pcap;
 pub mod protocol;
 pub mod protocols;

@@ -198,13 +198,19 @@ impl Mapper {
                 push_ms_short(n, self.pairing.timeout() / 1000);
                 n.push_str(" ms");
             }
-            Why::NextRequest => {
+            Why::NextRequest | Why::Retry => {
                 n.push_str("no response before the next request (after ");
                 push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }
-            Why::EndOfCapture => {
+            Why::End => {
                 n.push_str("no response before the end of the capture (after ");
+                push_ms(n, x.waited / 1000);
+                n.push_str(" ms)");
+            }
+            // Not from SAB's pairing (one request open at a time, nothing to give up).
+            Why::Dropped | Why::Overflow => {
+                n.push_str("given up (after ");
                 push_ms(n, x.waited / 1000);
                 n.push_str(" ms)");
             }

@@ -19,6 +19,10 @@
 //! response: modm's master starts its timer when it queues the request and stops waiting when
 //! the whole response has arrived.
 
+use crate::pairing::{Keep, LateWindow, Open};
+
+pub use crate::pairing::Reason as Why;
+
 /// A request as pairing needs it. Times in µs since the capture started.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Request {
@@ -28,18 +32,8 @@ pub struct Request {
     pub start: u64,
 }
 
-/// Why a request timed out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Why {
-    /// Its deadline passed without a response.
-    Deadline,
-    /// The next request came first.
-    NextRequest,
-    /// The capture ended (before the deadline) without a response.
-    EndOfCapture,
-}
-
-/// A request that timed out: emit a `Timeout` row at `at`.
+/// A request that timed out: emit a `Timeout` row at `at`. SAB's reasons are
+/// [`Why::Deadline`], [`Why::NextRequest`] and [`Why::End`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Expired {
     pub request: Request,
@@ -75,23 +69,6 @@ pub enum Answer {
     Unpaired { open: Option<Request> },
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Open {
-    req: Request,
-    answers: u32,
-    /// The first response ended after the deadline (the master timed out all the same).
-    late: bool,
-    /// The timeout was reported.
-    expired: bool,
-}
-
-impl Open {
-    /// Times out (or has timed out) without a response in time, not yet reported.
-    fn due(&self) -> bool {
-        !self.expired && (self.answers == 0 || self.late)
-    }
-}
-
 /// Requests closed without a response that a late response may still match.
 const RECENT: usize = 4;
 
@@ -99,9 +76,9 @@ const RECENT: usize = 4;
 #[derive(Clone, Debug)]
 pub struct Pairing {
     timeout: u64,
-    open: Option<Open>,
-    recent: [Option<(Request, Why)>; RECENT],
-    recent_next: usize,
+    open: Option<Open<Request>>,
+    /// Closed without a response, by (address, command): the last [`RECENT`] closings.
+    recent: LateWindow<(u8, u8), Request>,
 }
 
 impl Pairing {
@@ -110,8 +87,7 @@ impl Pairing {
         Pairing {
             timeout,
             open: None,
-            recent: [None; RECENT],
-            recent_next: 0,
+            recent: LateWindow::new(RECENT, Keep::Expiries),
         }
     }
 
@@ -122,12 +98,8 @@ impl Pairing {
     /// The request the master is waiting for, if any.
     pub fn waiting(&self) -> Option<Request> {
         self.open
-            .filter(|o| o.answers == 0 && !o.expired)
+            .filter(|o| o.answers == 0 && !o.reported)
             .map(|o| o.req)
-    }
-
-    fn deadline(&self, req: &Request) -> u64 {
-        req.start.saturating_add(self.timeout)
     }
 
     /// The capture's time reached `now`: the open request expires when its deadline passed
@@ -135,14 +107,10 @@ impl Pairing {
     pub fn advance(&mut self, now: u64) -> Option<Expired> {
         let timeout = self.timeout;
         let o = self.open.as_mut()?;
-        let deadline = o.req.start.saturating_add(timeout);
-        if !o.due() || now <= deadline {
-            return None;
-        }
-        o.expired = true;
+        let at = o.expire(now, timeout)?;
         Some(Expired {
             request: o.req,
-            at: deadline,
+            at,
             why: Why::Deadline,
             waited: timeout,
         })
@@ -154,10 +122,10 @@ impl Pairing {
     pub fn request(&mut self, req: Request) -> Option<Expired> {
         let mut result = None;
         if let Some(prev) = self.open.take() {
-            let deadline = self.deadline(&prev.req);
+            let deadline = prev.time.saturating_add(self.timeout);
             if prev.due() {
                 let (why, waited) = if prev.answers == 0 {
-                    (Why::NextRequest, req.start.saturating_sub(prev.req.start))
+                    (Why::NextRequest, req.start.saturating_sub(prev.time))
                 } else {
                     (Why::Deadline, self.timeout)
                 };
@@ -169,66 +137,50 @@ impl Pairing {
                 });
             }
             if prev.answers == 0 {
-                let why = if prev.expired {
+                let why = if prev.reported {
                     Why::Deadline
                 } else {
                     Why::NextRequest
                 };
-                self.remember(prev.req, why);
+                self.recent.push((prev.address, prev.command), prev, why);
             }
         }
-        self.open = Some(Open {
-            req,
-            answers: 0,
-            late: false,
-            expired: false,
-        });
+        self.open = Some(Open::at(req, req.start, true));
         result
     }
 
     /// A response from `address` for `command` ended at `end`.
     pub fn response(&mut self, address: u8, command: u8, end: u64) -> Answer {
-        let timeout = self.timeout;
         if let Some(o) = self.open.as_mut()
-            && o.req.address == address
-            && o.req.command == command
+            && o.address == address
+            && o.command == command
         {
-            o.answers += 1;
-            let micros = end.saturating_sub(o.req.start);
-            let late = if o.expired || micros > timeout {
-                if o.answers == 1 && !o.expired {
-                    // Reported by `advance` once the capture's time passes the deadline.
-                    o.late = true;
-                }
-                Lateness::AfterTimeout
-            } else {
-                Lateness::OnTime
-            };
+            let expired = o.reported;
+            let reply = o.answer(end, self.timeout);
+            // A late first response's Timeout is reported by `advance` once the capture's
+            // time passes the deadline.
             return Answer::Paired {
                 request: o.req,
-                micros,
-                late,
-                repeat: o.answers > 1,
+                micros: reply.elapsed,
+                late: if expired || reply.overdue {
+                    Lateness::AfterTimeout
+                } else {
+                    Lateness::OnTime
+                },
+                repeat: reply.repeat,
             };
         }
         // A late answer to a request that was already closed?
-        for i in 0..RECENT {
-            let slot = (self.recent_next + RECENT - 1 - i) % RECENT;
-            if let Some((req, why)) = self.recent[slot]
-                && req.address == address
-                && req.command == command
-            {
-                self.recent[slot] = None;
-                return Answer::Paired {
-                    request: req,
-                    micros: end.saturating_sub(req.start),
-                    late: match why {
-                        Why::NextRequest => Lateness::AfterNextRequest,
-                        _ => Lateness::AfterTimeout,
-                    },
-                    repeat: false,
-                };
-            }
+        if let Some((req, why)) = self.recent.take(|k| *k == (address, command)) {
+            return Answer::Paired {
+                request: req.req,
+                micros: end.saturating_sub(req.time),
+                late: match why {
+                    Why::NextRequest => Lateness::AfterNextRequest,
+                    _ => Lateness::AfterTimeout,
+                },
+                repeat: false,
+            };
         }
         Answer::Unpaired {
             open: self.waiting(),
@@ -242,7 +194,7 @@ impl Pairing {
         if !o.due() {
             return None;
         }
-        let deadline = o.req.start.saturating_add(timeout);
+        let deadline = o.time.saturating_add(timeout);
         Some(if now > deadline {
             Expired {
                 request: o.req,
@@ -253,9 +205,9 @@ impl Pairing {
         } else {
             Expired {
                 request: o.req,
-                at: now.max(o.req.start),
-                why: Why::EndOfCapture,
-                waited: now.saturating_sub(o.req.start),
+                at: now.max(o.time),
+                why: Why::End,
+                waited: now.saturating_sub(o.time),
             }
         })
     }
@@ -263,12 +215,7 @@ impl Pairing {
     /// A gap in the capture: forget everything.
     pub fn reset(&mut self) {
         self.open = None;
-        self.recent = [None; RECENT];
-    }
-
-    fn remember(&mut self, req: Request, why: Why) {
-        self.recent[self.recent_next] = Some((req, why));
-        self.recent_next = (self.recent_next + 1) % RECENT;
+        self.recent.clear();
     }
 }
 
@@ -411,7 +358,7 @@ mod tests {
         let mut p = Pairing::new(T);
         p.request(req(1, 1, 100));
         let x = p.finish(2_000).unwrap();
-        assert_eq!((x.at, x.why, x.waited), (2_000, Why::EndOfCapture, 1_900));
+        assert_eq!((x.at, x.why, x.waited), (2_000, Why::End, 1_900));
         let mut p = Pairing::new(T);
         p.request(req(1, 1, 100));
         let x = p.finish(50_000).unwrap();

@@ -1,109 +1,38 @@
-//! Pairing answers with requests, shared by the serial modes and Ether-S-Bus.
+//! Pairing answers with requests, shared by the serial modes and Ether-S-Bus: the S-Bus
+//! matching rules on top of the core in [`crate::pairing`].
 //!
 //! Responses and ACK/NAKs carry no command, so the decoder remembers each request. A serial
 //! line has one master, so the answer belongs to the last unanswered request (secure mode also
 //! compares the 8-bit SEQ). Ether-S-Bus keys requests by (conversation, 16-bit sequence).
 //! Both detect retries, report requests that got no answer (`Timeout`) and late answers.
 
-use std::collections::{HashMap, VecDeque};
-use std::hash::{BuildHasherDefault, Hasher};
+use std::collections::VecDeque;
+
+use crate::pairing::{Open, Table};
+
+pub use crate::pairing::{FastMap, Reason as TimeoutWhy};
 
 use super::telegram::ReqInfo;
 
-/// A small multiplicative hasher for the decoder's own keys (addresses, sequence numbers):
-/// the maps are looked up for every packet, and SipHash's resistance to crafted keys buys
-/// nothing here (keys only pick buckets; a collision costs time, never correctness).
-#[derive(Default, Clone, Copy)]
-pub struct FastHasher(u64);
-
-impl Hasher for FastHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-
-    fn write_u8(&mut self, n: u8) {
-        self.write_u64(n as u64);
-    }
-
-    fn write_u16(&mut self, n: u16) {
-        self.write_u64(n as u64);
-    }
-
-    fn write_u32(&mut self, n: u32) {
-        self.write_u64(n as u64);
-    }
-
-    fn write_u64(&mut self, n: u64) {
-        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
-    }
-
-    fn write_usize(&mut self, n: usize) {
-        self.write_u64(n as u64);
-    }
-}
-
-/// `HashMap` with [`FastHasher`].
-pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
-
-/// A request waiting for its answer.
+/// What S-Bus keeps of a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Outstanding {
+pub struct Request {
     pub info: ReqInfo,
-    /// Time of the latest transmission (µs since the capture started).
-    pub time: u64,
-    /// Time of the first transmission.
-    pub first: u64,
-    /// Whether the time is real (timeouts can be measured).
-    pub timed: bool,
     /// Secure-mode SEQ or Ether-S-Bus sequence.
     pub seq: Option<u16>,
-    /// Transmissions so far (1 + retries).
-    pub sends: u8,
-    /// A Timeout row was already written for it.
-    pub timeout_reported: bool,
-    /// An answer arrived but was unusable (bad CRC): no Timeout row for it.
-    pub bad_answer: bool,
     /// Free for the decoder (Ether-S-Bus: the PLC's index).
     pub tag: u32,
 }
 
-impl Outstanding {
-    pub fn new(info: ReqInfo, time: u64, timed: bool, seq: Option<u16>) -> Self {
-        Outstanding {
-            info,
-            time,
-            first: time,
-            timed,
-            seq,
-            sends: 1,
-            timeout_reported: false,
-            bad_answer: false,
-            tag: 0,
-        }
-    }
-}
+/// A request waiting for its answer (`time`: its latest transmission, µs since the capture
+/// started); it reads like its [`Request`].
+pub type Outstanding = Open<Request>;
 
-/// Why a request is reported as timed out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TimeoutWhy {
-    /// The master timeout passed without an answer.
-    Deadline,
-    /// The next (different) request came first.
-    NextRequest,
-    /// The same request was sent again.
-    Retry,
-    /// The capture ended.
-    End,
-    /// Ether-S-Bus: its conversation was dropped (more than [`MAX_CONVERSATIONS`] at once).
-    Dropped,
-    /// Ether-S-Bus: given up (more than [`MAX_OUTSTANDING`] requests waiting).
-    Overflow,
+impl Open<Request> {
+    /// A request sent at `time`; `timed`: the time is real (timeouts can be measured).
+    pub fn new(info: ReqInfo, time: u64, timed: bool, seq: Option<u16>) -> Self {
+        Open::at(Request { info, seq, tag: 0 }, time, timed)
+    }
 }
 
 /// How a new request relates to the previous ones.
@@ -116,6 +45,16 @@ pub enum RequestKind {
         n: u8,
         since: u64,
     },
+}
+
+impl RequestKind {
+    fn resend(next: &mut Outstanding, prev: &Outstanding) -> Self {
+        let r = next.resend_of(prev);
+        RequestKind::Retry {
+            n: r.n,
+            since: r.since,
+        }
+    }
 }
 
 /// What an answer was paired with.
@@ -168,12 +107,11 @@ impl SerialPairing {
         expects_answer: bool,
     ) -> (RequestKind, Option<(Outstanding, TimeoutWhy)>) {
         let same = !self.last_answered && self.last == bytes;
-        let prev = self.pending.take();
         let mut timed_out = None;
         let mut kind = RequestKind::New;
         let mut next = req;
-        if let Some(p) = prev {
-            if !p.timeout_reported && !p.bad_answer {
+        if let Some(p) = self.pending.take() {
+            if p.due() {
                 let why = if same {
                     TimeoutWhy::Retry
                 } else {
@@ -182,12 +120,7 @@ impl SerialPairing {
                 timed_out = Some((p, why));
             }
             if same {
-                kind = RequestKind::Retry {
-                    n: p.sends,
-                    since: req.time.saturating_sub(p.first),
-                };
-                next.first = p.first;
-                next.sends = p.sends.saturating_add(1);
+                kind = RequestKind::resend(&mut next, &p);
             }
         }
         self.last.clear();
@@ -199,9 +132,11 @@ impl SerialPairing {
         (kind, timed_out)
     }
 
-    /// An answer at `time` (µs); `seq`: its secure SEQ, if it came in secure mode.
+    /// An answer at `time` (µs); `seq`: its secure SEQ, if it came in secure mode. Late is
+    /// judged by the answer's time alone (a serial line has no late window: the request
+    /// stays pending after its timeout).
     pub fn answer(&mut self, time: u64, seq: Option<u16>) -> Answer {
-        let Some(p) = self.pending else {
+        let Some(mut p) = self.pending else {
             return Answer::NoRequest;
         };
         if let (Some(a), Some(r)) = (seq, p.seq)
@@ -211,35 +146,30 @@ impl SerialPairing {
         }
         self.pending = None;
         self.last_answered = true;
-        let elapsed = time.saturating_sub(p.time);
+        let reply = p.answer(time, self.timeout);
         Answer::Paired {
             req: p,
-            elapsed,
-            late: p.timed && elapsed > self.timeout,
+            elapsed: reply.elapsed,
+            late: reply.overdue,
         }
     }
 
     /// A broken answer (bad CRC) arrived for the pending request.
     pub fn bad_answer(&mut self) {
         if let Some(p) = self.pending.as_mut() {
-            p.bad_answer = true;
+            p.spoiled = true;
         }
     }
 
     /// The pending request, if its timeout passed at `now` and was not reported yet.
     pub fn expire(&mut self, now: u64) -> Option<Outstanding> {
         let p = self.pending.as_mut()?;
-        if p.timed && !p.timeout_reported && !p.bad_answer && now > p.time + self.timeout {
-            p.timeout_reported = true;
-            return Some(*p);
-        }
-        None
+        p.expire(now, self.timeout).map(|_| *p)
     }
 
     /// End of input: the pending request, unless already reported.
     pub fn finish(&mut self) -> Option<Outstanding> {
-        let p = self.pending.take()?;
-        (!p.timeout_reported && !p.bad_answer).then_some(p)
+        self.pending.take().filter(Open::due)
     }
 }
 
@@ -263,12 +193,7 @@ pub const CONVERSATION_IDLE: u64 = 60_000_000;
 const LATE_KEPT: usize = 256;
 
 /// A request given up, for a Timeout row at `at`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Expired {
-    pub req: Outstanding,
-    pub why: TimeoutWhy,
-    pub at: u64,
-}
+pub type Expired = crate::pairing::Expired<Request>;
 
 /// What the Ether-S-Bus tables forgot, for the summary.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -295,29 +220,13 @@ struct Conv {
     queued: u64,
 }
 
-/// A deadline (the request's time + the timeout): `generation` tells whether the request it
-/// was made for is still the one waiting.
-#[derive(Clone, Copy, Debug)]
-struct Deadline {
-    key: (u32, u16),
-    generation: u32,
-}
-
 /// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
 /// and server addresses) and carry a tag for the decoder (the PLC's index). Every table is
 /// bounded: see [`MAX_OUTSTANDING`], [`MAX_CONVERSATIONS`] and [`CONVERSATION_IDLE`].
 #[derive(Debug)]
 pub struct EtherPairing<K> {
-    /// Waiting requests by (conversation, sequence): an index into `slots` (a compact map).
-    map: FastMap<(u32, u16), u32>,
-    /// The requests, with the generation of their deadline; `free` lists unused slots.
-    slots: Vec<(Outstanding, u32)>,
-    free: Vec<u32>,
-    /// In the order of insertion; entries whose request was answered or sent again are stale
-    /// and dropped lazily (and compacted when they outnumber the live ones).
-    deadlines: VecDeque<Deadline>,
-    /// Recently timed-out requests, for late answers.
-    late: VecDeque<((u32, u16), Outstanding)>,
+    /// Waiting requests by (conversation, sequence).
+    table: Table<(u32, u16), Request>,
     convs: FastMap<K, Conv>,
     /// The last sequence of each conversation (by id; a cheaper key than the addresses).
     last_seq: FastMap<u32, u16>,
@@ -329,7 +238,6 @@ pub struct EtherPairing<K> {
     next_sweep: u64,
     next_conv: u32,
     stamp: u64,
-    generation: u32,
     pub timeout: u64,
     pub forgotten: Forgotten,
 }
@@ -347,18 +255,13 @@ pub struct TableSizes {
 impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     pub fn new(timeout: u64) -> Self {
         EtherPairing {
-            map: FastMap::default(),
-            slots: Vec::new(),
-            free: Vec::new(),
-            deadlines: VecDeque::new(),
-            late: VecDeque::new(),
+            table: Table::new(MAX_OUTSTANDING, LATE_KEPT),
             convs: FastMap::default(),
             last_seq: FastMap::default(),
             lru: VecDeque::new(),
             next_sweep: 0,
             next_conv: 0,
             stamp: 0,
-            generation: 0,
             timeout,
             forgotten: Forgotten::default(),
         }
@@ -366,35 +269,14 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
 
     #[doc(hidden)]
     pub fn sizes(&self) -> TableSizes {
+        let t = self.table.sizes();
         TableSizes {
             conversations: self.convs.len().max(self.last_seq.len()),
-            outstanding: self.map.len(),
-            deadlines: self.deadlines.len(),
-            late: self.late.len(),
+            outstanding: t.open,
+            deadlines: t.deadlines,
+            late: t.late,
             plcs: 0,
         }
-    }
-
-    fn get(&self, key: (u32, u16)) -> Option<&Outstanding> {
-        self.map.get(&key).map(|&i| &self.slots[i as usize].0)
-    }
-
-    fn get_mut(&mut self, key: (u32, u16)) -> Option<&mut Outstanding> {
-        let i = *self.map.get(&key)?;
-        Some(&mut self.slots[i as usize].0)
-    }
-
-    fn remove(&mut self, key: (u32, u16)) -> Option<Outstanding> {
-        let i = self.map.remove(&key)?;
-        self.free.push(i);
-        Some(self.slots[i as usize].0)
-    }
-
-    /// Whether deadline `d` belongs to the request waiting now.
-    fn live(&self, d: &Deadline) -> bool {
-        self.map
-            .get(&d.key)
-            .is_some_and(|&i| self.slots[i as usize].1 == d.generation)
     }
 
     fn idle_limit(&self) -> u64 {
@@ -462,17 +344,8 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let Some(c) = self.convs.remove(&key) else {
             return;
         };
-        if let Some(seq) = self.last_seq.remove(&c.id)
-            && let Some(mut r) = self.remove((c.id, seq))
-        {
-            r.timeout_reported = true;
-            if !r.bad_answer {
-                out.push(Expired {
-                    req: r,
-                    why,
-                    at: now,
-                });
-            }
+        if let Some(seq) = self.last_seq.remove(&c.id) {
+            self.table.forget((c.id, seq), why, now, out);
         }
     }
 
@@ -487,27 +360,13 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         out: &mut Vec<Expired>,
     ) -> (RequestKind, Option<SeqGap>) {
         let last = self.last_seq.insert(conv, seq);
-        if last == Some(seq) {
-            let prev = self.get((conv, seq)).copied().or_else(|| {
-                self.late
-                    .iter()
-                    .rev()
-                    .find(|(k, _)| *k == (conv, seq))
-                    .map(|e| e.1)
-            });
-            if let Some(p) = prev {
-                let mut next = req;
-                next.first = p.first;
-                next.sends = p.sends.saturating_add(1);
-                self.insert(conv, seq, next, out);
-                return (
-                    RequestKind::Retry {
-                        n: p.sends,
-                        since: req.time.saturating_sub(p.first),
-                    },
-                    None,
-                );
-            }
+        if last == Some(seq)
+            && let Some(p) = self.table.previous((conv, seq)).copied()
+        {
+            let mut next = req;
+            let kind = RequestKind::resend(&mut next, &p);
+            self.open((conv, seq), next, out);
+            return (kind, None);
         }
         let gap = match last {
             Some(l) if seq != l.wrapping_add(1) && seq != l => {
@@ -518,123 +377,38 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             }
             _ => None,
         };
-        self.insert(conv, seq, req, out);
+        self.open((conv, seq), req, out);
         (RequestKind::New, gap)
     }
 
-    fn insert(&mut self, conv: u32, seq: u16, req: Outstanding, out: &mut Vec<Expired>) {
-        let key = (conv, seq);
-        if !self.map.contains_key(&key) {
-            while self.map.len() >= MAX_OUTSTANDING {
-                // Give up the oldest request (deadlines are in order of insertion).
-                let Some(d) = self.deadlines.pop_front() else {
-                    break;
-                };
-                if self.live(&d) {
-                    let mut r = self.remove(d.key).expect("live");
-                    r.timeout_reported = true;
-                    self.forgotten.requests += 1;
-                    if !r.bad_answer {
-                        out.push(Expired {
-                            req: r,
-                            why: TimeoutWhy::Overflow,
-                            at: req.time.max(r.time),
-                        });
-                    }
-                    self.remember_late(d.key, r);
-                }
-            }
-        }
-        self.generation = self.generation.wrapping_add(1);
-        let entry = (req, self.generation);
-        match self.map.get(&key) {
-            Some(&i) => self.slots[i as usize] = entry,
-            None => {
-                let i = match self.free.pop() {
-                    Some(i) => {
-                        self.slots[i as usize] = entry;
-                        i
-                    }
-                    None => {
-                        self.slots.push(entry);
-                        (self.slots.len() - 1) as u32
-                    }
-                };
-                self.map.insert(key, i);
-            }
-        }
-        self.deadlines.push_back(Deadline {
-            key,
-            generation: self.generation,
-        });
-        // Answered and repeated requests leave stale deadlines behind: drop them when they
-        // outnumber a quarter of the live ones.
-        if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
-            let mut deadlines = std::mem::take(&mut self.deadlines);
-            deadlines.retain(|d| self.live(d));
-            self.deadlines = deadlines;
-        }
-    }
-
-    fn remember_late(&mut self, key: (u32, u16), r: Outstanding) {
-        if self.late.len() == LATE_KEPT {
-            self.late.pop_front();
-        }
-        self.late.push_back((key, r));
+    fn open(&mut self, key: (u32, u16), req: Outstanding, out: &mut Vec<Expired>) {
+        self.table.open(key, req, out);
+        self.forgotten.requests = self.table.given_up;
     }
 
     /// An answer on conversation `conv` with sequence `seq` at `time`.
     pub fn answer(&mut self, conv: u32, seq: u16, time: u64) -> Answer {
-        let req = match self.remove((conv, seq)) {
-            Some(r) => r,
-            None => match self.late.iter().rposition(|(k, _)| *k == (conv, seq)) {
-                Some(i) => self.late.remove(i).map(|e| e.1).expect("index in range"),
-                None => return Answer::NoRequest,
+        match self.table.answer((conv, seq), time, self.timeout) {
+            Some((req, reply, late)) => Answer::Paired {
+                req,
+                elapsed: reply.elapsed,
+                late,
             },
-        };
-        let elapsed = time.saturating_sub(req.time);
-        Answer::Paired {
-            req,
-            elapsed,
-            late: elapsed > self.timeout || req.timeout_reported,
+            None => Answer::NoRequest,
         }
     }
 
     /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
     pub fn bad_answer(&mut self, conv: u32, seq: u16) {
-        if let Some(r) = self.get_mut((conv, seq)) {
-            r.bad_answer = true;
+        if let Some(r) = self.table.get_mut((conv, seq)) {
+            r.spoiled = true;
         }
     }
 
     /// Requests whose timeout passed at `now`, oldest first; conversations idle for longer
     /// than [`CONVERSATION_IDLE`] are forgotten.
     pub fn expire(&mut self, now: u64, out: &mut Vec<Expired>) {
-        while let Some(&d) = self.deadlines.front() {
-            if !self.live(&d) {
-                self.deadlines.pop_front();
-                continue;
-            }
-            let at = self
-                .get(d.key)
-                .expect("live")
-                .time
-                .saturating_add(self.timeout);
-            if at >= now {
-                break;
-            }
-            self.deadlines.pop_front();
-            let mut r = self.remove(d.key).expect("live");
-            r.timeout_reported = true;
-            if !r.bad_answer {
-                out.push(Expired {
-                    req: r,
-                    why: TimeoutWhy::Deadline,
-                    at,
-                });
-            }
-            self.remember_late(d.key, r);
-        }
+        self.table.expire(now, self.timeout, out);
         if now < self.next_sweep {
             return;
         }
@@ -666,14 +440,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     /// End of input: forgets every request still waiting; returns how many there were (not
     /// counting those whose answer came with a bad CRC).
     pub fn finish(&mut self) -> u64 {
-        let mut n = 0;
-        while let Some(d) = self.deadlines.pop_front() {
-            if self.live(&d) {
-                let r = self.remove(d.key).expect("live");
-                n += u64::from(!r.bad_answer);
-            }
-        }
-        n
+        self.table.finish()
     }
 }
 

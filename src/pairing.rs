@@ -1,0 +1,741 @@
+//! Pairing answers with requests: the protocol-independent core.
+//!
+//! A request is *open* from its start until its answer comes or it *expires*: its deadline
+//! (start + the master's timeout) passes, a new request supersedes it, a table is full, or the
+//! input ends. Every expiry carries a [`Reason`]. An answer to a request that has already
+//! expired is *late*; it still pairs while the request is in the [`LateWindow`].
+//!
+//! The core knows no protocol: which answer belongs to which request is the protocol's rule.
+//! `sbus::pairing` (one request at a time on a serial line, by secure SEQ; by conversation and
+//! sequence on Ether-S-Bus) and `sab::pairing` (by address and command) wrap these pieces:
+//!
+//! * [`Open`]: an open request (its payload, start, retries, whether it was answered or its
+//!   expiry reported) with its deadline, expiry and answer rules;
+//! * [`LateWindow`]: the requests that expired recently, for late answers;
+//! * [`Table`]: many open requests by key, with a deadline queue, a cap and a late window,
+//!   every part bounded.
+//!
+//! Pure: times in, decisions out. Times are in the caller's unit (µs or ns) since the capture
+//! started; nothing here reads a clock, so the result does not depend on how often or when
+//! [`Table::expire`] is called, only on the times it is given.
+
+use std::collections::{HashMap, VecDeque};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
+use std::ops::{Deref, DerefMut};
+
+/// Why an open request expired (a `Timeout` row).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reason {
+    /// Its deadline passed without an answer.
+    Deadline,
+    /// A new (different) request came first: the master stopped waiting.
+    NextRequest,
+    /// The same request was sent again.
+    Retry,
+    /// The input ended (or had a gap) before its deadline.
+    End,
+    /// Its conversation was dropped (the table of conversations was full).
+    Dropped,
+    /// Given up: the table of open requests was full ([`Table`]'s cap).
+    Overflow,
+}
+
+/// An open request: the protocol's payload `R` and the pairing state. It reads like its
+/// payload (`open.field` reaches `R`'s fields).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Open<R> {
+    pub req: R,
+    /// Start of the latest transmission.
+    pub time: u64,
+    /// Start of the first transmission (retries keep it).
+    pub first: u64,
+    /// Whether the time is real: only then has the request a deadline.
+    pub timed: bool,
+    /// Transmissions so far (1 + retries).
+    pub sends: u8,
+    /// Answers paired with it so far.
+    pub answers: u32,
+    /// Its expiry was reported.
+    pub reported: bool,
+    /// An answer came but was unusable (a bad CRC): the master retries, no expiry is reported.
+    pub spoiled: bool,
+    /// Its first answer came after the deadline: it expires all the same (not reported yet).
+    pub answered_late: bool,
+}
+
+/// A repeated request: `n` is the retry number (1 = second transmission), `since` the time
+/// since the first transmission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Resend {
+    pub n: u8,
+    pub since: u64,
+}
+
+/// What [`Open::answer`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reply {
+    /// Response time: from the latest transmission to the answer.
+    pub elapsed: u64,
+    /// The answer came after the deadline.
+    pub overdue: bool,
+    /// Not the first answer to this request.
+    pub repeat: bool,
+}
+
+impl<R> Open<R> {
+    /// A request sent at `time` (`timed`: the time is real).
+    pub fn at(req: R, time: u64, timed: bool) -> Self {
+        Open {
+            req,
+            time,
+            first: time,
+            timed,
+            sends: 1,
+            answers: 0,
+            reported: false,
+            spoiled: false,
+            answered_late: false,
+        }
+    }
+
+    /// Start + `timeout`, when the time is real.
+    pub fn deadline(&self, timeout: u64) -> Option<u64> {
+        self.timed.then(|| self.time.saturating_add(timeout))
+    }
+
+    /// It expires (or has expired) without a usable answer in time, and that was not reported.
+    pub fn due(&self) -> bool {
+        !self.reported && !self.spoiled && (self.answers == 0 || self.answered_late)
+    }
+
+    /// At `now`: when it is due and its deadline passed, it is reported now; returns the
+    /// deadline (the time of its expiry).
+    pub fn expire(&mut self, now: u64, timeout: u64) -> Option<u64> {
+        let deadline = self.deadline(timeout)?;
+        if !self.due() || now <= deadline {
+            return None;
+        }
+        self.reported = true;
+        Some(deadline)
+    }
+
+    /// This request repeats `prev`: it keeps `prev`'s first transmission and counts one more.
+    pub fn resend_of(&mut self, prev: &Open<R>) -> Resend {
+        self.first = prev.first;
+        self.sends = prev.sends.saturating_add(1);
+        Resend {
+            n: prev.sends,
+            since: self.time.saturating_sub(prev.first),
+        }
+    }
+
+    /// An answer at `at` pairs with it.
+    pub fn answer(&mut self, at: u64, timeout: u64) -> Reply {
+        self.answers = self.answers.saturating_add(1);
+        let overdue = self.deadline(timeout).is_some_and(|d| at > d);
+        if overdue && self.answers == 1 && !self.reported {
+            self.answered_late = true;
+        }
+        Reply {
+            elapsed: at.saturating_sub(self.time),
+            overdue,
+            repeat: self.answers > 1,
+        }
+    }
+}
+
+impl<R> Deref for Open<R> {
+    type Target = R;
+    fn deref(&self) -> &R {
+        &self.req
+    }
+}
+
+impl<R> DerefMut for Open<R> {
+    fn deref_mut(&mut self) -> &mut R {
+        &mut self.req
+    }
+}
+
+/// A request that expired: a `Timeout` row at `at`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Expired<R> {
+    pub req: Open<R>,
+    pub why: Reason,
+    pub at: u64,
+}
+
+/// What a [`LateWindow`] of `n` holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Keep {
+    /// The last `n` expiries: an answered one leaves its place empty.
+    Expiries,
+    /// The last `n` expiries still without an answer.
+    Unanswered,
+}
+
+/// Requests that expired recently, keyed by `K`, for late answers. Bounded: the oldest goes
+/// when a new one comes to a full window. Lookups go newest first.
+#[derive(Clone, Debug)]
+pub struct LateWindow<K, R> {
+    entries: VecDeque<Option<(K, Open<R>, Reason)>>,
+    cap: usize,
+    keep: Keep,
+}
+
+impl<K: Copy + Eq, R: Copy> LateWindow<K, R> {
+    pub fn new(cap: usize, keep: Keep) -> Self {
+        LateWindow {
+            entries: VecDeque::new(),
+            cap,
+            keep,
+        }
+    }
+
+    /// Remembers `open`, which expired for `why`.
+    pub fn push(&mut self, key: K, open: Open<R>, why: Reason) {
+        if self.cap == 0 {
+            return;
+        }
+        if self.entries.len() == self.cap {
+            self.entries.pop_front();
+        }
+        self.entries.push_back(Some((key, open, why)));
+    }
+
+    fn position(&self, mut hit: impl FnMut(&K) -> bool) -> Option<usize> {
+        self.entries
+            .iter()
+            .rposition(|e| e.as_ref().is_some_and(|(k, _, _)| hit(k)))
+    }
+
+    /// The latest request remembered for `key`.
+    pub fn find(&self, key: K) -> Option<&Open<R>> {
+        let i = self.position(|k| *k == key)?;
+        self.entries[i].as_ref().map(|e| &e.1)
+    }
+
+    /// Takes the latest request remembered under a key that `hit` accepts (a late answer
+    /// pairs with it once), with the reason it expired.
+    pub fn take(&mut self, hit: impl FnMut(&K) -> bool) -> Option<(Open<R>, Reason)> {
+        let i = self.position(hit)?;
+        let e = match self.keep {
+            Keep::Expiries => self.entries[i].take(),
+            Keep::Unanswered => self.entries.remove(i).flatten(),
+        };
+        e.map(|(_, open, why)| (open, why))
+    }
+
+    /// Forgets everything.
+    pub fn clear(&mut self) {
+        self.entries.clear();
+    }
+
+    /// Places in use (empty ones included).
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+/// A small multiplicative hasher for the pairing keys (addresses, sequence numbers): the maps
+/// are looked up for every packet, and SipHash's resistance to crafted keys buys nothing here
+/// (keys only pick buckets; a collision costs time, never correctness).
+#[derive(Default, Clone, Copy)]
+pub struct FastHasher(u64);
+
+impl Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+
+    fn write_u8(&mut self, n: u8) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u16(&mut self, n: u16) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(n as u64);
+    }
+
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
+    }
+
+    fn write_usize(&mut self, n: usize) {
+        self.write_u64(n as u64);
+    }
+}
+
+/// `HashMap` with [`FastHasher`].
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+
+/// A deadline in the queue: `generation` tells whether the request it was made for is still
+/// the one open under `key`.
+#[derive(Clone, Copy, Debug)]
+struct Deadline<K> {
+    key: K,
+    generation: u32,
+}
+
+/// Sizes of a [`Table`]'s parts (for tests of the bounds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sizes {
+    pub open: usize,
+    pub deadlines: usize,
+    pub late: usize,
+}
+
+/// Many open requests by key `K`, each with a deadline (start + the timeout the caller
+/// gives; a table's times are taken as real whatever [`Open::timed`] says). Bounded: at most
+/// `cap` open requests (a new one gives up the oldest, [`Reason::Overflow`]), a deadline queue
+/// at most a quarter (+ 1,024) longer than the open requests, and a late window of its own
+/// size ([`Keep::Unanswered`]).
+///
+/// Deadlines are queued in the order of the requests, so with one timeout they come due in
+/// that order; answered and repeated requests leave stale entries that are dropped lazily
+/// (at the front) or all at once when there are too many (so a capture with constant times,
+/// where nothing ever comes due, keeps the queue small too).
+#[derive(Debug)]
+pub struct Table<K, R> {
+    /// Open requests by key: an index into `slots` (a compact map).
+    map: FastMap<K, u32>,
+    /// The requests, with the generation of their deadline; `free` lists unused slots.
+    slots: Vec<(Open<R>, u32)>,
+    free: Vec<u32>,
+    deadlines: VecDeque<Deadline<K>>,
+    generation: u32,
+    cap: usize,
+    late: LateWindow<K, R>,
+    /// Requests given up at the cap (reported or not).
+    pub given_up: u64,
+}
+
+impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
+    /// At most `cap` open requests and `late` expired ones kept for late answers.
+    pub fn new(cap: usize, late: usize) -> Self {
+        Table {
+            map: FastMap::default(),
+            slots: Vec::new(),
+            free: Vec::new(),
+            deadlines: VecDeque::new(),
+            generation: 0,
+            cap: cap.max(1),
+            late: LateWindow::new(late, Keep::Unanswered),
+            given_up: 0,
+        }
+    }
+
+    pub fn sizes(&self) -> Sizes {
+        Sizes {
+            open: self.map.len(),
+            deadlines: self.deadlines.len(),
+            late: self.late.len(),
+        }
+    }
+
+    /// The request open under `key`.
+    pub fn get(&self, key: K) -> Option<&Open<R>> {
+        self.map.get(&key).map(|&i| &self.slots[i as usize].0)
+    }
+
+    pub fn get_mut(&mut self, key: K) -> Option<&mut Open<R>> {
+        let i = *self.map.get(&key)?;
+        Some(&mut self.slots[i as usize].0)
+    }
+
+    /// The latest request under `key`, open or expired (to recognise a retry).
+    pub fn previous(&self, key: K) -> Option<&Open<R>> {
+        self.get(key).or_else(|| self.late.find(key))
+    }
+
+    fn remove(&mut self, key: K) -> Option<Open<R>> {
+        let i = self.map.remove(&key)?;
+        self.free.push(i);
+        Some(self.slots[i as usize].0)
+    }
+
+    /// Whether deadline `d` belongs to the request open now.
+    fn live(&self, d: &Deadline<K>) -> bool {
+        self.map
+            .get(&d.key)
+            .is_some_and(|&i| self.slots[i as usize].1 == d.generation)
+    }
+
+    /// Expires `open` for `why` at `at`: reported unless spoiled, then kept for late answers.
+    fn expired(
+        &mut self,
+        key: K,
+        mut open: Open<R>,
+        why: Reason,
+        at: u64,
+        out: &mut Vec<Expired<R>>,
+    ) {
+        open.reported = true;
+        if !open.spoiled {
+            out.push(Expired { req: open, why, at });
+        }
+        self.late.push(key, open, why);
+    }
+
+    /// Opens `open` under `key` (a request sent again replaces the one open). When `cap`
+    /// requests are open, the oldest are given up into `out`.
+    pub fn open(&mut self, key: K, open: Open<R>, out: &mut Vec<Expired<R>>) {
+        if !self.map.contains_key(&key) {
+            while self.map.len() >= self.cap {
+                let Some(d) = self.deadlines.pop_front() else {
+                    break;
+                };
+                if let Some(r) = self.live(&d).then(|| self.remove(d.key)).flatten() {
+                    self.given_up += 1;
+                    let at = open.time.max(r.time);
+                    self.expired(d.key, r, Reason::Overflow, at, out);
+                }
+            }
+        }
+        self.generation = self.generation.wrapping_add(1);
+        let entry = (open, self.generation);
+        match self.map.get(&key) {
+            Some(&i) => self.slots[i as usize] = entry,
+            None => {
+                let i = match self.free.pop() {
+                    Some(i) => {
+                        self.slots[i as usize] = entry;
+                        i
+                    }
+                    None => {
+                        self.slots.push(entry);
+                        (self.slots.len() - 1) as u32
+                    }
+                };
+                self.map.insert(key, i);
+            }
+        }
+        self.deadlines.push_back(Deadline {
+            key,
+            generation: self.generation,
+        });
+        if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
+            let mut deadlines = std::mem::take(&mut self.deadlines);
+            deadlines.retain(|d| self.live(d));
+            self.deadlines = deadlines;
+        }
+    }
+
+    /// An answer under `key` at `at`: the open request, or else one in the late window.
+    /// `late`: after the deadline, or after the request's expiry was reported.
+    pub fn answer(&mut self, key: K, at: u64, timeout: u64) -> Option<(Open<R>, Reply, bool)> {
+        let mut open = match self.remove(key) {
+            Some(r) => r,
+            None => self.late.take(|k| *k == key)?.0,
+        };
+        let reply = open.answer(at, timeout);
+        let late = reply.elapsed > timeout || open.reported;
+        Some((open, reply, late))
+    }
+
+    /// Requests whose deadline passed at `now` go to `out`, oldest first, at their deadline.
+    pub fn expire(&mut self, now: u64, timeout: u64, out: &mut Vec<Expired<R>>) {
+        while let Some(&d) = self.deadlines.front() {
+            if !self.live(&d) {
+                self.deadlines.pop_front();
+                continue;
+            }
+            let at = self
+                .get(d.key)
+                .map_or(0, |r| r.time.saturating_add(timeout));
+            if at >= now {
+                break;
+            }
+            self.deadlines.pop_front();
+            if let Some(r) = self.remove(d.key) {
+                self.expired(d.key, r, Reason::Deadline, at, out);
+            }
+        }
+    }
+
+    /// Forgets the request open under `key` for good (no late answer will pair with it); it
+    /// goes to `out` for `why` at `at` unless spoiled.
+    pub fn forget(&mut self, key: K, why: Reason, at: u64, out: &mut Vec<Expired<R>>) {
+        if let Some(mut r) = self.remove(key) {
+            r.reported = true;
+            if !r.spoiled {
+                out.push(Expired { req: r, why, at });
+            }
+        }
+    }
+
+    /// End of input: forgets every open request; returns how many were due (not spoiled).
+    pub fn finish(&mut self) -> u64 {
+        let mut n = 0;
+        while let Some(d) = self.deadlines.pop_front() {
+            if self.live(&d)
+                && let Some(r) = self.remove(d.key)
+            {
+                n += u64::from(!r.spoiled);
+            }
+        }
+        n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const T: u64 = 1_000;
+
+    #[test]
+    fn deadline_expiry_once_and_untimed_never() {
+        let mut o = Open::at('a', 100, true);
+        assert_eq!(o.deadline(T), Some(1_100));
+        assert_eq!(
+            o.expire(1_100, T),
+            None,
+            "exactly at the deadline is in time"
+        );
+        assert_eq!(o.expire(1_101, T), Some(1_100));
+        assert!(o.reported && !o.due());
+        assert_eq!(o.expire(5_000, T), None, "reported once");
+        let mut u = Open::at('b', 100, false);
+        assert_eq!(u.deadline(T), None);
+        assert_eq!(u.expire(u64::MAX, T), None);
+        assert!(u.due(), "still waiting: it expires by another reason");
+        // Deadlines saturate.
+        assert_eq!(Open::at((), u64::MAX - 1, true).deadline(T), Some(u64::MAX));
+    }
+
+    #[test]
+    fn answers_spoiled_and_resends() {
+        let mut o = Open::at((), 0, true);
+        let r = o.answer(400, T);
+        assert_eq!(
+            r,
+            Reply {
+                elapsed: 400,
+                overdue: false,
+                repeat: false
+            }
+        );
+        assert!(!o.due(), "answered in time: never expires");
+        assert!(o.answer(500, T).repeat);
+        // A first answer after the deadline: late, and the request still expires.
+        let mut o = Open::at((), 0, true);
+        assert!(o.answer(1_500, T).overdue);
+        assert!(o.due() && o.answered_late);
+        assert_eq!(o.expire(1_500, T), Some(T));
+        // A spoiled request (unusable answer) never expires.
+        let mut o = Open::at((), 0, true);
+        o.spoiled = true;
+        assert_eq!(o.expire(10 * T, T), None);
+        // A resend keeps the first transmission.
+        let first = Open::at((), 10, true);
+        let mut second = Open::at((), 300, true);
+        assert_eq!(second.resend_of(&first), Resend { n: 1, since: 290 });
+        let mut third = Open::at((), 700, true);
+        assert_eq!(third.resend_of(&second), Resend { n: 2, since: 690 });
+        assert_eq!((third.first, third.sends), (10, 3));
+    }
+
+    #[test]
+    fn payload_fields_through_the_open_request() {
+        #[derive(Clone, Copy)]
+        struct P {
+            tag: u32,
+        }
+        let mut o = Open::at(P { tag: 1 }, 0, true);
+        o.tag = 7;
+        assert_eq!(o.req.tag, 7);
+    }
+
+    fn open(t: u64) -> Open<u32> {
+        Open::at(0, t, true)
+    }
+
+    #[test]
+    fn late_window_keeps_the_last_expiries_or_the_unanswered() {
+        for keep in [Keep::Expiries, Keep::Unanswered] {
+            let mut w = LateWindow::new(3, keep);
+            for k in 1..=3u8 {
+                w.push(k, open(k as u64), Reason::Deadline);
+            }
+            assert_eq!(w.find(2).map(|o| o.time), Some(2));
+            assert_eq!(w.take(|k| *k == 2).map(|e| e.0.time), Some(2));
+            assert_eq!(w.take(|k| *k == 2), None, "a late answer pairs once");
+            w.push(4, open(4), Reason::NextRequest);
+            // Expiries: 1 made room for 4 (2's place stays taken); Unanswered: 2's place was
+            // freed, 1 stays.
+            let kept_1 = keep == Keep::Unanswered;
+            assert_eq!(w.find(1).is_some(), kept_1, "{keep:?}");
+            assert_eq!(w.len(), 3);
+            assert_eq!(w.take(|k| *k == 4).map(|e| e.1), Some(Reason::NextRequest));
+            w.clear();
+            assert!(w.is_empty());
+        }
+        // Newest first.
+        let mut w = LateWindow::new(4, Keep::Unanswered);
+        w.push(1, open(10), Reason::Deadline);
+        w.push(1, open(20), Reason::Deadline);
+        assert_eq!(w.find(1).map(|o| o.time), Some(20));
+        // A window of none keeps nothing.
+        let mut w = LateWindow::new(0, Keep::Expiries);
+        w.push(1, open(10), Reason::Deadline);
+        assert!(w.is_empty());
+    }
+
+    #[test]
+    fn table_expires_in_order_with_reasons_and_late_answers() {
+        let mut t: Table<u8, u32> = Table::new(16, 8);
+        let mut out = Vec::new();
+        t.open(1, open(0), &mut out);
+        t.open(2, open(100), &mut out);
+        t.open(3, open(200), &mut out);
+        t.get_mut(3).unwrap().spoiled = true;
+        t.expire(T, T, &mut out);
+        assert!(out.is_empty(), "exactly at the deadline is in time");
+        t.expire(1_150, T, &mut out);
+        assert_eq!(out.len(), 2);
+        assert_eq!(
+            (out[0].req.time, out[0].why, out[0].at),
+            (0, Reason::Deadline, T)
+        );
+        assert_eq!((out[1].req.time, out[1].at), (100, 1_100));
+        out.clear();
+        // 3 is spoiled: it expires silently, yet a late answer still pairs with it.
+        t.expire(5_000, T, &mut out);
+        assert!(out.is_empty());
+        let (o, reply, late) = t.answer(3, 5_000, T).unwrap();
+        assert_eq!((o.time, reply.elapsed, late), (200, 4_800, true));
+        // A late answer to 1 pairs once.
+        assert!(t.answer(1, 5_100, T).is_some_and(|a| a.2));
+        assert!(t.answer(1, 5_200, T).is_none());
+        // An answer in time.
+        t.open(4, open(6_000), &mut out);
+        let (_, reply, late) = t.answer(4, 6_500, T).unwrap();
+        assert_eq!((reply.elapsed, late), (500, false));
+        // Retries find the previous transmission, open or expired.
+        assert_eq!(t.previous(2).map(|o| o.time), Some(100));
+        t.open(5, open(7_000), &mut out);
+        assert_eq!(t.previous(5).map(|o| o.time), Some(7_000));
+        // Forgotten requests are reported but never pair again.
+        t.forget(5, Reason::Dropped, 7_100, &mut out);
+        assert_eq!((out[0].why, out[0].at), (Reason::Dropped, 7_100));
+        assert!(t.answer(5, 7_200, T).is_none());
+        assert_eq!(t.finish(), 0);
+    }
+
+    #[test]
+    fn table_cap_gives_up_the_oldest() {
+        let mut t: Table<u32, u32> = Table::new(3, 2);
+        let mut out = Vec::new();
+        for k in 0..3 {
+            t.open(k, open(k as u64 * 10), &mut out);
+        }
+        t.get_mut(1).unwrap().spoiled = true;
+        // The same key again replaces its request: nothing given up.
+        t.open(2, open(25), &mut out);
+        assert!(out.is_empty());
+        t.open(3, open(30), &mut out);
+        assert_eq!(out.len(), 1);
+        assert_eq!(
+            (out[0].req.time, out[0].why, out[0].at),
+            (0, Reason::Overflow, 30)
+        );
+        // The spoiled one is given up silently, but counted.
+        t.open(4, open(40), &mut out);
+        assert_eq!(out.len(), 1);
+        assert_eq!(t.given_up, 2);
+        assert_eq!(t.sizes().open, 3);
+        // Given-up requests still take late answers.
+        assert!(t.answer(0, 50, T).is_some_and(|a| a.2));
+        assert_eq!(t.finish(), 3);
+        assert_eq!(
+            t.sizes(),
+            Sizes {
+                open: 0,
+                deadlines: 0,
+                late: 1
+            }
+        );
+    }
+
+    #[test]
+    fn deadline_queue_stays_small_with_constant_times() {
+        // Nothing ever comes due: answered and repeated requests leave stale deadlines, which
+        // are compacted away.
+        let mut t: Table<u32, u32> = Table::new(1 << 16, 16);
+        let mut out = Vec::new();
+        for i in 0..100_000u32 {
+            t.open(i % 50, open(0), &mut out);
+            if i % 3 == 0 {
+                t.answer(i % 50, 0, T);
+            }
+            t.expire(0, T, &mut out);
+            let s = t.sizes();
+            assert!(s.deadlines <= s.open + s.open / 4 + 1_025, "{s:?}");
+        }
+        assert!(out.is_empty());
+    }
+
+    /// One step of a scripted exchange: `key` is opened (or answered) `dt` after the last step.
+    #[derive(Clone, Copy, Debug)]
+    struct Step {
+        dt: u64,
+        key: u8,
+        answer: bool,
+        ticks: u8,
+    }
+
+    /// Runs `steps`; with `ticks`, `expire` is also called at times between the steps (as a
+    /// live capture's idle calls would). Returns everything the table reported.
+    fn run(steps: &[Step], ticks: bool) -> Vec<String> {
+        let mut t: Table<u8, u32> = Table::new(4, 2);
+        let mut out = Vec::new();
+        let mut log = Vec::new();
+        let mut now = 0;
+        for s in steps {
+            if ticks {
+                for i in 1..=s.ticks as u64 {
+                    t.expire(now + s.dt * i / (s.ticks as u64 + 1), T, &mut out);
+                }
+            }
+            now += s.dt;
+            t.expire(now, T, &mut out);
+            if s.answer {
+                log.push(format!("{:?}", t.answer(s.key, now, T)));
+            } else {
+                t.open(s.key, open(now), &mut out);
+            }
+            log.extend(out.drain(..).map(|e| format!("{e:?}")));
+        }
+        log.push(format!("finish {}", t.finish()));
+        log
+    }
+
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn expiry_does_not_depend_on_idle_calls(
+            steps in prop::collection::vec(
+                (0u64..1_500, 0u8..6, any::<bool>(), 0u8..4)
+                    .prop_map(|(dt, key, answer, ticks)| Step { dt, key, answer, ticks }),
+                0..60,
+            )
+        ) {
+            prop_assert_eq!(run(&steps, false), run(&steps, true));
+        }
+    }
+}
