@@ -6,9 +6,9 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::exit::{Failure, code};
-use crate::record::{Recorder, RecordingReader};
+use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::record::Recorder;
 use crate::run::{Context, Stop, drive};
 use crate::sink::{Format, Output, Table, TableOptions};
 use crate::source::serial::{self, SerialReader};
@@ -359,11 +359,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sport(args) => run_capture(&args.capture, &crate::sport::PROTOCOL, |_, _| {
             crate::sport::decoder()
         }),
-        Command::Sbus(args) => {
-            run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
-                crate::sbus::decoder(args.options(line.baud), kind)
-            })
-        }
+        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
+            crate::sbus::decoder(args.options(line.baud), kind)
+        }),
         Command::Sab2(args) => run_capture(&args.capture, &crate::sab::PROTOCOL, |_, line| {
             crate::sab::decoder(args.options(line.baud))
         }),
@@ -440,7 +438,8 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect)?;
+    let keep_input = args.live.record.is_some();
+    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -487,11 +486,13 @@ pub fn run_capture(
     result
 }
 
-/// Opens SOURCE and returns its kind with the reader for it.
+/// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
+/// also hands on its input bytes (for `--record`).
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
     reconnect: bool,
+    keep_input: bool,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
@@ -511,10 +512,11 @@ fn open_source(
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
         Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(RecordingReader::new(opened)),
-        Kind::Raw | Kind::Pcap | Kind::Pcapng | Kind::Serial => {
-            Box::new(source::RawReader::new(opened))
+        Kind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
+        Kind::Pcap | Kind::Pcapng => {
+            Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
+        Kind::Raw | Kind::Serial => Box::new(source::RawReader::new(opened)),
     };
     Ok((kind, reader, Some(progress)))
 }

@@ -93,10 +93,6 @@ impl<'a> Row<'a> {
 /// Receives the rows a decoder produces.
 pub trait RowOut {
     fn row(&mut self, row: &Row<'_>) -> io::Result<()>;
-
-    /// The wall-clock time at which the capture started (µs 0), when a decoder learns it from
-    /// the data itself (pcap packet headers). Call it before the first row; used by `--time abs`.
-    fn anchor(&mut self, _anchor: crate::time::Anchor) {}
 }
 
 /// Collects rows as owned strings (tests, tools).

@@ -7,12 +7,13 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
-use crate::protocol::Decoder;
-use crate::row::RowOut;
 use crate::exit::{Failure, Interrupt};
+use crate::protocol::Decoder;
 use crate::record::Recorder;
+use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::sink::Table;
+use crate::source::capture::Captured;
 use crate::source::{Batch, Feed, Message};
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
@@ -201,6 +202,18 @@ impl Driver<'_> {
                         return Err(Failure::Signal(Interrupt::new(sig)));
                     }
                 }
+                Ok(Message::Packets(c)) => {
+                    let whole = self.packets(&c, stop)?;
+                    self.flush()?;
+                    if !whole {
+                        let sig = stop.signal().unwrap_or(libc::SIGINT);
+                        return Err(Failure::Signal(Interrupt::new(sig)));
+                    }
+                }
+                Ok(Message::CaptureError(e)) => self
+                    .decoder
+                    .capture_error(&e, self.table)
+                    .map_err(|_| output_error(self.table))?,
                 Ok(Message::ReadUpTo(n)) => {
                     // Exact for raw bytes; parsed inputs (logs, recordings) take up more room
                     // than the wire bytes they hold.
@@ -294,6 +307,26 @@ impl Driver<'_> {
         }
         self.watch();
         Ok(fed)
+    }
+
+    /// Decodes the packets of a capture (and records the input they came from), looking for a
+    /// signal between packets; false when a signal stopped it (the packets' input then does
+    /// not count as decoded).
+    fn packets(&mut self, c: &Captured, stop: &Stop) -> Result<bool, Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            for piece in c.input.chunks(UNIT) {
+                r.data(piece, None)?;
+            }
+        }
+        for p in c.packets.iter() {
+            if stop.signal().is_some() {
+                return Ok(false);
+            }
+            self.decoder
+                .packet(&p, self.table)
+                .map_err(|_| output_error(self.table))?;
+        }
+        Ok(true)
     }
 
     fn push(&mut self, bytes: &[u8], time: Option<u64>) -> Result<(), Failure> {

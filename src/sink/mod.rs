@@ -8,10 +8,10 @@ use std::path::Path;
 use chrono::{DateTime, Local};
 use owo_colors::{OwoColorize, Style};
 
-use crate::row::RowOut;
-use crate::time::Anchor;
 use crate::fmt::push_hex_bytes;
+use crate::row::RowOut;
 use crate::row::{BASE_COLUMNS, Class, Row};
+use crate::time::Anchor;
 pub use output::{Output, WriteError};
 
 /// Output format.
@@ -452,12 +452,6 @@ impl Table {
 }
 
 impl RowOut for Table {
-    fn anchor(&mut self, anchor: Anchor) {
-        if self.anchor.is_none() {
-            self.anchor = Some(anchor);
-        }
-    }
-
     fn row(&mut self, row: &Row<'_>) -> io::Result<()> {
         match self.write(row) {
             Ok(()) => Ok(()),
