@@ -97,7 +97,9 @@ fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
 fn decode_in_process(path: &Path) -> (Duration, u64) {
     decode_file(
         path,
-        &mut busnoop::sbus::EtherDecoder::new(&busnoop::sbus::Options::default()),
+        &mut busnoop::protocol::PcapBytes::new(busnoop::sbus::EtherDecoder::new(
+            &busnoop::sbus::Options::default(),
+        )),
     )
 }
 

@@ -8,7 +8,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::exit::{Failure, code};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
-use crate::record::{Recorder, RecordingReader};
+use crate::record::Recorder;
 use crate::run::{Context, drive};
 use crate::signal::Stop;
 use crate::sink::{Format, Output, Table, TableOptions};
@@ -440,7 +440,8 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect)?;
+    let keep_input = args.live.record.is_some();
+    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -487,11 +488,13 @@ pub fn run_capture(
     result
 }
 
-/// Opens SOURCE and returns its kind with the reader for it.
+/// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
+/// also hands on its input bytes (for `--record`).
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
     reconnect: bool,
+    keep_input: bool,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
@@ -511,10 +514,11 @@ fn open_source(
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
         Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(RecordingReader::new(opened)),
-        Kind::Raw | Kind::Pcap | Kind::Pcapng | Kind::Serial => {
-            Box::new(source::RawReader::new(opened))
+        Kind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
+        Kind::Pcap | Kind::Pcapng => {
+            Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
+        Kind::Raw | Kind::Serial => Box::new(source::RawReader::new(opened)),
     };
     Ok((kind, reader, Some(progress)))
 }

@@ -14,6 +14,8 @@
 //!
 //! * [`Decoder::push`]: bytes that arrived at a time; every frame they complete is emitted at
 //!   once, nothing is held back that is already known to be whole;
+//! * [`Decoder::packet`]: one packet of a capture of network traffic (the source opened the
+//!   pcap/pcapng container; [`Decoder::capture_error`] if it is broken);
 //! * [`Decoder::idle`]: time passed on a live line without bytes (timeouts, end-of-frame
 //!   gaps), never called for files;
 //! * [`Decoder::finish`]: the end of the input, or a gap (an unplugged adapter); whatever is open
@@ -28,7 +30,8 @@
 //! See `docs/architecture.md`: a folder, one entry in [`crate::protocols::PROTOCOLS`], a
 //! subcommand in `cli.rs`.
 
-use crate::row::{RowOut, RowResult};
+use crate::pcap::{Packet, PcapError, PcapStream};
+use crate::row::{Class, Row, RowOut, RowResult};
 use crate::stats::{Problems, Report};
 
 /// Parity of a serial line.
@@ -117,6 +120,25 @@ pub trait Decoder {
     /// sources without time). Rows for every frame completed by these bytes are emitted at once.
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult;
 
+    /// One packet of a capture (sources of [`Kind::Pcap`] and [`Kind::Pcapng`]); `p.time` is µs
+    /// since the capture started. Rows for everything it completes are emitted at once. A
+    /// byte-stream protocol takes its captured bytes as bytes that arrived at that time.
+    fn packet(&mut self, p: &Packet<'_>, out: &mut dyn RowOut) -> RowResult {
+        self.push(p.data, Some(p.time), out)
+    }
+
+    /// The capture container is broken here (after the packets before it); no packets follow.
+    /// By default a `Truncated` error row with the reason.
+    fn capture_error(&mut self, e: &PcapError, out: &mut dyn RowOut) -> RowResult {
+        let data = e.to_string();
+        out.row(&Row {
+            kind: crate::row::kind::TRUNCATED,
+            class: Class::Error,
+            data: &data,
+            ..Row::empty(None)
+        })
+    }
+
     /// Time passed without data on a live serial source; `now` is the current capture time
     /// (µs since the capture started). Lets a decoder report timeouts promptly.
     fn idle(&mut self, _now: u64, _out: &mut dyn RowOut) -> RowResult {
@@ -141,6 +163,62 @@ pub trait Decoder {
     /// A hint printed once when bytes keep arriving but no frame is found (live sources).
     fn no_frames_hint(&self) -> &'static str {
         "check the baud rate and the wiring"
+    }
+}
+
+/// A decoder that takes pcap/pcapng bytes: runs them through a [`PcapStream`] into `D`'s
+/// packet entry, as the capture source and the driver do (benchmarks, fuzzing and tests that
+/// feed raw capture bytes, in any chunking).
+pub struct PcapBytes<D> {
+    stream: PcapStream,
+    pub decoder: D,
+}
+
+impl<D: Decoder> PcapBytes<D> {
+    pub fn new(decoder: D) -> Self {
+        PcapBytes {
+            stream: PcapStream::new(),
+            decoder,
+        }
+    }
+}
+
+impl<D: Decoder> Decoder for PcapBytes<D> {
+    fn columns(&self) -> &'static [&'static str] {
+        self.decoder.columns()
+    }
+
+    /// `time` is ignored: packets carry their own.
+    fn push(&mut self, data: &[u8], _time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
+        let d = &mut self.decoder;
+        let mut latch = crate::row::Latch::new(out);
+        let parsed = self.stream.push(data, &mut |p| {
+            let _ = d.packet(&p, &mut latch);
+        });
+        latch.result()?;
+        match parsed {
+            Err(e) => d.capture_error(&e, out),
+            Ok(()) => Ok(()),
+        }
+    }
+
+    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
+        if let Err(e) = self.stream.finish() {
+            self.decoder.capture_error(&e, out)?;
+        }
+        self.decoder.finish(out)
+    }
+
+    fn valid_frames(&self) -> u64 {
+        self.decoder.valid_frames()
+    }
+
+    fn stats(&self) -> Report {
+        self.decoder.stats()
+    }
+
+    fn problems(&self) -> Problems {
+        self.decoder.problems()
     }
 }
 

@@ -119,10 +119,6 @@ pub type RowResult = Result<(), OutputError>;
 /// hands the error back unchanged (`?`), the driver reports it.
 pub trait RowOut {
     fn row(&mut self, row: &Row<'_>) -> RowResult;
-
-    /// The wall-clock time at which the capture started (µs 0), when a decoder learns it from
-    /// the data itself (pcap packet headers). Call it before the first row; used by `--time abs`.
-    fn anchor(&mut self, _anchor: crate::time::Anchor) {}
 }
 
 /// Collects rows as owned strings (tests, tools).
@@ -221,9 +217,5 @@ impl RowOut for Latch<'_> {
             self.error = Some(e);
         }
         Ok(())
-    }
-
-    fn anchor(&mut self, anchor: crate::time::Anchor) {
-        self.out.anchor(anchor);
     }
 }

@@ -11,6 +11,7 @@ use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::signal::Stop;
 use crate::sink::Table;
+use crate::source::capture::Captured;
 use crate::source::{Batch, Feed, Message};
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
@@ -158,6 +159,18 @@ impl Driver<'_> {
                         return Err(Failure::Signal(Interrupt::new(sig)));
                     }
                 }
+                Ok(Message::Packets(c)) => {
+                    let whole = self.packets(&c, stop)?;
+                    self.flush()?;
+                    if !whole {
+                        let sig = stop.signal().unwrap_or(libc::SIGINT);
+                        return Err(Failure::Signal(Interrupt::new(sig)));
+                    }
+                }
+                Ok(Message::CaptureError(e)) => self
+                    .decoder
+                    .capture_error(&e, self.table)
+                    .map_err(Failure::from)?,
                 Ok(Message::ReadUpTo(n)) => {
                     // Exact for raw bytes; parsed inputs (logs, recordings) take up more room
                     // than the wire bytes they hold.
@@ -249,6 +262,24 @@ impl Driver<'_> {
         }
         self.watch();
         Ok(fed)
+    }
+
+    /// Decodes the packets of a capture (and records the input they came from), looking for a
+    /// signal between packets; false when a signal stopped it (the packets' input then does
+    /// not count as decoded).
+    fn packets(&mut self, c: &Captured, stop: &Stop) -> Result<bool, Failure> {
+        if let Some(r) = self.recorder.as_deref_mut() {
+            for piece in c.input.chunks(UNIT) {
+                r.data(piece, None)?;
+            }
+        }
+        for p in c.packets.iter() {
+            if stop.signal().is_some() {
+                return Ok(false);
+            }
+            self.decoder.packet(&p, self.table).map_err(Failure::from)?;
+        }
+        Ok(true)
     }
 
     fn push(&mut self, bytes: &[u8], time: Option<u64>) -> Result<(), Failure> {

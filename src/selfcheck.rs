@@ -5,8 +5,8 @@
 use std::io::{self, Read};
 use std::sync::mpsc::sync_channel;
 
-use crate::protocol::Decoder;
 use crate::protocol::Kind;
+use crate::protocol::{Decoder, PcapBytes};
 use crate::row::Class;
 use crate::row::{Collected, OwnedRow};
 use crate::source::{Batch, ChunkReader, Message, Opened};
@@ -117,7 +117,7 @@ fn read_all(
         let mut failure = None;
         loop {
             match r.next_batch(&tx) {
-                Ok(Some(b)) => tx.send(Message::Data(b)).unwrap(),
+                Ok(Some(c)) => tx.send(c.into()).unwrap(),
                 Ok(None) => break,
                 Err(f) => {
                     failure = Some(f.to_string());
@@ -169,7 +169,7 @@ pub fn edgetx_log(data: &[u8]) {
 /// Recording (pcap) reader: never panics, read sizes do not matter.
 pub fn recording(data: &[u8]) {
     let (bytes, _) = read_all(
-        |o| Box::new(crate::record::RecordingReader::new(o)),
+        |o| Box::new(crate::source::recording::RecordingReader::new(o)),
         Kind::Recording,
         data,
     );
@@ -272,8 +272,16 @@ fn sbus_serial_crc_ok(raw: &[u8]) -> bool {
     crc16(&escaped) == want || crc16(&unescaped) == want
 }
 
-/// Ether-S-Bus decoder on arbitrary capture bytes: never panics, chunking does not matter, and
-/// every accepted telegram's UDP payload passes the CRC over the whole payload.
+/// The Ether-S-Bus decoder behind the pcap reader, taking capture bytes.
+fn ether_decoder() -> PcapBytes<crate::sbus::EtherDecoder> {
+    PcapBytes::new(crate::sbus::EtherDecoder::new(
+        &crate::sbus::Options::default(),
+    ))
+}
+
+/// Ether-S-Bus decoder on arbitrary capture bytes (through the pcap reader): never panics,
+/// chunking does not matter, and every accepted telegram's UDP payload passes the CRC over the
+/// whole payload.
 pub fn sbus_ether(data: &[u8]) {
     let check = |rows: &[OwnedRow]| {
         for r in rows {
@@ -293,27 +301,13 @@ pub fn sbus_ether(data: &[u8]) {
             }
         }
     };
-    let rows = same_rows_however_chunked(
-        &|| {
-            Box::new(crate::sbus::EtherDecoder::new(
-                &crate::sbus::Options::default(),
-            ))
-        },
-        data,
-    );
+    let rows = same_rows_however_chunked(&|| Box::new(ether_decoder()), data);
     check(&rows);
     // The same bytes behind a pcap header (link type Ethernet) reach the packet parsers.
     let mut f = Vec::new();
     crate::pcap::write::header(&mut f, 1);
     f.extend_from_slice(data);
-    let rows = same_rows_however_chunked(
-        &|| {
-            Box::new(crate::sbus::EtherDecoder::new(
-                &crate::sbus::Options::default(),
-            ))
-        },
-        &f,
-    );
+    let rows = same_rows_however_chunked(&|| Box::new(ether_decoder()), &f);
     check(&rows);
 }
 

@@ -4,10 +4,12 @@
 # Runs target/release/busnoop over every file in fixtures/ and fuzz/seeds/ with each subcommand
 # (sport; sbus --mode auto/data/break; sab2 --framing auto/sync/hdlc) and each format
 # (tsv, csv, jsonl, pretty --color always), with --raw and --stats, and stores stdout, stderr
-# and the exit code of every run in one directory. Prints one sha256 over that directory.
+# and the exit code of every run in one directory (sbus and sport once more with --time abs
+# --utc, for the capture times of pcaps, recordings and logs). Prints one sha256 over that directory.
 #
 #   tools/golden.sh [OUT_DIR]          # default: target/golden
-#   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial and sab (tsv only)
+#   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial, sab, sbus_ether and
+#                                      # recording (tsv only)
 #   GOLDEN_BENCH=1 tools/golden.sh     # also the benchmark captures in target/bench-data (tsv,
 #                                      # stored as the sha256 of stdout; run the benches first)
 #   BUSNOOP=path/to/busnoop tools/golden.sh   # another binary (e.g. a copy of the old one)
@@ -50,7 +52,20 @@ for f in "${files[@]}"; do
   done
 done
 
+# Wall-clock times (taken from pcap and recording headers, EdgeTX log lines) in UTC.
+for f in "${files[@]}"; do
+  for c in "sbus" "sport"; do
+    run "$(slug "$f $c time abs utc")" "$f" $c --time abs --utc -f tsv
+  done
+done
+
 if [ "${GOLDEN_CORPUS:-0}" = 1 ]; then
+  for f in fuzz/corpus/sbus_ether/* fuzz/corpus/recording/*; do
+    run "$(slug "$f sbus")" "$f" sbus --time abs --utc -f tsv
+  done
+  for f in fuzz/corpus/recording/*; do
+    run "$(slug "$f sport")" "$f" sport --time abs --utc -f tsv
+  done
   for f in fuzz/corpus/sbus_serial/*; do
     for c in "sbus --mode auto" "sbus --mode data" "sbus --mode break"; do
       # shellcheck disable=SC2086

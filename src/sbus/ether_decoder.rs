@@ -12,9 +12,9 @@ use super::stats::{self, MAX_PLCS, StationStats, Totals};
 use super::telegram;
 use super::{COLUMNS, DEFAULT_ETHER_TIMEOUT_MS, Options};
 use crate::fmt::{push_hex, push_u64};
-use crate::pcap::{PcapError, PcapStream};
+use crate::pcap::{Packet, PcapError};
 use crate::protocol::Decoder;
-use crate::row::{Class, Latch, OutputError, RowOut, RowResult};
+use crate::row::{Class, OutputError, RowOut, RowResult};
 use crate::stats::{Problems, Report};
 
 /// Addresses of PLCs beyond [`MAX_PLCS`] remembered to count them once.
@@ -25,15 +25,13 @@ struct Plc {
     stats: StationStats,
 }
 
-/// The Ether-S-Bus decoder: pcap/pcapng bytes in, rows out.
+/// The Ether-S-Bus decoder: packets in (the source reads the pcap/pcapng container), rows out.
 pub struct EtherDecoder {
-    pcap: PcapStream,
     core: EtherCore,
 }
 
 struct EtherCore {
     port: u16,
-    first_ts: Option<i64>,
     /// Conversations are keyed by (client, server); their tag is the PLC's index.
     pairing: EtherPairing<(SocketAddr, SocketAddr)>,
     /// At most [`MAX_PLCS`] + 1 (the last one: every other PLC).
@@ -55,10 +53,8 @@ struct EtherCore {
 impl EtherDecoder {
     pub fn new(opts: &Options) -> Self {
         EtherDecoder {
-            pcap: PcapStream::new(),
             core: EtherCore {
                 port: opts.port,
-                first_ts: None,
                 pairing: EtherPairing::new(
                     opts.timeout_ms.unwrap_or(DEFAULT_ETHER_TIMEOUT_MS) * 1000,
                 ),
@@ -93,7 +89,7 @@ impl EtherDecoder {
         self.core.plcs.iter().map(|p| (p.name.as_str(), &p.stats))
     }
 
-    fn pcap_failed(&mut self, e: PcapError, out: &mut dyn RowOut) -> RowResult {
+    fn pcap_failed(&mut self, e: &PcapError, out: &mut dyn RowOut) -> RowResult {
         let c = &mut self.core;
         c.failed = true;
         c.map.totals.pcap_error = Some(e.to_string());
@@ -206,15 +202,9 @@ impl EtherCore {
         t.requests_dropped = f.requests;
     }
 
-    fn packet(&mut self, p: crate::pcap::Packet<'_>, out: &mut dyn RowOut) -> RowResult {
+    fn packet(&mut self, p: &Packet<'_>, out: &mut dyn RowOut) -> RowResult {
         self.map.totals.packets += 1;
-        let first = *self.first_ts.get_or_insert_with(|| {
-            if let Some(t) = chrono::DateTime::from_timestamp_micros(p.ts_micros) {
-                out.anchor(crate::time::Anchor::Instant(t));
-            }
-            p.ts_micros
-        });
-        let t = p.ts_micros.saturating_sub(first).max(0) as u64;
+        let t = p.time;
         self.expire(t, out)?;
         self.last_micros = t;
         match ether::extract(p.link_type, p.data) {
@@ -502,29 +492,28 @@ impl Decoder for EtherDecoder {
         COLUMNS
     }
 
-    fn push(&mut self, data: &[u8], _time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
-        if self.core.failed {
-            return Ok(());
-        }
-        let core = &mut self.core;
-        let mut latch = Latch::new(out);
-        let r = self.pcap.push(data, &mut |p| {
-            let _ = core.packet(p, &mut latch);
-        });
-        core.sync_forgotten();
-        latch.result()?;
-        if let Err(e) = r {
-            self.pcap_failed(e, out)?;
-        }
+    /// Ether-S-Bus comes in packets only ([`Decoder::packet`]); bytes are ignored.
+    fn push(&mut self, _data: &[u8], _time: Option<u64>, _out: &mut dyn RowOut) -> RowResult {
         Ok(())
     }
 
-    fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
-        if !self.core.failed
-            && let Err(e) = self.pcap.finish()
-        {
-            self.pcap_failed(e, out)?;
+    fn packet(&mut self, p: &Packet<'_>, out: &mut dyn RowOut) -> RowResult {
+        if self.core.failed {
+            return Ok(());
         }
+        let r = self.core.packet(p, out);
+        self.core.sync_forgotten();
+        r
+    }
+
+    fn capture_error(&mut self, e: &PcapError, out: &mut dyn RowOut) -> RowResult {
+        if self.core.failed {
+            return Ok(());
+        }
+        self.pcap_failed(e, out)
+    }
+
+    fn finish(&mut self, _out: &mut dyn RowOut) -> RowResult {
         let c = &mut self.core;
         c.map.totals.unanswered_at_end += c.pairing.finish();
         c.sync_forgotten();

@@ -9,7 +9,7 @@ use super::telegram::{
     encode_secure, push_dle,
 };
 use super::*;
-use crate::protocol::Decoder;
+use crate::protocol::{Decoder, PcapBytes};
 use crate::row::{Collected, OwnedRow};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -817,7 +817,7 @@ proptest! {
         let biased: Vec<u8> = data.iter().map(|b| match b % 6 {
             0 => FS, 1 => DLE, 2 => 0x06, 3 => 0x00, _ => *b }).collect();
         run(&mut decoder(mode), &[(biased.clone(), None)]);
-        let mut e = EtherDecoder::new(&Options::default());
+        let mut e = PcapBytes::new(EtherDecoder::new(&Options::default()));
         run(&mut e, &[(data.clone(), None)]);
         // the fuzz targets' invariants: every byte in exactly one row, chunking does not matter
         crate::selfcheck::sbus_serial(&data);
@@ -939,13 +939,13 @@ impl EtherCapture {
 
     /// Decodes in 64 KiB chunks; returns (kind, device) of every row and the decoder.
     fn decode(&self) -> (Vec<(String, String)>, EtherDecoder) {
-        let mut e = EtherDecoder::new(&Options::default());
+        let mut e = PcapBytes::new(EtherDecoder::new(&Options::default()));
         let mut out = Collected::default();
         let mut rows = Vec::new();
         for c in self.bytes.chunks(65_536) {
             e.push(c, None, &mut out).unwrap();
             rows.extend(out.rows.drain(..).map(|r| (r.kind, r.device)));
-            let s = e.table_sizes();
+            let s = e.decoder.table_sizes();
             assert!(s.conversations <= pairing::MAX_CONVERSATIONS, "{s:?}");
             assert!(s.outstanding <= pairing::MAX_OUTSTANDING, "{s:?}");
             assert!(s.deadlines <= 2 * s.outstanding + 1_100, "{s:?}");
@@ -953,7 +953,7 @@ impl EtherCapture {
         }
         e.finish(&mut out).unwrap();
         rows.extend(out.rows.drain(..).map(|r| (r.kind, r.device)));
-        (rows, e)
+        (rows, e.decoder)
     }
 }
 
@@ -1111,7 +1111,7 @@ fn ether_timeout_rows_at_the_caps_leave_the_next_row_alone() {
         let ip = [10, 1, (i >> 16) as u8, (i >> 8) as u8];
         cap.packet(T0, (ip, i as u16), PLC, 7, 0);
     }
-    let mut e = EtherDecoder::new(&Options::default());
+    let mut e = PcapBytes::new(EtherDecoder::new(&Options::default()));
     let mut out = Collected::default();
     e.push(&cap.bytes, None, &mut out).unwrap();
     let rows = &out.rows;

@@ -454,12 +454,6 @@ impl Table {
 }
 
 impl RowOut for Table {
-    fn anchor(&mut self, anchor: Anchor) {
-        if self.anchor.is_none() {
-            self.anchor = Some(anchor);
-        }
-    }
-
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         self.write(row)
     }

@@ -11,7 +11,7 @@ use std::sync::mpsc::SyncSender;
 
 use chrono::NaiveDateTime;
 
-use super::{Batch, ChunkReader, Message, Opened};
+use super::{Batch, Chunk, ChunkReader, Message, Opened};
 use crate::exit::Failure;
 use crate::time::Anchor;
 
@@ -208,7 +208,7 @@ impl EdgeTxReader {
 }
 
 impl ChunkReader for EdgeTxReader {
-    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Chunk>, Failure> {
         let mut batch = Batch::default();
         if std::mem::take(&mut self.held) {
             self.take_line(&mut batch, tx);
@@ -236,7 +236,7 @@ impl ChunkReader for EdgeTxReader {
                     return Ok(if batch.bytes.is_empty() {
                         None
                     } else {
-                        Some(batch)
+                        Some(batch.into())
                     });
                 }
                 self.fill()?;
@@ -266,7 +266,7 @@ impl ChunkReader for EdgeTxReader {
                 }
             }
         }
-        Ok(Some(batch))
+        Ok(Some(batch.into()))
     }
 }
 
@@ -305,7 +305,7 @@ mod tests {
         let (tx, rx) = std::sync::mpsc::sync_channel(16);
         let mut r = EdgeTxReader::new(opened);
         let mut all = Batch::default();
-        while let Some(b) = r.next_batch(&tx).unwrap() {
+        while let Some(Chunk::Bytes(b)) = r.next_batch(&tx).unwrap() {
             for (bytes, t) in b.segments() {
                 all.marks.push((all.bytes.len(), t));
                 all.bytes.extend_from_slice(bytes);
@@ -331,8 +331,8 @@ mod tests {
         };
         let (tx, rx) = std::sync::mpsc::sync_channel(1000);
         let mut r = EdgeTxReader::new(opened);
-        while let Some(b) = r.next_batch(&tx).unwrap() {
-            tx.send(Message::Data(b)).unwrap();
+        while let Some(c) = r.next_batch(&tx).unwrap() {
+            tx.send(c.into()).unwrap();
         }
         drop(tx);
         rx.iter().collect()

@@ -1,10 +1,15 @@
 //! Sources: where bytes come from, with their arrival times.
 //!
-//! A source runs in its own reader thread and hands [`Batch`]es of bytes to the decoder over a
-//! bounded channel, so memory stays flat however large the capture is. Input files and
-//! standard input are recognised by their content, not by their name ([`detect`]).
+//! A source runs in its own reader thread and hands [`Batch`]es of bytes (or, for captures of
+//! network traffic, [`capture::Captured`] packets) to the decoder over a bounded channel, so
+//! memory stays flat however large the capture is. Input files and standard input are
+//! recognised by their content, not by their name ([`detect`]); containers (EdgeTX logs,
+//! recordings, pcap and pcapng) are opened here, so decoders see bytes or packets with their
+//! times, and the capture's start comes as [`Message::Anchor`].
 
+pub mod capture;
 pub mod edgetx;
+pub mod recording;
 pub mod serial;
 
 use std::fs::File;
@@ -54,12 +59,38 @@ impl Batch {
     }
 }
 
+/// What a reader yields: bytes with their times, or packets of a capture.
+#[derive(Debug)]
+pub enum Chunk {
+    Bytes(Batch),
+    Packets(capture::Captured),
+}
+
+impl From<Batch> for Chunk {
+    fn from(b: Batch) -> Self {
+        Chunk::Bytes(b)
+    }
+}
+
+impl From<Chunk> for Message {
+    fn from(c: Chunk) -> Self {
+        match c {
+            Chunk::Bytes(b) => Message::Data(b),
+            Chunk::Packets(p) => Message::Packets(p),
+        }
+    }
+}
+
 /// What a reader thread sends.
 #[derive(Debug)]
 pub enum Message {
     /// The wall-clock time at the capture's start became known.
     Anchor(Anchor),
     Data(Batch),
+    /// Packets of a capture of network traffic, with their times.
+    Packets(capture::Captured),
+    /// The capture container is broken here (pcap/pcapng): no packets follow.
+    CaptureError(crate::pcap::PcapError),
     /// A note for the user (unreadable log lines and the like); printed on stderr.
     Warning(String),
     /// A row busnoop adds to the table itself (a time jump in a log, an event of a recording),
@@ -83,8 +114,9 @@ pub enum Message {
         micros: u64,
         path: PathBuf,
     },
-    /// Sent by [`spawn`] after each `Data` of a file or stream: the input had been read up to
-    /// this many bytes when that batch was made (its bytes and everything before them).
+    /// Sent by [`spawn`] after each `Data` or `Packets` of a file or stream: the input had been
+    /// read up to this many bytes when that batch was made (its bytes and everything before
+    /// them).
     ReadUpTo(u64),
     /// The source ended normally.
     End,
@@ -94,8 +126,9 @@ pub enum Message {
 
 /// Something that yields batches; runs inside the reader thread.
 pub trait ChunkReader: Send {
-    /// The next batch, or `None` at the end of the input.
-    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure>;
+    /// The next batch, or `None` at the end of the input. Other messages (the anchor, notes,
+    /// warnings) go straight to `tx`, before the batch they precede.
+    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Chunk>, Failure>;
 }
 
 /// Bytes read at most to tell the kinds apart (leading blank lines of a log included).
@@ -115,10 +148,9 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
             if prefix.len() < 24 && !complete {
                 return None;
             }
-            return Some(match crate::record::pcap_link_type(prefix) {
-                Some(crate::record::LINKTYPE_RTAC_SERIAL | crate::record::LINKTYPE_USER0) => {
-                    Kind::Recording
-                }
+            use crate::pcap::linktype::{RTAC_SERIAL, USER0};
+            return Some(match crate::pcap::link_type(prefix) {
+                Some(RTAC_SERIAL | USER0) => Kind::Recording,
                 _ => Kind::Pcap,
             });
         }
@@ -354,9 +386,9 @@ impl RawReader {
 }
 
 impl ChunkReader for RawReader {
-    fn next_batch(&mut self, _tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+    fn next_batch(&mut self, _tx: &SyncSender<Message>) -> Result<Option<Chunk>, Failure> {
         if let Some(p) = self.prefix.take() {
-            return Ok(Some(Batch::single(p, None)));
+            return Ok(Some(Batch::single(p, None).into()));
         }
         let mut buf = vec![0u8; READ_SIZE];
         loop {
@@ -364,7 +396,7 @@ impl ChunkReader for RawReader {
                 Ok(0) => return Ok(None),
                 Ok(n) => {
                     buf.truncate(n);
-                    return Ok(Some(Batch::single(buf, None)));
+                    return Ok(Some(Batch::single(buf, None).into()));
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(e) => return Err(Failure::Input(format!("cannot read {}: {e}", self.name))),
@@ -398,8 +430,8 @@ impl Drop for Feed {
     }
 }
 
-/// Runs `reader` in a thread; batches arrive on the returned feed, each followed by
-/// `ReadUpTo` when `progress` is given, then `End` or `Failed`. The channel is bounded so a
+/// Runs `reader` in a thread; batches (`Data`, `Packets`) arrive on the returned feed, each
+/// followed by `ReadUpTo` when `progress` is given, then `End` or `Failed`. The channel is bounded so a
 /// fast reader waits for the decoder; once the feed halts, the thread reads nothing more.
 pub fn spawn(mut reader: Box<dyn ChunkReader>, progress: Option<Progress>) -> Feed {
     let (tx, rx) = sync_channel(32);
@@ -414,8 +446,8 @@ pub fn spawn(mut reader: Box<dyn ChunkReader>, progress: Option<Progress>) -> Fe
         .spawn(move || {
             while !halt.load(Ordering::Relaxed) {
                 match reader.next_batch(&tx) {
-                    Ok(Some(b)) => {
-                        if tx.send(Message::Data(b)).is_err() {
+                    Ok(Some(c)) => {
+                        if tx.send(c.into()).is_err() {
                             return;
                         }
                         if let Some(p) = &progress

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use serialport::{DataBits, FlowControl, Parity, SerialPort, SerialPortType, StopBits};
 
-use super::{Batch, ChunkReader, Message};
+use super::{Batch, Chunk, ChunkReader, Message};
 use crate::exit::Failure;
 use crate::protocol::{Line, Parity as LineParity};
 use crate::time::Anchor;
@@ -455,7 +455,7 @@ impl SerialReader {
 }
 
 impl ChunkReader for SerialReader {
-    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Batch>, Failure> {
+    fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Chunk>, Failure> {
         use std::io::ErrorKind::*;
         if !self.started {
             self.started = true;
@@ -470,7 +470,9 @@ impl ChunkReader for SerialReader {
                 Ok(0) => true,
                 Ok(n) => {
                     let micros = self.micros();
-                    return Ok(Some(Batch::single(self.buf[..n].to_vec(), Some(micros))));
+                    return Ok(Some(
+                        Batch::single(self.buf[..n].to_vec(), Some(micros)).into(),
+                    ));
                 }
                 Err(e) if matches!(e.kind(), TimedOut | Interrupted | WouldBlock) => false,
                 Err(_) => true,

@@ -1,106 +1,6 @@
-//! Incremental pcap and pcapng packet parser, independent of any protocol.
-//!
-//! [`PcapStream`] is pure: bytes in (any chunking), [`Packet`]s out, so a `tcpdump -U -w -` pipe
-//! yields each packet as soon as its record is complete. It reads classic pcap (both byte
-//! orders, microsecond and nanosecond magics) and pcapng (section header blocks in both byte
-//! orders, several sections, interface description blocks with their link type, `if_tsresol`
-//! and `if_tsoffset`, enhanced, simple and the obsolete packet blocks; other blocks are
-//! skipped). Memory stays bounded: a record or block longer than [`MAX_RECORD`] is an error,
-//! never an allocation.
+//! [`PcapStream`]: the pure incremental pcap/pcapng reader (see [`crate::pcap`]).
 
-use std::fmt;
-
-/// Longest record or block accepted (Wireshark's limit for pcapng blocks is 16 MiB too).
-pub const MAX_RECORD: usize = 16 * 1024 * 1024;
-
-/// pcapng interfaces kept per section (24 bytes each); a packet naming a later one is an error.
-pub const MAX_INTERFACES: usize = 65_536;
-
-/// Well-known link types (LINKTYPE_* values).
-pub mod linktype {
-    pub const NULL: u32 = 0;
-    pub const ETHERNET: u32 = 1;
-    pub const RAW_OLD: u32 = 12;
-    pub const RAW_OLD_OPENBSD: u32 = 14;
-    pub const RAW: u32 = 101;
-    pub const LOOP: u32 = 108;
-    pub const LINUX_SLL: u32 = 113;
-    pub const USER0: u32 = 147;
-    pub const IPV4: u32 = 228;
-    pub const IPV6: u32 = 229;
-    pub const RTAC_SERIAL: u32 = 250;
-    pub const LINUX_SLL2: u32 = 276;
-}
-
-/// One captured packet.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Packet<'a> {
-    /// Capture time in µs since the Unix epoch.
-    pub ts_micros: i64,
-    /// LINKTYPE_* of the interface that captured it.
-    pub link_type: u32,
-    /// The captured bytes (possibly fewer than `orig_len`).
-    pub data: &'a [u8],
-    /// Length of the packet on the wire.
-    pub orig_len: u32,
-    /// pcapng interface ID within its section (0 for classic pcap).
-    pub interface: u32,
-}
-
-/// Why a stream cannot be read on.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum PcapError {
-    /// Neither a pcap magic nor a pcapng section header.
-    BadMagic([u8; 4]),
-    /// A record or block length that cannot be right.
-    BadLength { offset: u64, len: u64 },
-    /// A pcapng block whose trailing length differs from its leading one.
-    LengthMismatch { offset: u64 },
-    /// A pcapng packet for an interface no IDB described.
-    UnknownInterface { offset: u64, interface: u32 },
-    /// A pcapng packet for an interface beyond [`MAX_INTERFACES`].
-    TooManyInterfaces { offset: u64, interface: u32 },
-    /// A pcapng block before the first section header.
-    NoSection { offset: u64 },
-    /// The input ended inside a record.
-    Truncated { offset: u64, missing: u64 },
-}
-
-impl fmt::Display for PcapError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            PcapError::BadMagic(m) => write!(
-                f,
-                "not a pcap or pcapng file (starts with {:02X} {:02X} {:02X} {:02X})",
-                m[0], m[1], m[2], m[3]
-            ),
-            PcapError::BadLength { offset, len } => {
-                write!(f, "impossible record length {len} at byte {offset}")
-            }
-            PcapError::LengthMismatch { offset } => write!(
-                f,
-                "pcapng block at byte {offset} has different leading and trailing lengths"
-            ),
-            PcapError::UnknownInterface { offset, interface } => write!(
-                f,
-                "pcapng packet at byte {offset} names interface {interface}, which no interface description block defined"
-            ),
-            PcapError::TooManyInterfaces { offset, interface } => write!(
-                f,
-                "pcapng packet at byte {offset} names interface {interface}; busnoop keeps the first {MAX_INTERFACES} interfaces of a section"
-            ),
-            PcapError::NoSection { offset } => {
-                write!(f, "pcapng block at byte {offset} before any section header")
-            }
-            PcapError::Truncated { offset, missing } => write!(
-                f,
-                "the capture ends inside the record at byte {offset} ({missing} bytes missing)"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for PcapError {}
+use super::{MAX_INTERFACES, MAX_RECORD, Packet, PcapError};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Iface {
@@ -162,7 +62,11 @@ pub struct PcapStream {
     offset: u64,
     /// Last packet time (for simple packet blocks, which carry none).
     last_ts: i64,
+    /// Time of the first packet: [`Packet::time`] counts from it.
+    first_ts: Option<i64>,
     packets: u64,
+    /// Longest record or block accepted.
+    max_record: usize,
 }
 
 impl Default for PcapStream {
@@ -204,8 +108,35 @@ impl PcapStream {
             pending: Vec::new(),
             offset: 0,
             last_ts: 0,
+            first_ts: None,
             packets: 0,
+            max_record: MAX_RECORD,
         }
+    }
+
+    /// A reader that refuses records longer than `max` bytes (at most [`MAX_RECORD`]) with
+    /// [`PcapError::BadLength`].
+    pub fn with_max_record(max: usize) -> Self {
+        PcapStream {
+            max_record: max.min(MAX_RECORD),
+            ..Self::new()
+        }
+    }
+
+    /// Time stamp of the first packet (the capture's start), once one was read.
+    pub fn start(&self) -> Option<i64> {
+        self.first_ts
+    }
+
+    /// Bytes of an unfinished record held until the rest arrives.
+    pub fn buffered(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// µs since the first packet for a packet stamped `ts` (the first one sets the start).
+    fn time(&mut self, ts: i64) -> u64 {
+        let first = *self.first_ts.get_or_insert(ts);
+        ts.saturating_sub(first).max(0) as u64
     }
 
     /// pcapng interfaces kept for the current section (for tests of the bound).
@@ -400,7 +331,7 @@ impl PcapStream {
         let frac = rd32(&b[4..], big) as i64;
         let incl = rd32(&b[8..], big) as usize;
         let orig = rd32(&b[12..], big);
-        if incl > MAX_RECORD {
+        if incl > self.max_record {
             return Err(PcapError::BadLength {
                 offset: self.offset,
                 len: incl as u64,
@@ -412,8 +343,10 @@ impl PcapStream {
         let ts = secs * 1_000_000 + if nanos { frac / 1000 } else { frac };
         self.last_ts = ts;
         self.packets += 1;
+        let time = self.time(ts);
         emit(Packet {
             ts_micros: ts,
+            time,
             link_type,
             data: &b[16..16 + incl],
             orig_len: orig,
@@ -447,7 +380,7 @@ impl PcapStream {
         };
         let block_type = rd32(b, big);
         let len = rd32(&b[4..], big) as usize;
-        if len < 12 || !len.is_multiple_of(4) || len > MAX_RECORD {
+        if len < 12 || !len.is_multiple_of(4) || len > self.max_record {
             return Err(PcapError::BadLength {
                 offset: self.offset,
                 len: len as u64,
@@ -567,8 +500,10 @@ impl PcapStream {
                 let link_type = iface.link_type;
                 self.last_ts = ts_micros;
                 self.packets += 1;
+                let time = self.time(ts_micros);
                 emit(Packet {
                     ts_micros,
+                    time,
                     link_type,
                     data: &body[20..20 + cap],
                     orig_len: orig,
@@ -596,8 +531,10 @@ impl PcapStream {
                 }
                 let link_type = iface.link_type;
                 self.packets += 1;
+                let time = self.time(self.last_ts);
                 emit(Packet {
                     ts_micros: self.last_ts,
+                    time,
                     link_type,
                     data: &body[4..4 + cap],
                     orig_len: orig,
@@ -610,60 +547,9 @@ impl PcapStream {
     }
 }
 
-/// Writes classic pcap (microseconds, little endian): for tests, benchmarks and tools.
-pub mod write {
-    /// The 24-byte file header.
-    pub fn header(out: &mut Vec<u8>, link_type: u32) {
-        out.extend_from_slice(&0xA1B2_C3D4u32.to_le_bytes());
-        out.extend_from_slice(&2u16.to_le_bytes());
-        out.extend_from_slice(&4u16.to_le_bytes());
-        out.extend_from_slice(&0i32.to_le_bytes());
-        out.extend_from_slice(&0u32.to_le_bytes());
-        out.extend_from_slice(&262_144u32.to_le_bytes());
-        out.extend_from_slice(&link_type.to_le_bytes());
-    }
-
-    /// One record.
-    pub fn record(out: &mut Vec<u8>, ts_micros: i64, data: &[u8]) {
-        let secs = ts_micros.div_euclid(1_000_000) as u32;
-        let us = ts_micros.rem_euclid(1_000_000) as u32;
-        out.extend_from_slice(&secs.to_le_bytes());
-        out.extend_from_slice(&us.to_le_bytes());
-        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        out.extend_from_slice(data);
-    }
-
-    /// An Ethernet/IPv4/UDP frame around `payload` (checksum 0 = none).
-    pub fn udp4_frame(out: &mut Vec<u8>, src: ([u8; 4], u16), dst: ([u8; 4], u16), payload: &[u8]) {
-        out.extend_from_slice(&[0x02, 0, 0, 0, 0, 2, 0x02, 0, 0, 0, 0, 1, 0x08, 0x00]);
-        let total = 20 + 8 + payload.len();
-        let mut ip = [0u8; 20];
-        ip[0] = 0x45;
-        ip[2..4].copy_from_slice(&(total as u16).to_be_bytes());
-        ip[8] = 64;
-        ip[9] = 17;
-        ip[12..16].copy_from_slice(&src.0);
-        ip[16..20].copy_from_slice(&dst.0);
-        let mut sum: u32 = 0;
-        for c in ip.chunks(2) {
-            sum += u16::from_be_bytes([c[0], c[1]]) as u32;
-        }
-        while sum > 0xFFFF {
-            sum = (sum & 0xFFFF) + (sum >> 16);
-        }
-        ip[10..12].copy_from_slice(&(!(sum as u16)).to_be_bytes());
-        out.extend_from_slice(&ip);
-        out.extend_from_slice(&src.1.to_be_bytes());
-        out.extend_from_slice(&dst.1.to_be_bytes());
-        out.extend_from_slice(&((8 + payload.len()) as u16).to_be_bytes());
-        out.extend_from_slice(&[0, 0]);
-        out.extend_from_slice(payload);
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::write;
     use super::*;
 
     type Got = Vec<(i64, u32, Vec<u8>, u32)>;

@@ -1,0 +1,249 @@
+//! pcap and pcapng: the one place that knows the capture containers.
+//!
+//! * [`read`]: [`PcapStream`], the pure incremental reader: bytes in (any chunking), [`Packet`]s
+//!   out, so a `tcpdump -U -w -` pipe yields each packet as soon as its record is complete. It
+//!   reads classic pcap (both byte orders, microsecond and nanosecond magics) and pcapng
+//!   (section header blocks in both byte orders, several sections, interface description blocks
+//!   with their link type, `if_tsresol` and `if_tsoffset`, enhanced, simple and the obsolete
+//!   packet blocks; other blocks are skipped). Memory stays bounded: a record or block longer
+//!   than its limit ([`MAX_RECORD`]) is an error, never an allocation.
+//! * [`write`]: classic pcap records (the recorder, tests, benchmarks and tools).
+//! * [`rtac`]: the RTAC serial encapsulation busnoop records serial lines in.
+//! * [`linktype`]: every link type busnoop names, and [`Packets`], packets with their bytes in one
+//!   buffer, as the capture source hands them on.
+//!
+//! The sources ([`crate::source`]) open the containers; protocols see [`Packet`]s only.
+
+pub mod read;
+pub mod rtac;
+pub mod write;
+
+pub use read::PcapStream;
+
+use std::fmt;
+
+use crate::time::Anchor;
+
+/// Longest record or block accepted (Wireshark's limit for pcapng blocks is 16 MiB too).
+pub const MAX_RECORD: usize = 16 * 1024 * 1024;
+
+/// pcapng interfaces kept per section (24 bytes each); a packet naming a later one is an error.
+pub const MAX_INTERFACES: usize = 65_536;
+
+/// Well-known link types (LINKTYPE_* values).
+pub mod linktype {
+    pub const NULL: u32 = 0;
+    pub const ETHERNET: u32 = 1;
+    pub const RAW_OLD: u32 = 12;
+    pub const RAW_OLD_OPENBSD: u32 = 14;
+    pub const RAW: u32 = 101;
+    pub const LOOP: u32 = 108;
+    pub const LINUX_SLL: u32 = 113;
+    pub const USER0: u32 = 147;
+    pub const IPV4: u32 = 228;
+    pub const IPV6: u32 = 229;
+    pub const RTAC_SERIAL: u32 = 250;
+    pub const LINUX_SLL2: u32 = 276;
+}
+
+/// One captured packet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Packet<'a> {
+    /// Capture time in µs since the Unix epoch.
+    pub ts_micros: i64,
+    /// Capture time in µs since the first packet of the stream (0 for a packet stamped before
+    /// it): the `time` every decoder works with.
+    pub time: u64,
+    /// LINKTYPE_* of the interface that captured it.
+    pub link_type: u32,
+    /// The captured bytes (possibly fewer than `orig_len`).
+    pub data: &'a [u8],
+    /// Length of the packet on the wire.
+    pub orig_len: u32,
+    /// pcapng interface ID within its section (0 for classic pcap).
+    pub interface: u32,
+}
+
+/// Why a stream cannot be read on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PcapError {
+    /// Neither a pcap magic nor a pcapng section header.
+    BadMagic([u8; 4]),
+    /// A record or block length that cannot be right.
+    BadLength { offset: u64, len: u64 },
+    /// A pcapng block whose trailing length differs from its leading one.
+    LengthMismatch { offset: u64 },
+    /// A pcapng packet for an interface no IDB described.
+    UnknownInterface { offset: u64, interface: u32 },
+    /// A pcapng packet for an interface beyond [`MAX_INTERFACES`].
+    TooManyInterfaces { offset: u64, interface: u32 },
+    /// A pcapng block before the first section header.
+    NoSection { offset: u64 },
+    /// The input ended inside a record.
+    Truncated { offset: u64, missing: u64 },
+}
+
+impl fmt::Display for PcapError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PcapError::BadMagic(m) => write!(
+                f,
+                "not a pcap or pcapng file (starts with {:02X} {:02X} {:02X} {:02X})",
+                m[0], m[1], m[2], m[3]
+            ),
+            PcapError::BadLength { offset, len } => {
+                write!(f, "impossible record length {len} at byte {offset}")
+            }
+            PcapError::LengthMismatch { offset } => write!(
+                f,
+                "pcapng block at byte {offset} has different leading and trailing lengths"
+            ),
+            PcapError::UnknownInterface { offset, interface } => write!(
+                f,
+                "pcapng packet at byte {offset} names interface {interface}, which no interface description block defined"
+            ),
+            PcapError::TooManyInterfaces { offset, interface } => write!(
+                f,
+                "pcapng packet at byte {offset} names interface {interface}; busnoop keeps the first {MAX_INTERFACES} interfaces of a section"
+            ),
+            PcapError::NoSection { offset } => {
+                write!(f, "pcapng block at byte {offset} before any section header")
+            }
+            PcapError::Truncated { offset, missing } => write!(
+                f,
+                "the capture ends inside the record at byte {offset} ({missing} bytes missing)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PcapError {}
+
+/// The link type of a classic pcap file from its first 24 bytes (all 32 bits of the field).
+pub fn link_type(header: &[u8]) -> Option<u32> {
+    let magic: [u8; 4] = header.get(..4)?.try_into().ok()?;
+    let lt: [u8; 4] = header.get(20..24)?.try_into().ok()?;
+    match magic {
+        [0xD4, 0xC3, 0xB2, 0xA1] | [0x4D, 0x3C, 0xB2, 0xA1] => Some(u32::from_le_bytes(lt)),
+        [0xA1, 0xB2, 0xC3, 0xD4] | [0xA1, 0xB2, 0x3C, 0x4D] => Some(u32::from_be_bytes(lt)),
+        _ => None,
+    }
+}
+
+/// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),
+/// when it is one.
+pub fn anchor(ts_micros: i64) -> Option<Anchor> {
+    chrono::DateTime::from_timestamp_micros(ts_micros).map(Anchor::Instant)
+}
+
+/// Where one packet of [`Packets`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Slot {
+    ts_micros: i64,
+    time: u64,
+    link_type: u32,
+    orig_len: u32,
+    interface: u32,
+    /// Its bytes end here in the shared buffer.
+    end: usize,
+}
+
+/// Owned packets with their bytes in one buffer: two allocations per batch, whatever the
+/// number of packets.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Packets {
+    data: Vec<u8>,
+    slots: Vec<Slot>,
+}
+
+impl Packets {
+    /// Appends a copy of `p`.
+    pub fn push(&mut self, p: &Packet<'_>) {
+        self.data.extend_from_slice(p.data);
+        self.slots.push(Slot {
+            ts_micros: p.ts_micros,
+            time: p.time,
+            link_type: p.link_type,
+            orig_len: p.orig_len,
+            interface: p.interface,
+            end: self.data.len(),
+        });
+    }
+
+    /// The `i`th packet.
+    pub fn get(&self, i: usize) -> Option<Packet<'_>> {
+        let s = self.slots.get(i)?;
+        let start = i.checked_sub(1).map_or(0, |j| self.slots[j].end);
+        Some(Packet {
+            ts_micros: s.ts_micros,
+            time: s.time,
+            link_type: s.link_type,
+            data: &self.data[start..s.end],
+            orig_len: s.orig_len,
+            interface: s.interface,
+        })
+    }
+
+    /// The packets in order.
+    pub fn iter(&self) -> impl Iterator<Item = Packet<'_>> {
+        (0..self.slots.len()).filter_map(|i| self.get(i))
+    }
+
+    /// Number of packets.
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+
+    /// Captured bytes of all packets together.
+    pub fn bytes(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Empties the batch, keeping its buffers.
+    pub fn clear(&mut self) {
+        self.data.clear();
+        self.slots.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn link_type_from_header() {
+        let mut out = Vec::new();
+        write::header(&mut out, linktype::RTAC_SERIAL);
+        assert_eq!(link_type(&out), Some(linktype::RTAC_SERIAL));
+        let mut be = vec![0xA1, 0xB2, 0xC3, 0xD4];
+        be.extend_from_slice(&[0; 16]);
+        be.extend_from_slice(&1u32.to_be_bytes());
+        assert_eq!(link_type(&be), Some(1));
+        assert_eq!(link_type(b"hello"), None);
+    }
+
+    #[test]
+    fn packets_keep_every_field_and_byte() {
+        let p = |ts, data: &'static [u8]| Packet {
+            ts_micros: ts,
+            time: ts as u64 * 2,
+            link_type: 1,
+            data,
+            orig_len: 99,
+            interface: 3,
+        };
+        let want = [p(5, b"ab"), p(6, b""), p(7, b"cde")];
+        let mut b = Packets::default();
+        for x in &want {
+            b.push(x);
+        }
+        assert_eq!(b.iter().collect::<Vec<_>>(), want);
+        assert_eq!((b.len(), b.bytes(), b.get(3)), (3, 5, None));
+        b.clear();
+        assert!(b.is_empty());
+    }
+}
