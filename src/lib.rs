@@ -10,6 +10,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fmt;
+pub mod pace;
 pub mod pcap;
 pub mod protocol;
 pub mod protocols;
@@ -27,3 +28,4 @@ pub mod source;
 pub mod sport;
 pub mod summary;
 pub mod time;
+pub mod top;
