@@ -40,7 +40,10 @@ fn terminal(cols: u16, rows: u16) -> Term {
     let mut t: libc::termios = unsafe { std::mem::zeroed() };
     assert_eq!(unsafe { libc::tcgetattr(slave.as_raw_fd(), &mut t) }, 0);
     t.c_lflag |= libc::ICANON | libc::ECHO | libc::ISIG | libc::IEXTEN;
-    assert_eq!(unsafe { libc::tcsetattr(slave.as_raw_fd(), libc::TCSANOW, &t) }, 0);
+    assert_eq!(
+        unsafe { libc::tcsetattr(slave.as_raw_fd(), libc::TCSANOW, &t) },
+        0
+    );
     Term { master, slave }
 }
 
@@ -53,7 +56,10 @@ impl Term {
 
     fn lflag(&self) -> libc::tcflag_t {
         let mut t: libc::termios = unsafe { std::mem::zeroed() };
-        assert_eq!(unsafe { libc::tcgetattr(self.slave.as_raw_fd(), &mut t) }, 0);
+        assert_eq!(
+            unsafe { libc::tcgetattr(self.slave.as_raw_fd(), &mut t) },
+            0
+        );
         t.c_lflag
     }
 }
@@ -126,7 +132,11 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
     let at = wait_for(&screen, 0, "\x1b[?1049h");
     let at = wait_for(&screen, at, "S.Port");
     wait_for(&screen, at, "quit");
-    assert_eq!(term.lflag() & libc::ICANON, 0, "raw mode while the view runs");
+    assert_eq!(
+        term.lflag() & libc::ICANON,
+        0,
+        "raw mode while the view runs"
+    );
 
     // Nothing on the bus: after 5 s the hint shows at the bottom of the view.
     let at = wait_for(&screen, at, "no bytes from");
@@ -146,7 +156,11 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
     wait_for(&screen, at, "65.19");
 
     // Keys: sort, pause, filter (typed and applied), then quit.
-    term.master.try_clone_native().unwrap().write_all(b"s").unwrap();
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"s")
+        .unwrap();
     let at = wait_for(&screen, at, "sort rate");
     let mut keys = term.master.try_clone_native().unwrap();
     keys.write_all(b"fal\r").unwrap();
@@ -157,24 +171,13 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
     let status = wait_exit(&mut child);
     assert!(status.success(), "{status:?}");
 
-    // The terminal is given back: alternate screen left, cursor shown, cooked mode again.
-    let drawn = screen.lock().unwrap().clone();
-    let tail = &drawn[at..];
-    let left = tail
-        .windows(8)
-        .position(|w| w == b"\x1b[?1049l")
-        .expect("alternate screen left");
-    assert!(
-        tail[left..].windows(6).any(|w| w == b"\x1b[?25h"),
-        "cursor shown after leaving"
-    );
+    // The terminal is given back: alternate screen left, cursor shown, cooked mode again (the
+    // screen reader may still be on its way to the last bytes: wait for them).
+    let left = wait_for(&screen, at, "\x1b[?1049l");
+    wait_for(&screen, left, "\x1b[?25h");
     assert_eq!(term.lflag(), before, "terminal modes restored");
     // What was said on stderr during the view is repeated on the terminal after it.
-    assert!(
-        String::from_utf8_lossy(&tail[left..]).contains("no bytes from"),
-        "{}",
-        String::from_utf8_lossy(&tail[left..])
-    );
+    wait_for(&screen, left, "no bytes from");
 
     // Nothing lost: the table has every frame, the recording every byte.
     let rows = std::fs::read_to_string(&table).unwrap();
@@ -212,7 +215,10 @@ fn a_silent_port_gets_the_wiring_hint_in_the_table_mode() {
             break l;
         }
     };
-    assert!(started.elapsed() >= Duration::from_secs(5), "not before 5 s");
+    assert!(
+        started.elapsed() >= Duration::from_secs(5),
+        "not before 5 s"
+    );
     assert_eq!(
         line,
         format!(
@@ -246,7 +252,14 @@ fn speed_paces_the_table_of_a_replay() {
     // at the default (0) no time at all.
     let t = Instant::now();
     let paced = Command::new(bin())
-        .args(["sport", "-f", "tsv", "--speed", "1", "fixtures/sport-sample.bin"])
+        .args([
+            "sport",
+            "-f",
+            "tsv",
+            "--speed",
+            "1",
+            "fixtures/sport-sample.bin",
+        ])
         .output()
         .unwrap();
     let took = t.elapsed();
@@ -262,4 +275,43 @@ fn speed_paces_the_table_of_a_replay() {
         .output()
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
+}
+
+#[test]
+fn ctrl_c_in_a_paced_replay_stops_like_sigint_and_restores_the_terminal() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    // 30 s of S.Port at the bus rate.
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    let long = dir.path().join("long.bin");
+    std::fs::write(&long, sample.repeat(80)).unwrap();
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args(["sport", "--top", "-o"])
+        .arg(&table)
+        .arg(&long)
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .spawn()
+        .unwrap();
+    let at = wait_for(&screen, 0, "×1");
+    let at = wait_for(&screen, at, "Volts");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"\x03")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(130));
+    let at = wait_for(&screen, at, "\x1b[?1049l");
+    wait_for(&screen, at, "interrupted after");
+    assert_eq!(term.lflag(), before);
+    // Paced: far from all of the 30 s were decoded, and what was is in the table.
+    let rows = std::fs::read_to_string(&table).unwrap().lines().count();
+    assert!(rows > 1 && rows < 2400, "{rows}");
 }
