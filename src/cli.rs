@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::exit::{Failure, code};
+use crate::pace::{Paced, Pacer};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::record::Recorder;
 use crate::run::{Context, drive};
@@ -14,6 +15,8 @@ use crate::signal::Stop;
 use crate::sink::{Format, Output, Table, TableOptions};
 use crate::source::serial::{self, SerialReader};
 use crate::source::{self, ChunkReader, Input};
+use crate::top::Top;
+use crate::top::view::Info;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -281,6 +284,25 @@ pub struct OutputArgs {
     /// With --time abs: print UTC instead of local time.
     #[arg(long)]
     pub utc: bool,
+
+    /// Full-screen live view instead of the scrolling table: one line per device and sensor
+    /// with value, rate, age, min/max and errors (keys: q quit, p pause, s sort, f filter,
+    /// space mark). The table can still go to -o FILE.
+    #[arg(long)]
+    pub top: bool,
+
+    /// Replay speed of captures with times: 1 = real time, 2 = twice as fast, 0 = as fast as
+    /// possible [default: 1 with --top, 0 otherwise]. No effect on a live port.
+    #[arg(long, value_name = "N", value_parser = parse_speed)]
+    pub speed: Option<f64>,
+}
+
+/// `--speed`: a number from 0 to 1000.
+fn parse_speed(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1000.0).contains(&v) => Ok(v),
+        _ => Err("expected a number from 0 (as fast as possible) to 1000 (1 = real time)".into()),
+    }
 }
 
 impl OutputArgs {
@@ -410,6 +432,7 @@ pub fn run_capture(
             "--record - needs -o FILE: standard output already carries the table".into(),
         ));
     }
+    check_top(args, record_to_stdout)?;
     // The clash with the input first: the capture-name hint below would point at it again.
     let input = Input::parse(&args.source);
     check_distinct(
@@ -455,37 +478,101 @@ pub fn run_capture(
         None => None,
     };
     let out = &args.output;
-    let output = match out.output_file() {
-        Some(p) => Output::create(p)
-            .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
-        None => Output::stdout(),
+    // With --top and no -o, the view is the only output.
+    let mut table = match (out.top, out.output_file()) {
+        (true, None) => None,
+        (_, file) => {
+            let output = match file {
+                Some(p) => Output::create(p)
+                    .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
+                None => Output::stdout(),
+            };
+            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+            let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+            Some(Table::new(
+                output,
+                out.table_options(to_terminal, no_color_env),
+                decoder.columns(),
+            ))
+        }
     };
-    let to_terminal = out.output_file().is_none() && std::io::stdout().is_terminal();
-    let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-    let mut table = Table::new(
-        output,
-        out.table_options(to_terminal, no_color_env),
-        decoder.columns(),
-    );
+    let live = kind == Kind::Serial;
+    let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
+    let pacer = if live { None } else { Pacer::new(speed) };
     let rx = source::spawn(reader, progress);
+    let source_name = args.source.display().to_string();
     let ctx = Context {
         stop: &stop,
         recorder: recorder.as_mut(),
         protocol: protocol.name,
-        live: kind == Kind::Serial,
+        live,
+        source: &source_name,
     };
-    let result = table
-        .header()
-        .map_err(Failure::from)
-        .and_then(|()| drive(decoder.as_mut(), &rx, &mut table, ctx));
-    report(
-        decoder.as_ref(),
-        out.stats,
-        protocol.name,
-        table.rows(),
-        &result,
-    );
+    if let Some(t) = &mut table {
+        t.header().map_err(Failure::from)?;
+    }
+    let (result, rows) = if out.top {
+        let info = Info {
+            protocol: protocol.name.to_owned(),
+            source: source_name.clone(),
+            baud: live.then_some(line.baud),
+            speed: pacer.as_ref().map(Pacer::speed),
+            live,
+        };
+        let columns = decoder.columns().to_vec();
+        let mut view = Top::open(table.as_mut(), &columns, info, pacer)
+            .map_err(|e| Failure::Output(format!("cannot set up the terminal for --top: {e}")))?;
+        let result = drive(decoder.as_mut(), &rx, &mut view, ctx);
+        if result.is_ok() {
+            view.hold();
+        }
+        let rows = view.rows();
+        // Leaves the alternate screen and gives stderr back (with what was written to it).
+        drop(view);
+        (result, rows)
+    } else {
+        let table = table.as_mut().expect("a table without --top");
+        let result = match pacer {
+            Some(pacer) => drive(
+                decoder.as_mut(),
+                &rx,
+                &mut Paced {
+                    inner: table,
+                    pacer,
+                },
+                ctx,
+            ),
+            None => drive(decoder.as_mut(), &rx, table, ctx),
+        };
+        (result, table.rows())
+    };
+    report(decoder.as_ref(), out.stats, protocol.name, rows, &result);
     result
+}
+
+/// `--top` draws on standard output, which must be a terminal and carry nothing else.
+fn check_top(args: &CaptureArgs, record_to_stdout: bool) -> Result<(), Failure> {
+    if !args.output.top {
+        return Ok(());
+    }
+    if args.output.output.as_deref().is_some_and(is_dash) {
+        return Err(Failure::Usage(
+            "--top draws on standard output; write the table with -o FILE".into(),
+        ));
+    }
+    if record_to_stdout {
+        return Err(Failure::Usage(
+            "--top draws on standard output; record to a file (--record FILE.pcap)".into(),
+        ));
+    }
+    if !std::io::stdout().is_terminal() {
+        return Err(Failure::Usage(
+            "--top needs a terminal on standard output; without one, write the table (drop \
+             --top, or -o FILE)"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader

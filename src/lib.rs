@@ -10,6 +10,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fmt;
+pub mod pace;
 pub mod pairing;
 pub mod pcap;
 pub mod protocol;
@@ -29,3 +30,4 @@ pub mod sport;
 pub mod stats;
 pub mod summary;
 pub mod time;
+pub mod top;

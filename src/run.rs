@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use crate::exit::{Failure, Interrupt};
 use crate::protocol::Decoder;
 use crate::record::Recorder;
+use crate::row::OutputError;
 use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::signal::Stop;
@@ -27,6 +28,35 @@ const NO_FRAMES_BYTES: u64 = 256;
 /// their input is cut).
 const UNIT: usize = 4096;
 
+/// After this long without a single byte from a live port, the user gets a hint once.
+const SILENT_AFTER: Duration = Duration::from_secs(5);
+
+/// Where the driver writes rows: the table, or the live view (which may also write the table).
+pub trait Sink: RowOut {
+    /// Writes everything buffered; called after every batch and on every idle tick.
+    fn flush(&mut self) -> Result<(), OutputError>;
+    /// Flushes and closes the output at the end of the run.
+    fn close(&mut self) -> Result<(), OutputError>;
+    /// The wall-clock time of the capture's start became known.
+    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>);
+    /// The user asked to stop (the live view's `q`): the driver ends as at the end of the input.
+    fn quit(&self) -> bool {
+        false
+    }
+}
+
+impl Sink for Table {
+    fn flush(&mut self) -> Result<(), OutputError> {
+        Table::flush(self)
+    }
+    fn close(&mut self) -> Result<(), OutputError> {
+        Table::close(self)
+    }
+    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>) {
+        Table::set_anchor(self, anchor)
+    }
+}
+
 /// What the driver needs besides the decoder and the table.
 pub struct Context<'a> {
     pub stop: &'a Stop,
@@ -36,6 +66,8 @@ pub struct Context<'a> {
     pub protocol: &'a str,
     /// The source is a live serial device: decoders get `idle` calls with the current time.
     pub live: bool,
+    /// The source's name, for the hint about a silent port.
+    pub source: &'a str,
 }
 
 /// Feeds every message from `feed` through `decoder` into `table` until the source ends, fails,
@@ -46,7 +78,7 @@ pub struct Context<'a> {
 pub fn drive(
     decoder: &mut dyn Decoder,
     feed: &Feed,
-    table: &mut Table,
+    table: &mut dyn Sink,
     ctx: Context<'_>,
 ) -> Result<(), Failure> {
     let mut state = Driver {
@@ -55,6 +87,9 @@ pub fn drive(
         recorder: ctx.recorder,
         protocol: ctx.protocol,
         live: ctx.live,
+        source: ctx.source,
+        started: Instant::now(),
+        silent_hinted: false,
         clock: None,
         bytes: 0,
         first_byte: None,
@@ -106,10 +141,13 @@ pub fn drive(
 
 struct Driver<'a> {
     decoder: &'a mut dyn Decoder,
-    table: &'a mut Table,
+    table: &'a mut dyn Sink,
     recorder: Option<&'a mut Recorder>,
     protocol: &'a str,
     live: bool,
+    source: &'a str,
+    started: Instant,
+    silent_hinted: bool,
     /// Maps capture time to this process's clock: the instant of capture time 0.
     clock: Option<Instant>,
     bytes: u64,
@@ -144,6 +182,9 @@ impl Driver<'_> {
         loop {
             if let Some(sig) = stop.signal() {
                 return Err(Failure::Signal(Interrupt::new(sig)));
+            }
+            if self.table.quit() {
+                return Ok(());
             }
             match feed.rx.recv_timeout(TICK) {
                 Ok(Message::Data(b)) => {
@@ -294,6 +335,19 @@ impl Driver<'_> {
     /// Bytes keep arriving but nothing decodes: say so once, with the likely causes.
     /// Live sources only: a replayed file has no wiring to check.
     fn watch(&mut self) {
+        if self.live && self.bytes == 0 && !self.silent_hinted {
+            let waited = self.started.elapsed();
+            if waited >= SILENT_AFTER {
+                self.silent_hinted = true;
+                let _ = self.table.flush();
+                eprintln!(
+                    "busnoop: no bytes from {} in {:.0} s: check RX wiring and that the bus is \
+                     powered",
+                    self.source,
+                    waited.as_secs_f64()
+                );
+            }
+        }
         if !self.live
             || self.hinted
             || self.bytes < NO_FRAMES_BYTES

@@ -1,0 +1,198 @@
+//! The terminal of the live view: raw mode and the alternate screen, restored on every way out
+//! (normal end, error, panic, signal), and busnoop's own stderr kept off the screen.
+
+use std::io::{self, Stdout, Write};
+use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::{Arc, Mutex, Once};
+
+use ratatui::Terminal;
+use ratatui::backend::CrosstermBackend;
+use ratatui::crossterm::cursor::{Hide, Show};
+use ratatui::crossterm::execute;
+use ratatui::crossterm::terminal::{
+    EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
+};
+
+/// The terminal is in raw mode on the alternate screen.
+static ACTIVE: AtomicBool = AtomicBool::new(false);
+/// The real stderr while it is captured (-1: not captured).
+static SAVED_STDERR: AtomicI32 = AtomicI32::new(-1);
+
+/// Lines of stderr kept while the view runs; more are counted.
+const KEPT_LINES: usize = 1000;
+
+/// Puts the terminal back: leaves raw mode and the alternate screen, shows the cursor, and
+/// gives stderr back. Safe to call more than once.
+pub fn restore() {
+    if ACTIVE.swap(false, Ordering::SeqCst) {
+        let _ = disable_raw_mode();
+        let _ = execute!(io::stdout(), LeaveAlternateScreen, Show);
+        let _ = io::stdout().flush();
+    }
+    let saved = SAVED_STDERR.swap(-1, Ordering::SeqCst);
+    if saved >= 0 {
+        // SAFETY: `saved` is the descriptor `Capture::start` duplicated from stderr and owns;
+        // dup2 onto 2 only replaces the pipe's write end.
+        unsafe { libc::dup2(saved, 2) };
+    }
+}
+
+/// What was written to stderr while the view ran.
+#[derive(Default, Debug)]
+pub struct Captured {
+    pub lines: Vec<String>,
+    pub dropped: u64,
+    /// The lines were also written to the real stderr as they came (it is not the terminal).
+    passed_on: bool,
+}
+
+/// Stderr redirected into a pipe read by a thread.
+struct Capture {
+    saved: OwnedFd,
+    thread: Option<std::thread::JoinHandle<()>>,
+    captured: Arc<Mutex<Captured>>,
+}
+
+impl Capture {
+    fn start() -> io::Result<Capture> {
+        let (r, w) = nix::unistd::pipe()?;
+        // SAFETY: duplicating stderr, which is open for the whole process.
+        let saved = unsafe { libc::dup(2) };
+        if saved < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        // SAFETY: `saved` was just returned by dup and is owned by nobody else.
+        let saved = unsafe { OwnedFd::from_raw_fd(saved) };
+        let _ = nix::fcntl::fcntl(
+            &saved,
+            nix::fcntl::FcntlArg::F_SETFD(nix::fcntl::FdFlag::FD_CLOEXEC),
+        );
+        let _ = nix::fcntl::fcntl(
+            &r,
+            nix::fcntl::FcntlArg::F_SETFD(nix::fcntl::FdFlag::FD_CLOEXEC),
+        );
+        // SAFETY: replaces descriptor 2 with the pipe's write end; `w` stays owned and is
+        // closed below, so only descriptor 2 holds the write end.
+        if unsafe { libc::dup2(w.as_raw_fd(), 2) } < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        drop(w);
+        let through = !nix::unistd::isatty(&saved).unwrap_or(false);
+        let captured = Arc::new(Mutex::new(Captured {
+            passed_on: through,
+            ..Captured::default()
+        }));
+        let raw_saved: RawFd = saved.as_raw_fd();
+        SAVED_STDERR.store(raw_saved, Ordering::SeqCst);
+        let sink = captured.clone();
+        let out_fd = saved.try_clone()?;
+        let thread = std::thread::Builder::new()
+            .name("busnoop-stderr".into())
+            .spawn(move || {
+                use std::io::BufRead;
+                let mut out = std::fs::File::from(out_fd);
+                for line in io::BufReader::new(std::fs::File::from(r)).lines() {
+                    let Ok(line) = line else { break };
+                    if through {
+                        let _ = writeln!(out, "{line}");
+                    }
+                    let mut c = sink.lock().unwrap_or_else(|e| e.into_inner());
+                    if c.lines.len() < KEPT_LINES {
+                        c.lines.push(line);
+                    } else {
+                        c.dropped += 1;
+                    }
+                }
+            })?;
+        Ok(Capture {
+            saved,
+            thread: Some(thread),
+            captured,
+        })
+    }
+
+    /// Gives stderr back and writes what was kept (unless it went through already).
+    fn finish(mut self) {
+        if SAVED_STDERR.swap(-1, Ordering::SeqCst) >= 0 {
+            // SAFETY: see `restore`.
+            unsafe { libc::dup2(self.saved.as_raw_fd(), 2) };
+        }
+        // Descriptor 2 no longer holds the pipe: the thread reads to the end and stops.
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+        let c = self.captured.lock().unwrap_or_else(|e| e.into_inner());
+        if !c.passed_on {
+            let mut err = io::stderr().lock();
+            for l in &c.lines {
+                let _ = writeln!(err, "{l}");
+            }
+            if c.dropped > 0 {
+                let _ = writeln!(
+                    err,
+                    "busnoop: {} more lines of messages were not kept",
+                    c.dropped
+                );
+            }
+        }
+    }
+}
+
+/// The live view's terminal.
+pub struct Screen {
+    pub terminal: Terminal<CrosstermBackend<Stdout>>,
+    capture: Option<Capture>,
+}
+
+impl Screen {
+    /// Raw mode, alternate screen, hidden cursor; stderr captured.
+    pub fn open() -> io::Result<Screen> {
+        static HOOK: Once = Once::new();
+        HOOK.call_once(|| {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                restore();
+                previous(info);
+            }));
+        });
+        let capture = Capture::start().ok();
+        let opened = (|| {
+            enable_raw_mode()?;
+            ACTIVE.store(true, Ordering::SeqCst);
+            execute!(io::stdout(), EnterAlternateScreen, Hide)?;
+            Terminal::new(CrosstermBackend::new(io::stdout()))
+        })();
+        match opened {
+            Ok(terminal) => Ok(Screen { terminal, capture }),
+            Err(e) => {
+                restore();
+                if let Some(c) = capture {
+                    c.finish();
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// The last `n` lines written to stderr while the view runs.
+    pub fn messages(&self, n: usize) -> Vec<String> {
+        match &self.capture {
+            Some(c) => {
+                let c = c.captured.lock().unwrap_or_else(|e| e.into_inner());
+                let from = c.lines.len().saturating_sub(n);
+                c.lines[from..].to_vec()
+            }
+            None => Vec::new(),
+        }
+    }
+}
+
+impl Drop for Screen {
+    fn drop(&mut self) {
+        restore();
+        if let Some(c) = self.capture.take() {
+            c.finish();
+        }
+    }
+}

@@ -1,0 +1,317 @@
+//! `--top` on pseudo-terminals: the device is one pty, busnoop's terminal (stdin, stdout,
+//! stderr) another. The test reads the screen, presses keys, and checks the terminal is given
+//! back as it was; and the hint for a port that stays silent.
+
+mod common;
+
+use std::io::{BufRead, Read, Write};
+use std::os::fd::{AsRawFd, OwnedFd};
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use busnoop::sport::wire;
+use common::pty::{bin, bus, lock, wait_exit};
+use serialport::{SerialPort, TTYPort};
+
+/// A terminal for busnoop: the test holds `master` (the screen and keyboard), busnoop gets
+/// the slave as stdin, stdout and stderr, `cols`×`rows` big.
+struct Term {
+    master: TTYPort,
+    slave: TTYPort,
+}
+
+fn terminal(cols: u16, rows: u16) -> Term {
+    let (master, slave) = TTYPort::pair().expect("pty pair");
+    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
+        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
+    }
+    let ws = libc::winsize {
+        ws_row: rows,
+        ws_col: cols,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    assert_eq!(
+        unsafe { libc::ioctl(slave.as_raw_fd(), libc::TIOCSWINSZ, &ws) },
+        0
+    );
+    // A terminal as a shell leaves it (pty pairs start raw): line editing, echo, signals.
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    assert_eq!(unsafe { libc::tcgetattr(slave.as_raw_fd(), &mut t) }, 0);
+    t.c_lflag |= libc::ICANON | libc::ECHO | libc::ISIG | libc::IEXTEN;
+    assert_eq!(
+        unsafe { libc::tcsetattr(slave.as_raw_fd(), libc::TCSANOW, &t) },
+        0
+    );
+    Term { master, slave }
+}
+
+impl Term {
+    fn stdio(&self) -> Stdio {
+        let fd = unsafe { libc::dup(self.slave.as_raw_fd()) };
+        assert!(fd >= 0);
+        Stdio::from(unsafe { <OwnedFd as std::os::fd::FromRawFd>::from_raw_fd(fd) })
+    }
+
+    fn lflag(&self) -> libc::tcflag_t {
+        let mut t: libc::termios = unsafe { std::mem::zeroed() };
+        assert_eq!(
+            unsafe { libc::tcgetattr(self.slave.as_raw_fd(), &mut t) },
+            0
+        );
+        t.c_lflag
+    }
+}
+
+/// Everything busnoop drew, collected by a thread.
+fn collect(master: &TTYPort) -> Arc<Mutex<Vec<u8>>> {
+    let screen = Arc::new(Mutex::new(Vec::new()));
+    let mut reader = master.try_clone_native().unwrap();
+    reader.set_timeout(Duration::from_millis(50)).unwrap();
+    let s = screen.clone();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        loop {
+            match reader.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => s.lock().unwrap().extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(_) => break,
+            }
+        }
+    });
+    screen
+}
+
+/// Waits up to 10 s for `text` in what was drawn after byte `from`; returns where it ends.
+fn wait_for(screen: &Mutex<Vec<u8>>, from: usize, text: &str) -> usize {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        {
+            let s = screen.lock().unwrap();
+            if let Some(i) = s[from.min(s.len())..]
+                .windows(text.len())
+                .position(|w| w == text.as_bytes())
+            {
+                return from + i + text.len();
+            }
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{text:?} not on the screen; drawn: {}",
+            String::from_utf8_lossy(&screen.lock().unwrap()[from..])
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("table.tsv");
+    let rec = dir.path().join("wire.bin");
+    let mut b = bus();
+    let term = terminal(120, 30);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args(["sport", "--top", "-o"])
+        .arg(&table)
+        .arg("--record")
+        .arg(&rec)
+        .arg(&b.path)
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .spawn()
+        .unwrap();
+    // The alternate screen, the header, the key help.
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    let at = wait_for(&screen, at, "S.Port");
+    wait_for(&screen, at, "quit");
+    assert_eq!(
+        term.lflag() & libc::ICANON,
+        0,
+        "raw mode while the view runs"
+    );
+
+    // Nothing on the bus: after 5 s the hint shows at the bottom of the view.
+    let at = wait_for(&screen, at, "no bytes from");
+    wait_for(&screen, at, "check RX wiring");
+
+    // Frames: an altitude (physical ID 0) and a poll without answer.
+    let mut wire_bytes = Vec::new();
+    for i in 0..20u32 {
+        let mut f = Vec::new();
+        wire::encode_frame(&mut f, wire::header_for(0), 0x10, 0x0100, 6500 + i);
+        wire::encode_poll(&mut f, wire::header_for(3));
+        b.master.write_all(&f).unwrap();
+        wire_bytes.extend_from_slice(&f);
+        std::thread::sleep(Duration::from_millis(12));
+    }
+    let at = wait_for(&screen, at, "Alt");
+    wait_for(&screen, at, "65.19");
+
+    // Keys: sort, pause, filter (typed and applied), then quit.
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"s")
+        .unwrap();
+    let at = wait_for(&screen, at, "sort rate");
+    let mut keys = term.master.try_clone_native().unwrap();
+    keys.write_all(b"fal\r").unwrap();
+    let at = wait_for(&screen, at, "filter \"al\"");
+    keys.write_all(b"p").unwrap();
+    let at = wait_for(&screen, at, "PAUSED");
+    keys.write_all(b"q").unwrap();
+    let status = wait_exit(&mut child);
+    assert!(status.success(), "{status:?}");
+
+    // The terminal is given back: alternate screen left, cursor shown, cooked mode again (the
+    // screen reader may still be on its way to the last bytes: wait for them).
+    let left = wait_for(&screen, at, "\x1b[?1049l");
+    wait_for(&screen, left, "\x1b[?25h");
+    assert_eq!(term.lflag(), before, "terminal modes restored");
+    // What was said on stderr during the view is repeated on the terminal after it.
+    wait_for(&screen, left, "no bytes from");
+
+    // Nothing lost: the table has every frame, the recording every byte.
+    let rows = std::fs::read_to_string(&table).unwrap();
+    let alt = rows.lines().filter(|l| l.contains("\tAlt\t")).count();
+    assert_eq!(alt, 20, "{rows}");
+    assert_eq!(std::fs::read(&rec).unwrap(), wire_bytes);
+    drop(b);
+}
+
+#[test]
+fn a_silent_port_gets_the_wiring_hint_in_the_table_mode() {
+    let _g = lock();
+    let b = bus();
+    let mut child = Command::new(bin())
+        .args(["sport", "-f", "tsv"])
+        .arg(&b.path)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stderr).lines() {
+            let Ok(line) = line else { break };
+            let _ = tx.send(line);
+        }
+    });
+    let line = loop {
+        let l = rx
+            .recv_timeout(Duration::from_secs(10))
+            .expect("no hint within 10 s");
+        if l.contains("no bytes") {
+            break l;
+        }
+    };
+    assert!(
+        started.elapsed() >= Duration::from_secs(5),
+        "not before 5 s"
+    );
+    assert_eq!(
+        line,
+        format!(
+            "busnoop: no bytes from {} in 5 s: check RX wiring and that the bus is powered",
+            b.path.display()
+        )
+    );
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    wait_exit(&mut child);
+}
+
+#[test]
+fn top_needs_a_terminal_and_keeps_stdout_for_itself() {
+    let out = Command::new(bin())
+        .args(["sport", "--top", "fixtures/sport-sample.bin"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--top needs a terminal"));
+    let out = Command::new(bin())
+        .args(["sport", "--top", "-o", "-", "fixtures/sport-sample.bin"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("write the table with -o FILE"));
+}
+
+#[test]
+fn speed_paces_the_table_of_a_replay() {
+    // sport-sample.bin spans 336 ms of bus time: at --speed 1 the table takes about that long,
+    // at the default (0) no time at all.
+    let t = Instant::now();
+    let paced = Command::new(bin())
+        .args([
+            "sport",
+            "-f",
+            "tsv",
+            "--speed",
+            "1",
+            "fixtures/sport-sample.bin",
+        ])
+        .output()
+        .unwrap();
+    let took = t.elapsed();
+    assert!(paced.status.success());
+    assert!(took >= Duration::from_millis(300), "{took:?}");
+    let fast = Command::new(bin())
+        .args(["sport", "-f", "tsv", "fixtures/sport-sample.bin"])
+        .output()
+        .unwrap();
+    assert_eq!(paced.stdout, fast.stdout, "the same rows");
+    let bad = Command::new(bin())
+        .args(["sport", "--speed", "-1", "fixtures/sport-sample.bin"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
+
+#[test]
+fn ctrl_c_in_a_paced_replay_stops_like_sigint_and_restores_the_terminal() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    // 30 s of S.Port at the bus rate.
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    let long = dir.path().join("long.bin");
+    std::fs::write(&long, sample.repeat(80)).unwrap();
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args(["sport", "--top", "-o"])
+        .arg(&table)
+        .arg(&long)
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .spawn()
+        .unwrap();
+    let at = wait_for(&screen, 0, "×1");
+    let at = wait_for(&screen, at, "Volts");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"\x03")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(130));
+    let at = wait_for(&screen, at, "\x1b[?1049l");
+    wait_for(&screen, at, "interrupted after");
+    assert_eq!(term.lflag(), before);
+    // Paced: far from all of the 30 s were decoded, and what was is in the table.
+    let rows = std::fs::read_to_string(&table).unwrap().lines().count();
+    assert!(rows > 1 && rows < 2400, "{rows}");
+}
