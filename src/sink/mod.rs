@@ -64,6 +64,8 @@ pub struct Table {
     /// Number of the decoder's extra columns.
     n_extra: usize,
     counter: u64,
+    /// Rows of whole frames (with wire bytes, not an error or a note).
+    frames: u64,
     anchor: Option<Anchor>,
     header_written: bool,
     csv: csv::Writer<SharedBuf>,
@@ -108,6 +110,7 @@ impl Table {
             columns,
             n_extra: extra.len(),
             counter: 0,
+            frames: 0,
             anchor: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
@@ -123,6 +126,12 @@ impl Table {
     /// Rows written so far.
     pub fn rows(&self) -> u64 {
         self.counter
+    }
+
+    /// Rows of frames with a valid check written so far (polls, requests, answers, data; not
+    /// errors, garbage, timeouts or notes): "did anything decode".
+    pub fn frames(&self) -> u64 {
+        self.frames
     }
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
@@ -171,6 +180,9 @@ impl Table {
             self.header()?;
         }
         self.counter += 1;
+        if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
+            self.frames += 1;
+        }
         match self.opts.format {
             Format::Tsv => self.tsv(row),
             Format::Csv => self.csv_row(row),
