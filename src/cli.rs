@@ -111,7 +111,8 @@ pub struct SbusArgs {
     #[arg(long = "station", value_name = "NAME=ADDR", value_parser = crate::sbus::parse_station)]
     pub stations: Vec<(String, u8)>,
 
-    /// Ether-S-Bus UDP port (datagrams to or from it are decoded). `--port` is an old name.
+    /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
+    // `--port` was its name first; kept as a hidden alias.
     #[arg(long = "udp-port", alias = "port", value_name = "PORT",
           default_value_t = crate::sbus::DEFAULT_PORT,
           value_parser = clap::value_parser!(u16).range(1..=65_535))]

@@ -410,6 +410,7 @@ fn numeric_options_out_of_range_are_refused() {
         out_of_range(&["sbus", "--gap-ms", t], "1..=3600000");
         out_of_range(&["sab2", "--timeout-ms", t], "1..=3600000");
     }
+    out_of_range(&["sbus", "--udp-port", "0"], "1..=65535");
     out_of_range(&["sbus", "--port", "0"], "1..=65535");
     out_of_range(&["sab2", "--max-payload", "0"], "1..=255");
     for cmd in ["sport", "sbus", "sab2"] {
