@@ -518,6 +518,7 @@ pub fn run_capture(
         out.table_options(to_terminal, no_color_env),
         decoder.columns(),
     );
+    table.set_pretty_widths(protocol.pretty_widths);
     let rx = source::spawn(reader, progress);
     let ctx = Context {
         stop: &stop,

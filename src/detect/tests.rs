@@ -359,3 +359,18 @@ fn advice_after_a_run() {
         a => panic!("{a:?}"),
     }
 }
+
+#[test]
+fn every_descriptor_has_a_pretty_width_per_column() {
+    // The widths of the protocol descriptor follow its decoders' columns (every variant).
+    for kind in [Kind::Raw, Kind::Pcap] {
+        for c in candidates(kind, None) {
+            assert_eq!(
+                c.protocol.pretty_widths.len(),
+                crate::row::BASE_COLUMNS.len() + c.decoder.columns().len(),
+                "{}",
+                c.label
+            );
+        }
+    }
+}
