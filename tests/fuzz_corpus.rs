@@ -1,6 +1,8 @@
 //! Replays the committed, minimized fuzz corpus (`fuzz/corpus/<target>/`) and the fuzz seeds
 //! through the same invariant checks the fuzz targets run (`busnoop::selfcheck`), so CI keeps
 //! every input the fuzzers found interesting without running a fuzzer.
+//!
+//! The published crate carries the seeds only (the corpus is 28 MB); its tests replay those.
 
 use std::path::PathBuf;
 
