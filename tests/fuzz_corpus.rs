@@ -2,7 +2,8 @@
 //! through the same invariant checks the fuzz targets run (`busnoop::selfcheck`), so CI keeps
 //! every input the fuzzers found interesting without running a fuzzer.
 //!
-//! The published crate carries the seeds only (the corpus is 28 MB); its tests replay those.
+//! Not in the published crate (Cargo.toml `exclude`): it reads `fuzz/`, which stays in the
+//! repository.
 
 use std::path::PathBuf;
 
