@@ -27,7 +27,8 @@ use crate::top::view::Info;
              JSON Lines.",
     after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
-                  130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  10 nothing decoded (empty input, or no frame of the protocol), \
+                  11 detect: no known protocol, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -41,22 +42,56 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC (57600 baud).
+    #[command(mut_arg("source", |a| a.help(SPORT_SOURCE)))]
     Sport(SportArgs),
     /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
     /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
+    #[command(mut_arg("source", |a| a.help(SBUS_SOURCE)))]
     Sbus(SbusArgs),
     /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
     /// requests paired with responses.
-    #[command(visible_alias = "sab")]
+    #[command(visible_alias = "sab", mut_arg("source", |a| a.help(SAB_SOURCE)))]
     Sab2(SabArgs),
+    /// Which protocol is on this wire? Tries every protocol (S-Bus modes, SAB framings) on a
+    /// file's first megabytes, or on a serial port at the usual baud rates, and prints the
+    /// verdict, the evidence and the command to run.
+    Detect(crate::detect::DetectArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
+    /// Print the shell completion script for SHELL on standard output (see README, "Install").
+    Completions {
+        /// The shell to complete in.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page busnoop(1) (roff) on standard output, or with --dir write one page
+    /// per command into a directory.
+    Man {
+        /// Write busnoop.1, busnoop-sport.1, … into this directory instead.
+        #[arg(long, value_name = "DIR")]
+        dir: Option<PathBuf>,
+    },
 }
+
+/// The subcommands that are not a protocol.
+pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "completions", "man"];
+
+/// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
+const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
+     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap \
+     recording) or `-` for standard input. File kinds are recognised by content.";
+/// `SOURCE` in `busnoop sbus --help`.
+const SBUS_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
+     a capture file (raw wire bytes, a busnoop .pcap recording, a pcap/pcapng capture of \
+     Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w -` pipe). File kinds \
+     are recognised by content; `--baud` also sets the byte times of raw files.";
+/// `SOURCE` in `busnoop sab2 --help`.
+const SAB_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
+     a capture file (raw wire bytes, a busnoop .pcap recording) or `-` for standard input. File \
+     kinds are recognised by content; `--baud` also sets the byte times of raw files.";
 
 #[derive(Args, Debug)]
 pub struct SbusArgs {
-    /// SOURCE may also be a pcap/pcapng capture of Ether-S-Bus traffic (or a `tcpdump -U -w -`
-    /// pipe on standard input); `--baud` also sets the byte times of raw files.
     #[command(flatten)]
     pub capture: CaptureArgs,
 
@@ -80,7 +115,9 @@ pub struct SbusArgs {
     pub stations: Vec<(String, u8)>,
 
     /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
-    #[arg(long, default_value_t = crate::sbus::DEFAULT_PORT,
+    // `--port` was its name first; kept as a hidden alias.
+    #[arg(long = "udp-port", alias = "port", value_name = "PORT",
+          default_value_t = crate::sbus::DEFAULT_PORT,
           value_parser = clap::value_parser!(u16).range(1..=65_535))]
     pub port: u16,
 }
@@ -197,9 +234,7 @@ pub struct SportArgs {
 /// SOURCE and the options every protocol shares.
 #[derive(Args, Debug, Clone)]
 pub struct CaptureArgs {
-    /// What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a capture file
-    /// (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap recording, a pcap of the protocol's
-    /// network traffic) or `-` for standard input. File kinds are recognised by content.
+    /// What to read (each subcommand names the sources it accepts).
     pub source: PathBuf,
 
     #[command(flatten)]
@@ -369,8 +404,12 @@ fn init_tracing(verbose: u8) {
         _ => "trace",
     };
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
+    // Colour codes only on a terminal (and not with NO_COLOR): `-v 2>log` stays plain text.
+    let ansi = std::io::stderr().is_terminal()
+        && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
+        .with_ansi(ansi)
         .with_writer(std::io::stderr)
         .with_target(false)
         .try_init();
@@ -388,7 +427,10 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sab2(args) => run_capture(&args.capture, &crate::sab::PROTOCOL, |_, line| {
             crate::sab::decoder(args.options(line.baud))
         }),
+        Command::Detect(args) => crate::detect::run(&args),
         Command::Ports => list_ports(),
+        Command::Completions { shell } => crate::manual::completions(shell),
+        Command::Man { dir } => crate::manual::man(dir.as_deref()),
     }
 }
 
@@ -463,12 +505,24 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    let keep_input = args.live.record.is_some();
+    // A capture reader hands on its input bytes for --record, and for the wrong-protocol check
+    // after the run (which looks at the first megabytes only).
+    let keep_input = args.live.record.is_some() || !matches!(input, Input::Device(_));
     let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
     }
+    for note in option_notes(&args.output, kind) {
+        eprintln!("busnoop: note: {note}");
+    }
+    // Files and streams: keep their start, to tell a wrong protocol afterwards.
+    let (reader, kept): (Box<dyn ChunkReader>, _) = if kind == Kind::Serial {
+        (reader, None)
+    } else {
+        let (tee, kept) = crate::detect::Tee::new(reader);
+        (Box::new(tee), Some(kept))
+    };
     let mut decoder = decoder_for(kind, &line);
 
     let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
@@ -489,11 +543,13 @@ pub fn run_capture(
             };
             let to_terminal = file.is_none() && std::io::stdout().is_terminal();
             let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-            Some(Table::new(
+            let mut table = Table::new(
                 output,
                 out.table_options(to_terminal, no_color_env),
                 decoder.columns(),
-            ))
+            );
+            table.set_pretty_widths(protocol.pretty_widths);
+            Some(table)
         }
     };
     let live = kind == Kind::Serial;
@@ -547,7 +603,59 @@ pub fn run_capture(
         (result, table.rows())
     };
     report(decoder.as_ref(), out.stats, protocol.name, rows, &result);
+    // Frames that decoded: the table counts its frame rows; the view alone has the decoder's count.
+    let frames = table
+        .as_ref()
+        .map_or(decoder.valid_frames(), |t| t.frames());
+    // A clean run needs no second look; otherwise the start of the input is scored against
+    // every protocol (`busnoop detect`'s scoring).
+    if result.is_ok()
+        && let Some(kept) = kept
+        && (decoder.problems().line().is_some() || frames == 0)
+        && let Ok(kept) = kept.lock()
+    {
+        use crate::detect::{Advice, advise};
+        match advise(protocol, kind, &kept, frames, &args.source) {
+            Advice::Fine => {}
+            Advice::Note(n) => eprintln!("busnoop: {n}"),
+            Advice::NothingDecoded(m) => return Err(Failure::NothingDecoded(m)),
+        }
+    }
     result
+}
+
+/// Notes on options that cannot do what they ask for this input or output: `--time abs` on a
+/// source without times, `--utc` on times without a zone (or without `--time abs`), an `-o`
+/// extension that names no format.
+fn option_notes(out: &OutputArgs, kind: Kind) -> Vec<String> {
+    let mut notes = Vec::new();
+    if out.time == TimeMode::Abs && kind == Kind::Raw {
+        notes.push(
+            "--time abs: raw wire bytes carry no wall-clock time, so the Time column stays \
+             empty (a recording made with --record FILE.pcap keeps the times)"
+                .to_string(),
+        );
+    }
+    if out.utc && out.time != TimeMode::Abs {
+        notes.push("--utc has an effect only with --time abs".to_string());
+    } else if out.utc && kind == Kind::EdgeTxLog {
+        notes.push(
+            "--utc: an EdgeTX log's times have no time zone; they are shown as logged".to_string(),
+        );
+    }
+    if out.format.is_none()
+        && let Some(p) = out.output_file()
+        && let Some(ext) = p.extension()
+        && Format::from_path(p).is_none()
+    {
+        notes.push(format!(
+            "-o {}: .{} is not a format busnoop writes; the table is TSV (tab-separated). Use \
+             .csv, .tsv, .jsonl or .txt, or --format",
+            p.display(),
+            ext.to_string_lossy()
+        ));
+    }
+    notes
 }
 
 /// `--top` draws on standard output, which must be a terminal and carry nothing else.
@@ -787,7 +895,7 @@ mod tests {
         let subcommands: Vec<String> = Cli::command()
             .get_subcommands()
             .map(|c| c.get_name().to_owned())
-            .filter(|n| n != "ports")
+            .filter(|n| !OTHER_COMMANDS.contains(&n.as_str()))
             .collect();
         assert_eq!(subcommands, table);
     }

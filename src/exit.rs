@@ -27,6 +27,11 @@ pub mod code {
     pub const OUTPUT: u8 = 8;
     /// Reading the input failed after it was opened, or its content cannot be used.
     pub const INPUT: u8 = 9;
+    /// Nothing decoded: the input was empty, or holds no frame of the protocol (files and
+    /// streams); `detect`: no bytes arrived on a serial line.
+    pub const NOTHING_DECODED: u8 = 10;
+    /// `detect`: bytes, but no known protocol in them.
+    pub const NO_PROTOCOL: u8 = 11;
     /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
     pub const SIGINT: u8 = 130;
     /// Standard output was closed by the reader (`busnoop … | head`): 128 + 13 (SIGPIPE).
@@ -58,6 +63,10 @@ pub enum Failure {
     Signal(Interrupt),
     /// Standard output closed by the reader: quiet.
     BrokenPipe,
+    /// Nothing decoded (an empty input, or no frame of the protocol), with the message.
+    NothingDecoded(String),
+    /// `detect` recognised no protocol.
+    NoProtocol(String),
     /// A combination of options that cannot work (clap reports the other usage errors).
     Usage(String),
     /// Anything else.
@@ -101,6 +110,8 @@ impl Failure {
             Failure::Disconnected { .. } => code::DISCONNECTED,
             Failure::Output(_) => code::OUTPUT,
             Failure::Input(_) => code::INPUT,
+            Failure::NothingDecoded(_) => code::NOTHING_DECODED,
+            Failure::NoProtocol(_) => code::NO_PROTOCOL,
             Failure::Signal(i) if i.signal == libc::SIGTERM => code::SIGTERM,
             Failure::Signal(_) => code::SIGINT,
             Failure::BrokenPipe => code::BROKEN_PIPE,
@@ -163,9 +174,12 @@ impl fmt::Display for Failure {
                 count(*frames, "frame", "frames"),
                 path.display()
             ),
-            Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) | Failure::Usage(m) => {
-                f.write_str(m)
-            }
+            Failure::Output(m)
+            | Failure::Input(m)
+            | Failure::Internal(m)
+            | Failure::Usage(m)
+            | Failure::NothingDecoded(m)
+            | Failure::NoProtocol(m) => f.write_str(m),
             Failure::Signal(i) => write!(f, "stopped by signal {}", i.signal),
             Failure::BrokenPipe => f.write_str("output closed"),
         }

@@ -8,8 +8,10 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 pub mod cli;
+pub mod detect;
 pub mod exit;
 pub mod fmt;
+pub mod manual;
 pub mod pace;
 pub mod pairing;
 pub mod pcap;

@@ -102,6 +102,10 @@ pub struct Protocol {
     /// The same in words, for the message that refuses another kind ("raw wire bytes, EdgeTX
     /// logs or busnoop recordings").
     pub accepts_text: &'static str,
+    /// Pretty output: the width of each column, the eight base columns and then the decoder's
+    /// extra columns in order (the last one's is unused: it is not padded). A column grows for
+    /// a longer value.
+    pub pretty_widths: &'static [usize],
 }
 
 impl Protocol {

@@ -1,6 +1,9 @@
 //! Replays the committed, minimized fuzz corpus (`fuzz/corpus/<target>/`) and the fuzz seeds
 //! through the same invariant checks the fuzz targets run (`busnoop::selfcheck`), so CI keeps
 //! every input the fuzzers found interesting without running a fuzzer.
+//!
+//! Not in the published crate (Cargo.toml `exclude`): it reads `fuzz/`, which stays in the
+//! repository.
 
 use std::path::PathBuf;
 

@@ -43,22 +43,30 @@ const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\
 
 #[test]
 fn empty_file() {
+    // An empty input is said so, with the exit code of "nothing decoded" (10).
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("empty.bin");
     std::fs::write(&p, b"").unwrap();
     let out = busnoop().arg("sport").arg(&p).output().unwrap();
     no_panic(&out);
-    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(out.status.code(), Some(10));
     assert_eq!(text(&out.stdout), format!("{HEADER}\n"));
-    assert_eq!(text(&out.stderr), "");
+    assert_eq!(
+        text(&out.stderr),
+        format!("busnoop: empty input: {} holds no bytes\n", p.display())
+    );
     // Empty standard input too.
     let out = busnoop()
         .args(["sport", "-"])
         .stdin(Stdio::null())
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(out.status.code(), Some(10));
     assert_eq!(text(&out.stdout), format!("{HEADER}\n"));
+    assert_eq!(
+        text(&out.stderr),
+        "busnoop: empty input: standard input holds no bytes\n"
+    );
 }
 
 #[test]
@@ -99,11 +107,19 @@ fn random_bytes() {
     std::fs::write(&p, &bytes).unwrap();
     let out = busnoop().args(["sport", "--raw"]).arg(&p).output().unwrap();
     no_panic(&out);
+    // A valid frame or two turn up in noise by chance: exit 0, the summary line, and a note
+    // that almost nothing decodes and no protocol fits.
     assert_eq!(out.status.code(), Some(0));
     let err = text(&out.stderr);
-    assert!(err.starts_with("busnoop: S.Port: "), "{err}");
-    assert!(err.contains("garbage bytes skipped"), "{err}");
-    assert_eq!(err.lines().count(), 1);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 2, "{err}");
+    assert!(lines[0].starts_with("busnoop: S.Port: "), "{err}");
+    assert!(lines[0].contains("garbage bytes skipped"), "{err}");
+    assert!(
+        lines[1].starts_with("busnoop: note: only <0.1% of the bytes are in valid S.Port frames")
+            && lines[1].ends_with("finds no known protocol in it"),
+        "{err}"
+    );
     // Every input byte is in the Raw column of exactly one row.
     let stdout = text(&out.stdout);
     let raw_bytes: usize = stdout
@@ -123,16 +139,24 @@ fn random_bytes() {
 
 #[test]
 fn wrong_protocol_for_the_file() {
-    // A Saia S-Bus data-mode session is not S.Port: no valid frame, shown as garbage, one line.
+    // Bytes that are no S.Port: no valid frame, shown as garbage, the summary line, then the
+    // "nothing decoded" failure (exit 10) pointing at `busnoop detect`.
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("sbus.bin");
     let telegram = [0xB5, 0x00, 0x01, 0x06, 0x00, 0x00, 0x0A, 0x12, 0x34];
     std::fs::write(&p, telegram.repeat(50)).unwrap();
     let out = busnoop().arg("sport").arg(&p).output().unwrap();
     no_panic(&out);
-    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(out.status.code(), Some(10));
     let err = text(&out.stderr);
     assert!(err.contains("in 0 valid frames"), "{err}");
+    assert!(
+        err.ends_with(&format!(
+            "busnoop: no S.Port frame in {0}; `busnoop detect {0}` finds no known protocol in it\n",
+            p.display()
+        )),
+        "{err}"
+    );
     // A pcap of network traffic given to the S.Port decoder is refused with a reason.
     let mut pcap = vec![0xD4, 0xC3, 0xB2, 0xA1, 2, 0, 4, 0];
     pcap.extend_from_slice(&[0; 8]);
@@ -356,26 +380,43 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
     let noisy = dir.path().join("noise.bin");
     std::fs::write(&noisy, noise(50_000, 0x9E37_79B9_7F4A_7C15)).unwrap();
     for p in PROTOCOLS {
-        // Empty: the header only, nothing on stderr.
+        // Empty: the header only, "empty input", exit 10.
         let out = busnoop().arg(p).arg(&empty).output().unwrap();
         no_panic(&out);
-        assert_eq!(out.status.code(), Some(0), "{p}");
+        assert_eq!(out.status.code(), Some(10), "{p}");
         assert_eq!(text(&out.stdout).lines().count(), 1, "{p}");
         assert!(
             text(&out.stdout)
                 .starts_with("Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData")
         );
-        assert_eq!(text(&out.stderr), "", "{p}");
-        // Random bytes: rows, exit 0, one summary line naming what went wrong.
+        assert_eq!(
+            text(&out.stderr),
+            format!("busnoop: empty input: {} holds no bytes\n", empty.display()),
+            "{p}"
+        );
+        // Random bytes: rows, the summary line naming what went wrong, and the word that no
+        // protocol fits: a note (exit 0) when a frame turned up by chance, else exit 10.
         let out = busnoop().arg(p).arg(&noisy).output().unwrap();
         no_panic(&out);
-        assert_eq!(out.status.code(), Some(0), "{p}");
         let err = text(&out.stderr);
-        assert_eq!(err.lines().count(), 1, "{p}: {err}");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 2, "{p}: {err}");
         assert!(
-            err.starts_with("busnoop: ") && err.contains("garbage"),
+            lines[0].starts_with("busnoop: ") && lines[0].contains("garbage"),
             "{p}: {err}"
         );
+        assert!(
+            lines[1].ends_with("finds no known protocol in it"),
+            "{p}: {err}"
+        );
+        // No row of a whole frame at all: "no … frame"; some by chance: a note.
+        let expected = if lines[1].starts_with("busnoop: no ") {
+            10
+        } else {
+            assert!(lines[1].starts_with("busnoop: note: "), "{p}: {err}");
+            0
+        };
+        assert_eq!(out.status.code(), Some(expected), "{p}: {err}");
         assert!(text(&out.stdout).lines().count() > 10, "{p}");
         // Missing file and directory.
         let out = busnoop()
@@ -454,7 +495,7 @@ fn pcap_with_a_link_type_that_is_not_network_traffic() {
     std::fs::write(&p, &pcap).unwrap();
     let out = busnoop().arg("sbus").arg(&p).output().unwrap();
     no_panic(&out);
-    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(out.status.code(), Some(10), "nothing decoded");
     let stdout = text(&out.stdout);
     assert_eq!(stdout.lines().count(), 2, "{stdout}");
     assert!(
@@ -467,7 +508,11 @@ fn pcap_with_a_link_type_that_is_not_network_traffic() {
     );
     assert_eq!(
         text(&out.stderr),
-        "busnoop: S-Bus: 3 packets of a link type that is not network traffic skipped in 0 valid telegrams\n"
+        format!(
+            "busnoop: S-Bus: 3 packets of a link type that is not network traffic skipped in 0 valid telegrams\n\
+             busnoop: no S-Bus frame in {0}; `busnoop detect {0}` finds no known protocol in it\n",
+            p.display()
+        )
     );
     for proto in ["sport", "sab2"] {
         let out = busnoop().arg(proto).arg(&p).output().unwrap();
@@ -482,13 +527,16 @@ fn pcap_with_a_link_type_that_is_not_network_traffic() {
 
 #[test]
 fn wrong_protocol_for_every_decoder() {
-    // Each protocol's own sample given to the other decoders: no panic, exit 0, a summary line.
+    // Each protocol's own sample given to the other decoders: no panic, the summary line, then
+    // the protocol that fits with the command to run: exit 10 when nothing decoded, else a
+    // note and exit 0 (S-Bus break mode reads S.Port's zero keep-alives as telegrams).
     let samples = [
-        ("sport", fixture("sport-sample.bin")),
-        ("sab2", fixture("sab2-session.bin")),
-        ("sbus", fixture("sbus-digimat.pcap")),
+        ("sport", fixture("sport-sample.bin"), "busnoop sport"),
+        ("sab2", fixture("sab2-session.bin"), "busnoop sab2"),
+        ("sab2", fixture("sab1-session.bin"), "busnoop sab2"),
+        ("sbus", fixture("sbus-digimat.pcap"), "busnoop sbus"),
     ];
-    for (own, file) in &samples {
+    for (own, file, command) in &samples {
         for p in PROTOCOLS.iter().filter(|p| *p != own) {
             let out = busnoop().arg(p).arg(file).output().unwrap();
             no_panic(&out);
@@ -497,12 +545,86 @@ fn wrong_protocol_for_every_decoder() {
             if file.extension().is_some_and(|e| e == "pcap") {
                 // A pcap of network traffic is refused by the serial-only decoders.
                 assert_eq!(code, Some(9), "{p} on {own}: {err}");
+                continue;
+            }
+            let lines: Vec<&str> = err.lines().collect();
+            assert_eq!(lines.len(), 2, "{p} on {own}: {err}");
+            let suggestion = format!("; try: {command} {}", file.display());
+            assert!(lines[1].ends_with(&suggestion), "{p} on {own}: {err}");
+            if lines[1].starts_with("busnoop: no ") {
+                assert_eq!(code, Some(10), "{p} on {own}: {err}");
             } else {
                 assert_eq!(code, Some(0), "{p} on {own}: {err}");
-                assert_eq!(err.lines().count(), 1, "{p} on {own}: {err}");
+                assert!(
+                    lines[1].starts_with("busnoop: note: "),
+                    "{p} on {own}: {err}"
+                );
             }
         }
     }
+}
+
+#[test]
+fn sbus_on_an_sport_capture_names_sport() {
+    // The case of the issue: break mode reads S.Port's zero keep-alives as 16 valid telegrams.
+    let file = fixture("sport-sample.bin");
+    let out = busnoop().arg("sbus").arg(&file).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "busnoop: S-Bus: 2 CRC errors, 97 garbage bytes skipped (17 runs), 1 timeout in 16 valid telegrams\n\
+             busnoop: note: only 49.1% of the bytes are in valid S-Bus frames; it looks like S.Port \
+             (100.0% of the bytes in 30 valid frames); try: busnoop sport {}\n",
+            file.display()
+        )
+    );
+}
+
+#[test]
+fn sport_on_a_text_file_is_nothing_decoded() {
+    let file = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+    let out = busnoop().arg("sport").arg(&file).output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(10));
+    let err = text(&out.stderr);
+    assert!(
+        err.ends_with(&format!(
+            "busnoop: no S.Port frame in {0}; `busnoop detect {0}` finds no known protocol in it\n",
+            file.display()
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn wrong_options_for_the_right_protocol() {
+    // Ether-S-Bus on another UDP port: nothing decodes with these options, the defaults do.
+    let file = fixture("sbus-digimat.pcap");
+    let out = busnoop()
+        .args(["sbus", "--udp-port", "5051"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(10));
+    let err = text(&out.stderr);
+    assert!(
+        err.ends_with(&format!(
+            "busnoop: no S-Bus frame in {0} with these options, but 100.0% of its bytes are in \
+             valid Ether-S-Bus frames with the defaults; try: busnoop sbus {0}\n",
+            file.display()
+        )),
+        "{err}"
+    );
+    // The old name of the option still works (hidden).
+    let out = busnoop()
+        .args(["sbus", "--port", "5050"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
 }
 
 #[test]

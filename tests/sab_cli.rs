@@ -183,7 +183,27 @@ fn generated_capture_every_framing_option() {
         }
         // The wrong framing finds nothing and says so.
         let wrong = framing.other().name();
-        let (t, stderr) = run_tsv(&["sab2", p, "--framing", wrong]);
+        let out = busnoop()
+            .args(["sab2", p, "--framing", wrong, "-f", "tsv"])
+            .assert()
+            .code(10);
+        let o = out.get_output();
+        let (t, stderr) = (
+            Table::parse(&o.stdout),
+            String::from_utf8(o.stderr.clone()).unwrap(),
+        );
+        assert!(
+            stderr.ends_with(&format!(
+                "with these options, but 100.0% of its bytes are in valid {} frames with the \
+                 defaults; try: busnoop sab2 {p}\n",
+                if framing == Framing::Sync {
+                    "SAB v1 (sync framing)"
+                } else {
+                    "SAB2 (HDLC framing)"
+                }
+            )),
+            "{stderr}"
+        );
         assert!(
             t.column("Type")
                 .iter()

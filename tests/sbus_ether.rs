@@ -567,7 +567,21 @@ fn another_port() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("p.pcap");
     std::fs::write(&path, &f).unwrap();
-    assert!(busnoop_rows(&path, &[]).is_empty());
+    // Nothing on the default port: nothing decoded (exit 10), said so.
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .arg("sbus")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(10), "{out:?}");
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 1);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).starts_with("busnoop: no S-Bus frame in "),
+        "{out:?}"
+    );
+    let rows = busnoop_rows(&path, &["--udp-port", "6060"]);
+    assert_eq!(rows.len(), 1);
     let rows = busnoop_rows(&path, &["--port", "6060"]);
     assert_eq!(rows.len(), 1);
     assert_eq!(
@@ -716,7 +730,20 @@ fn broken_captures_are_reported_not_fatal() {
     pw::record(&mut f, 30, &frame);
     let path = dir.path().join("odd.pcap");
     std::fs::write(&path, &f).unwrap();
-    let rows = busnoop_rows(&path, &[]);
+    // Not one valid telegram: exit 10 (nothing decoded), the rows still written.
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .args(["sbus", "-f", "tsv"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(10), "{out:?}");
+    let rows: Vec<Vec<String>> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').map(str::to_owned).collect())
+        .collect();
     assert_eq!(rows.len(), 3, "{rows:?}");
     assert_eq!(rows[0][4], "Garbage");
     assert_eq!(rows[1][4], "Truncated");

@@ -48,7 +48,10 @@ fn decode(bytes: &[u8], args: &[&str]) -> Vec<Row> {
         .args(args)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{out:?}");
+    // A vector that is only a bad telegram decodes nothing: exit 10, said on stderr.
+    let nothing = out.status.code() == Some(10)
+        && String::from_utf8_lossy(&out.stderr).contains("busnoop: no S-Bus frame in ");
+    assert!(out.status.success() || nothing, "{out:?}");
     let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
     assert_eq!(

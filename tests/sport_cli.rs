@@ -233,12 +233,22 @@ fn problems_give_one_line_without_stats() {
         .arg(bad_crc_capture(&dir))
         .output()
         .unwrap();
-    assert!(out.status.success());
+    // Not one valid frame: the summary line, then what that means, exit 10.
+    assert_eq!(out.status.code(), Some(10));
     let err = String::from_utf8(out.stderr).unwrap();
+    let lines: Vec<&str> = err.lines().collect();
     assert_eq!(
-        err,
-        "busnoop: S.Port: 14 CRC errors, 1 truncated frame in 0 valid frames\n"
+        lines[0],
+        "busnoop: S.Port: 14 CRC errors, 1 truncated frame in 0 valid frames"
     );
+    assert!(
+        lines[1].starts_with("busnoop: no valid S.Port frame in ")
+            && lines[1].contains(
+                "though 14 frames with a bad check and 1 truncated frame look like S.Port"
+            ),
+        "{err}"
+    );
+    assert_eq!(lines.len(), 2, "{err}");
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(
         text.lines().filter(|l| l.contains("\tBadCRC\t")).count(),
@@ -342,9 +352,12 @@ fn empty_file_gives_just_the_header() {
         .arg("sport")
         .arg(&empty)
         .assert()
-        .success()
+        .code(10)
         .stdout("Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote\n")
-        .stderr("");
+        .stderr(format!(
+            "busnoop: empty input: {} holds no bytes\n",
+            empty.display()
+        ));
 }
 
 #[test]

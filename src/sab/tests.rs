@@ -1060,6 +1060,8 @@ proptest! {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
+    // The self dev-dependency turns the checks on; a published crate's tests go without them.
+    #[cfg(feature = "selfcheck")]
     #[test]
     fn selfcheck_on_random_sessions_and_noise(
         framing in framing(),

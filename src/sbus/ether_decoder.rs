@@ -545,6 +545,6 @@ impl Decoder for EtherDecoder {
     }
 
     fn no_frames_hint(&self) -> &'static str {
-        "no Ether-S-Bus datagram yet: check the UDP port (--port) and the tcpdump filter"
+        "no Ether-S-Bus datagram yet: check the UDP port (--udp-port) and the tcpdump filter"
     }
 }

@@ -42,6 +42,9 @@ pub const PROTOCOL: Protocol = Protocol {
         Kind::Pcapng,
     ],
     accepts_text: "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
+    // Counter Millis ID Device(IP:port) Type Sensor#(DB4000[2]) Sensor(command) Data | Resp ms
+    // Seq Note
+    pretty_widths: &[7, 8, 3, 15, 9, 9, 22, 40, 7, 5, 0],
 };
 
 /// Ether-S-Bus server port.

@@ -61,9 +61,13 @@ pub struct Table {
     opts: TableOptions,
     out: Output,
     columns: Vec<&'static str>,
+    /// Pretty output: the width of each column now (they only grow).
+    widths: Vec<usize>,
     /// Number of the decoder's extra columns.
     n_extra: usize,
     counter: u64,
+    /// Rows of whole frames (with wire bytes, not an error or a note).
+    frames: u64,
     anchor: Option<Anchor>,
     header_written: bool,
     csv: csv::Writer<SharedBuf>,
@@ -88,8 +92,13 @@ impl io::Write for SharedBuf {
     }
 }
 
-/// Pretty-output column widths for the base columns.
+/// Pretty-output column widths for the base columns, when the protocol gives none (see
+/// [`crate::protocol::Protocol::pretty_widths`]).
 const PRETTY_WIDTHS: [usize; 8] = [7, 8, 3, 10, 9, 8, 10, 30];
+
+/// A pretty column grows to fit a longer value (and stays that wide, so later rows stay
+/// aligned with each other) up to this many characters; a longer value overflows its row only.
+pub const PRETTY_GROW_MAX: usize = 60;
 
 impl Table {
     pub fn new(out: Output, opts: TableOptions, extra: &[&'static str]) -> Self {
@@ -102,12 +111,19 @@ impl Table {
             columns.push("Time");
         }
         let csv_buf = SharedBuf::default();
+        let widths = columns
+            .iter()
+            .enumerate()
+            .map(|(i, c)| PRETTY_WIDTHS.get(i).copied().unwrap_or(c.len().max(4)))
+            .collect();
         Table {
             opts,
             out,
             columns,
+            widths,
             n_extra: extra.len(),
             counter: 0,
+            frames: 0,
             anchor: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
@@ -120,9 +136,24 @@ impl Table {
         }
     }
 
+    /// Sets the pretty widths of the first columns (the base columns and the protocol's extra
+    /// columns, in order: the protocol descriptor's `pretty_widths`); never narrower than a
+    /// column's name. Call before the header is written.
+    pub fn set_pretty_widths(&mut self, widths: &[usize]) {
+        for ((w, &new), name) in self.widths.iter_mut().zip(widths).zip(&self.columns) {
+            *w = new.max(name.chars().count());
+        }
+    }
+
     /// Rows written so far.
     pub fn rows(&self) -> u64 {
         self.counter
+    }
+
+    /// Rows of frames with a valid check written so far (polls, requests, answers, data; not
+    /// errors, garbage, timeouts or notes): "did anything decode".
+    pub fn frames(&self) -> u64 {
+        self.frames
     }
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
@@ -152,7 +183,7 @@ impl Table {
                 self.move_csv();
             }
             Format::Pretty => {
-                let line = self.pretty_line(cols.iter().copied(), &[true; 3]);
+                let line = self.pretty_line(cols.iter().copied(), &[true; 3], false);
                 let buf = self.out.buf();
                 if self.opts.color {
                     let _ = writeln!(buf, "{}", line.bold());
@@ -171,6 +202,9 @@ impl Table {
             self.header()?;
         }
         self.counter += 1;
+        if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
+            self.frames += 1;
+        }
         match self.opts.format {
             Format::Tsv => self.tsv(row),
             Format::Csv => self.csv_row(row),
@@ -401,7 +435,7 @@ impl Table {
         if let Some(t) = &time {
             cells.push(t);
         }
-        let line = self.pretty_line(cells.into_iter(), &[true, true, true]);
+        let line = self.pretty_line(cells.into_iter(), &[true, true, true], true);
         let style = match row.class {
             Class::Plain => None,
             Class::Quiet => Some(Style::new().dimmed()),
@@ -421,8 +455,15 @@ impl Table {
         }
     }
 
-    /// Pads cells to the pretty widths; the first `right.len()` columns are right-aligned.
-    fn pretty_line<'a>(&self, cells: impl Iterator<Item = &'a str>, right: &[bool]) -> String {
+    /// Pads cells to the pretty widths; the first `right.len()` columns are right-aligned. With
+    /// `grow`, a column whose value is longer than its width (up to [`PRETTY_GROW_MAX`]) widens
+    /// for this row and every later one.
+    fn pretty_line<'a>(
+        &mut self,
+        cells: impl Iterator<Item = &'a str>,
+        right: &[bool],
+        grow: bool,
+    ) -> String {
         let mut line = String::new();
         let cells: Vec<&str> = cells.collect();
         let n = cells.len();
@@ -431,12 +472,15 @@ impl Table {
             if i > 0 {
                 line.push_str("  ");
             }
-            let width = PRETTY_WIDTHS
-                .get(i)
-                .copied()
-                .unwrap_or_else(|| self.columns.get(i).map_or(0, |c| c.len().max(4)));
             let last = i + 1 == n;
             let len = cell.chars().count();
+            if i >= self.widths.len() {
+                self.widths.push(4);
+            }
+            if grow && !last && len > self.widths[i] && len <= PRETTY_GROW_MAX {
+                self.widths[i] = len;
+            }
+            let width = self.widths[i];
             if i < right.len() && right[i] {
                 line.extend(std::iter::repeat_n(' ', width.saturating_sub(len)));
                 line.push_str(&cell);
@@ -595,6 +639,83 @@ mod tests {
         let lines: Vec<&str> = s.lines().collect();
         assert!(lines[0].starts_with("Counter    Millis   ID  Device"));
         assert!(lines[1].starts_with("      1      4280    0  Vario"));
+    }
+
+    /// Where each column of a pretty line starts (after a run of two spaces).
+    fn starts(line: &str) -> Vec<usize> {
+        let b = line.as_bytes();
+        (1..b.len())
+            .filter(|&i| b[i] != b' ' && i >= 2 && b[i - 1] == b' ' && b[i - 2] == b' ')
+            .collect()
+    }
+
+    #[test]
+    fn pretty_columns_come_from_the_protocol_and_grow_for_long_values() {
+        let opts = TableOptions {
+            format: Format::Pretty,
+            color: false,
+            raw: false,
+            time_abs: false,
+            utc: false,
+        };
+        let mut t = Table::new(Output::memory(), opts, &["Resp ms", "Note"]);
+        t.set_pretty_widths(&[7, 8, 3, 15, 9, 9, 12, 10, 3, 0]);
+        t.header().unwrap();
+        let row = |device: &'static str, data: &'static str| Row {
+            micros: Some(1000),
+            id: Some(10),
+            device,
+            kind: "Request",
+            class: Class::Plain,
+            sensor_no: "R0",
+            sensor: "Read",
+            data,
+            extra: &["1.5", "note"],
+            raw: &[],
+        };
+        t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+        // Longer than its column: the column grows, here and for every later row.
+        t.write(&row("192.168.100.200:5050", "R0=1")).unwrap();
+        t.write(&row("10.0.0.1:5050", "R0=12345678 R1=2")).unwrap();
+        t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+        // Beyond the limit: this row overflows, the column keeps its width.
+        let huge: &'static str = Box::leak("x".repeat(PRETTY_GROW_MAX + 1).into_boxed_str());
+        t.write(&row("10.0.0.1:5050", huge)).unwrap();
+        t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+        t.flush().unwrap();
+        let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        // The protocol's widths ("Resp ms" is wider than its 3).
+        assert_eq!(
+            lines[0],
+            "Counter    Millis   ID  Device           Type       Sensor #   Sensor        Data        Resp ms  Note"
+        );
+        // The starts of the seven left-aligned columns (Device to Note).
+        let left = |l: &str| {
+            let s = starts(l);
+            s[s.len() - 7..].to_vec()
+        };
+        assert_eq!(left(lines[1]), left(lines[0]), "the header's widths");
+        let grown = left(lines[2]);
+        assert_eq!(grown[0], left(lines[1])[0], "Device starts where it did");
+        assert_eq!(
+            grown[1],
+            left(lines[1])[1] + "192.168.100.200:5050".len() - 15,
+            "Type moves by what Device grew"
+        );
+        let data_grown = left(lines[3]);
+        assert_eq!(data_grown[..5], grown[..5]);
+        assert_eq!(data_grown[5], grown[5] + "R0=12345678 R1=2".len() - 10);
+        assert_eq!(
+            left(lines[4]),
+            data_grown,
+            "later rows keep the grown widths"
+        );
+        assert_eq!(
+            left(lines[6]),
+            data_grown,
+            "an overflow does not widen the column"
+        );
     }
 
     #[test]

@@ -30,6 +30,8 @@ pub const PROTOCOL: Protocol = Protocol {
     line: Line::n81(DEFAULT_BAUD),
     accepts: &[Kind::Raw, Kind::Serial, Kind::EdgeTxLog, Kind::Recording],
     accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
+    // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
+    pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 30, 4, 0],
 };
 
 /// Extra columns after the eight base columns.

@@ -1,0 +1,942 @@
+//! `busnoop detect SOURCE`: which protocol is on this wire?
+//!
+//! Every protocol of [`crate::protocols::PROTOCOLS`] that reads the input's kind is tried in
+//! each of its variants (S-Bus modes, SAB framings, S.Port on an inverted line), each through
+//! the protocol's own `decoder(...)`, on the first [`SCAN_BYTES`] of a file or on a few
+//! seconds of a serial port at each usual baud rate. A variant's score is the share of the
+//! input's bytes that lie inside frames with a valid check; the evidence (frames, CRC errors,
+//! truncated frames, garbage, the bytes frames start with) is printed with the verdict and the
+//! command to run.
+//!
+//! The same scoring tells a user who picked the wrong protocol ([`advise`], after a run).
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use crate::exit::Failure;
+use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocols::PROTOCOLS;
+use crate::row::{Class, Row, RowOut, RowResult, kind as row_kind};
+use crate::source::serial::{self, ModemLines, SerialConfig};
+use crate::source::{Batch, Chunk, ChunkReader, Input, Message};
+
+/// How much of a file is examined.
+pub const SCAN_BYTES: usize = 2 << 20;
+
+/// The baud rates tried on a live port, the usual ones of the field.
+pub const USUAL_BAUDS: [u32; 9] = [
+    9600, 19200, 38400, 57600, 100_000, 115_200, 230_400, 400_000, 420_000,
+];
+
+/// A frame-looking variant must find at least this many frames to count.
+const MIN_FRAMES: u64 = 3;
+/// Below this share of the bytes in valid frames, nothing is recognised.
+const MIN_SHARE: f64 = 0.10;
+/// A second protocol is named (a mixed input) when it covers at least this share of the bytes
+/// that the first one leaves.
+const MIXED_SHARE: f64 = 0.15;
+
+/// `busnoop detect`.
+#[derive(clap::Args, Debug)]
+pub struct DetectArgs {
+    /// What to examine: a capture file (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap
+    /// recording, a pcap/pcapng capture), `-` for standard input, or a serial device, which is
+    /// listened to (passively, read-only) at each baud rate in turn.
+    pub source: PathBuf,
+
+    /// Serial devices: how long to listen at each baud rate.
+    #[arg(long, value_name = "MS", default_value_t = 1500,
+          value_parser = clap::value_parser!(u64).range(10..=60_000))]
+    pub listen_ms: u64,
+
+    /// Serial devices: the baud rates to try, comma-separated [default: 9600, 19200, 38400,
+    /// 57600, 100000, 115200, 230400, 400000, 420000].
+    #[arg(long = "baud", value_name = "BAUD", value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(crate::cli::BAUD_RANGE))]
+    pub bauds: Vec<u32>,
+
+    /// Serial devices: DTR and RTS, as for the protocol commands.
+    #[arg(long, value_enum, value_name = "MODE", default_value_t)]
+    pub dtr_rts: ModemLines,
+}
+
+/// One way of reading the bytes: a protocol, with options.
+pub struct Candidate {
+    pub protocol: &'static Protocol,
+    /// "S-Bus break mode".
+    pub label: &'static str,
+    /// Options to add to the protocol's command for this variant.
+    pub args: &'static [&'static str],
+    /// The bytes are inverted (S.Port through an adapter that does not invert).
+    pub inverted: bool,
+    decoder: Box<dyn Decoder>,
+}
+
+/// The variants of every protocol that reads inputs of `kind`, at `baud`.
+pub fn candidates(kind: Kind, baud: Option<u32>) -> Vec<Candidate> {
+    let mut out = Vec::new();
+    let byte_stream = matches!(kind, Kind::Raw | Kind::Serial | Kind::Recording);
+    for &p in PROTOCOLS {
+        if !p.reads(kind) {
+            continue;
+        }
+        let baud = baud.unwrap_or(p.line.baud);
+        let mut add = |label, args, inverted, decoder| {
+            out.push(Candidate {
+                protocol: p,
+                label,
+                args,
+                inverted,
+                decoder,
+            })
+        };
+        match p.command {
+            "sport" => {
+                add("S.Port", &[], false, crate::sport::decoder());
+                if byte_stream {
+                    add("S.Port, inverted line", &[], true, crate::sport::decoder());
+                }
+            }
+            "sbus" => {
+                use crate::sbus::{Mode, Options};
+                let opts = |mode| Options {
+                    mode,
+                    baud,
+                    ..Options::default()
+                };
+                if byte_stream {
+                    add(
+                        "S-Bus data mode",
+                        &[],
+                        false,
+                        crate::sbus::decoder(opts(Mode::Data), kind),
+                    );
+                    add(
+                        "S-Bus break mode",
+                        &[],
+                        false,
+                        crate::sbus::decoder(opts(Mode::Break), kind),
+                    );
+                    add(
+                        "S-Bus parity mode",
+                        &["--mode", "parity"],
+                        false,
+                        crate::sbus::decoder(opts(Mode::Parity), kind),
+                    );
+                } else {
+                    // Scored on the capture's bytes: the pcap reader runs inside.
+                    add(
+                        "Ether-S-Bus",
+                        &[],
+                        false,
+                        Box::new(crate::protocol::PcapBytes::new(
+                            crate::sbus::EtherDecoder::new(&opts(Mode::Auto)),
+                        )),
+                    );
+                }
+            }
+            "sab2" => {
+                use crate::sab::{FramingChoice, Options};
+                for (label, framing) in [
+                    ("SAB v1 (sync framing)", FramingChoice::Sync),
+                    ("SAB2 (HDLC framing)", FramingChoice::Hdlc),
+                ] {
+                    let opts = Options {
+                        framing,
+                        baud,
+                        ..Options::default()
+                    };
+                    add(label, &[], false, crate::sab::decoder(opts));
+                }
+            }
+            // A protocol without variants here is still tried, with its defaults; the test
+            // below makes sure every protocol of the table is listed.
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The evidence for one candidate.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Score {
+    /// Frames with a valid check.
+    pub frames: u64,
+    /// Bytes inside those frames.
+    pub valid_bytes: u64,
+    /// The bytes examined.
+    pub total: u64,
+    pub crc_errors: u64,
+    pub truncated: u64,
+    /// Bytes inside frames with a bad check or cut short.
+    pub bad_bytes: u64,
+    pub garbage_bytes: u64,
+    /// The first byte of valid frames, most frequent first, with counts (at most 3).
+    pub starts: Vec<(u8, u64)>,
+    /// Packets of a network capture: one valid packet is evidence enough.
+    pub network: bool,
+}
+
+impl Score {
+    /// Share of the examined bytes inside valid frames (0 to 1).
+    pub fn share(&self) -> f64 {
+        if self.total == 0 {
+            0.0
+        } else {
+            (self.valid_bytes as f64 / self.total as f64).min(1.0)
+        }
+    }
+
+    /// Enough valid frames to mean something.
+    fn recognised(&self) -> bool {
+        let min = if self.network { 1 } else { MIN_FRAMES };
+        self.frames >= min && self.share() >= MIN_SHARE
+    }
+}
+
+/// A candidate after the scan.
+pub struct Ranked {
+    pub protocol: &'static Protocol,
+    pub label: &'static str,
+    pub args: &'static [&'static str],
+    pub inverted: bool,
+    pub score: Score,
+    /// Which bytes (by position) lay inside valid frames.
+    coverage: Vec<u64>,
+}
+
+impl Ranked {
+    /// Bytes this candidate covers that `other` does not.
+    fn beyond(&self, other: &Ranked) -> u64 {
+        self.coverage
+            .iter()
+            .zip(other.coverage.iter().chain(std::iter::repeat(&0)))
+            .map(|(a, b)| u64::from((a & !b).count_ones()))
+            .sum()
+    }
+
+    /// The command that decodes this, for `source`.
+    pub fn command(&self, source: &Path, baud: Option<u32>) -> String {
+        let mut s = format!("busnoop {}", self.protocol.command);
+        for a in self.args {
+            s.push(' ');
+            s.push_str(a);
+        }
+        if let Some(b) = baud.filter(|&b| b != self.protocol.line.baud) {
+            s.push_str(&format!(" --baud {b}"));
+        }
+        s.push(' ');
+        s.push_str(&shell_quote(source));
+        s
+    }
+}
+
+/// Counts the rows of one candidate.
+struct Tally {
+    score: Score,
+    starts: [u64; 256],
+    /// Position in the input of the next row's bytes.
+    cursor: u64,
+    coverage: Vec<u64>,
+}
+
+impl Tally {
+    fn new(total: u64) -> Self {
+        Tally {
+            score: Score {
+                total,
+                ..Score::default()
+            },
+            starts: [0; 256],
+            cursor: 0,
+            coverage: vec![0; (total as usize).div_ceil(64)],
+        }
+    }
+
+    fn finish(mut self) -> (Score, Vec<u64>) {
+        let mut starts: Vec<(u8, u64)> = (0..=255u8)
+            .map(|b| (b, self.starts[b as usize]))
+            .filter(|&(_, n)| n > 0)
+            .collect();
+        starts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        starts.truncate(3);
+        self.score.starts = starts;
+        (self.score, self.coverage)
+    }
+}
+
+impl RowOut for Tally {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        let n = row.raw.len() as u64;
+        let s = &mut self.score;
+        match row.kind {
+            row_kind::BAD_CRC => {
+                s.crc_errors += 1;
+                s.bad_bytes += n;
+            }
+            row_kind::TRUNCATED => {
+                s.truncated += 1;
+                s.bad_bytes += n;
+            }
+            row_kind::GARBAGE => s.garbage_bytes += n,
+            _ => {}
+        }
+        let valid = n > 0 && !matches!(row.class, Class::Error | Class::Info);
+        if valid {
+            s.frames += 1;
+            s.valid_bytes += n;
+            self.starts[row.raw[0] as usize] += 1;
+            for i in self.cursor..(self.cursor + n).min(s.total) {
+                self.coverage[(i / 64) as usize] |= 1 << (i % 64);
+            }
+        }
+        self.cursor += n;
+        Ok(())
+    }
+}
+
+/// Feeds `segments` (bytes with their times) through every candidate and ranks them, best
+/// first. `total` is the number of bytes for the share (the wire bytes; for network captures,
+/// where the file holds more than the payloads, the payload bytes the decoder saw).
+pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: Kind) -> Vec<Ranked> {
+    let wire: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
+    let network = matches!(kind, Kind::Pcap | Kind::Pcapng);
+    let mut ranked: Vec<Ranked> = candidates
+        .drain(..)
+        .map(|mut c| {
+            let mut tally = Tally::new(if network { 0 } else { wire });
+            let mut flipped = Vec::new();
+            for b in batches {
+                for (bytes, time) in b.segments() {
+                    let bytes = if c.inverted {
+                        flipped.clear();
+                        flipped.extend(bytes.iter().map(|b| !b));
+                        &flipped[..]
+                    } else {
+                        bytes
+                    };
+                    let _ = c.decoder.push(bytes, time, &mut tally);
+                }
+            }
+            let _ = c.decoder.finish(&mut tally);
+            if network {
+                // The payloads: every one is in exactly one row.
+                tally.score.total = tally.cursor;
+                tally.score.network = true;
+            }
+            let (score, coverage) = tally.finish();
+            Ranked {
+                protocol: c.protocol,
+                label: c.label,
+                args: c.args,
+                inverted: c.inverted,
+                score,
+                coverage,
+            }
+        })
+        .collect();
+    ranked.sort_by(|a, b| {
+        b.score
+            .share()
+            .total_cmp(&a.score.share())
+            .then(b.score.frames.cmp(&a.score.frames))
+    });
+    ranked
+}
+
+/// What the scan concluded.
+#[derive(Debug, PartialEq)]
+pub enum Verdict {
+    /// No bytes at all.
+    Empty,
+    /// Nothing decodes well enough.
+    Unknown,
+    /// The best candidate (index into the ranking), and a second protocol that covers bytes
+    /// the first leaves, when the input is mixed.
+    Found(usize, Option<usize>),
+}
+
+/// The verdict on a ranking.
+pub fn verdict(ranked: &[Ranked]) -> Verdict {
+    let Some(best) = ranked.first() else {
+        return Verdict::Unknown;
+    };
+    if best.score.total == 0 {
+        return Verdict::Empty;
+    }
+    if !best.score.recognised() {
+        return Verdict::Unknown;
+    }
+    let mixed = ranked.iter().enumerate().skip(1).find(|(_, r)| {
+        r.protocol.command != best.protocol.command
+            && r.score.recognised()
+            && r.beyond(best) as f64 >= MIXED_SHARE * r.score.total as f64
+    });
+    Verdict::Found(0, mixed.map(|(i, _)| i))
+}
+
+fn percent(share: f64) -> String {
+    let p = share * 100.0;
+    if p > 0.0 && p < 0.1 {
+        "<0.1%".into()
+    } else {
+        format!("{p:.1}%")
+    }
+}
+
+/// `7E ×30, 00 ×2`.
+fn starts_text(starts: &[(u8, u64)]) -> String {
+    let parts: Vec<String> = starts
+        .iter()
+        .map(|(b, n)| format!("{b:02X} ×{n}"))
+        .collect();
+    if parts.is_empty() {
+        "-".into()
+    } else {
+        parts.join(", ")
+    }
+}
+
+/// The evidence table, one line per candidate.
+pub fn evidence(ranked: &[Ranked]) -> String {
+    let mut s = format!(
+        "  {:<24} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
+        "candidate", "in frames", "frames", "CRC err", "truncated", "garbage", "frames start with"
+    );
+    for r in ranked {
+        let sc = &r.score;
+        s.push_str(&format!(
+            "  {:<24} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
+            r.label,
+            percent(sc.share()),
+            sc.frames,
+            sc.crc_errors,
+            sc.truncated,
+            sc.garbage_bytes,
+            starts_text(&sc.starts)
+        ));
+    }
+    s
+}
+
+/// The fix for an S.Port line read without inversion.
+pub const INVERTED_FIX: &str = "the line is inverted: 0x81 arrives where S.Port's 0x7E belongs, \
+     so the adapter does not invert. Set \"invert RXD\" on an FTDI adapter (FT_PROG, or \
+     `ftdi_eeprom`), or put a one-transistor inverter before RX (docs/live.md)";
+
+/// A file's content as batches: at most [`SCAN_BYTES`] wire bytes, read through the same
+/// readers as a capture.
+fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>), Failure> {
+    let (opened, progress) = crate::source::open(input)?;
+    let kind = opened.kind;
+    let reader: Box<dyn ChunkReader> = match kind {
+        Kind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
+        Kind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
+        _ => Box::new(crate::source::RawReader::new(opened)),
+    };
+    let feed = crate::source::spawn(reader, Some(progress));
+    let mut batches = Vec::new();
+    let mut bytes = 0;
+    loop {
+        match feed.rx.recv() {
+            Ok(Message::Data(b)) => {
+                bytes += b.bytes.len();
+                batches.push(b);
+                if bytes >= SCAN_BYTES {
+                    break;
+                }
+            }
+            Ok(Message::End) | Err(_) => break,
+            Ok(Message::Failed(f)) => return Err(f),
+            Ok(_) => {}
+        }
+    }
+    feed.halt();
+    Ok((kind, batches))
+}
+
+fn kind_text(kind: Kind) -> &'static str {
+    match kind {
+        Kind::Raw => "raw bytes",
+        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        Kind::Pcap | Kind::Pcapng => "a network capture",
+        Kind::Recording => "a busnoop recording",
+        Kind::Serial => "a serial line",
+    }
+}
+
+/// Runs `busnoop detect`.
+pub fn run(args: &DetectArgs) -> Result<(), Failure> {
+    let input = Input::parse(&args.source);
+    if let Input::Device(path) = &input {
+        match live(path, args) {
+            Err(LiveError::NotATty) => {}
+            Err(LiveError::Failed(f)) => return Err(f),
+            Ok(()) => return Ok(()),
+        }
+    }
+    let (kind, batches) = read_prefix(&input)?;
+    let examined: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
+    let ranked = rank(candidates(kind, None), &batches, kind);
+    let name = args.source.display();
+    let mut text = format!(
+        "{name}: {}, {examined} bytes examined{}\n",
+        kind_text(kind),
+        if examined as usize >= SCAN_BYTES {
+            " (the start of the input)"
+        } else {
+            ""
+        }
+    );
+    let v = if examined == 0 {
+        Verdict::Empty
+    } else {
+        verdict(&ranked)
+    };
+    if v != Verdict::Empty {
+        text.push_str(&evidence(&ranked));
+    }
+    let result = match v {
+        Verdict::Empty => Err(Failure::NothingDecoded(format!(
+            "empty input: {name} holds no bytes"
+        ))),
+        Verdict::Unknown => {
+            text.push_str("verdict: no known protocol");
+            match ranked.first() {
+                Some(b) if b.score.frames > 0 => text.push_str(&format!(
+                    " (at best {} of the bytes in {} {} frames)",
+                    percent(b.score.share()),
+                    b.score.frames,
+                    b.label
+                )),
+                _ => text.push_str(" (not one valid frame of any)"),
+            }
+            text.push('\n');
+            Err(Failure::NoProtocol(format!(
+                "no known protocol in {name}: another protocol, a capture made at the wrong \
+                 baud rate, or not a capture at all"
+            )))
+        }
+        Verdict::Found(i, mixed) => {
+            let best = &ranked[i];
+            found_text(&mut text, best, &args.source, None);
+            if let Some(j) = mixed {
+                let other = &ranked[j];
+                text.push_str(&format!(
+                    "also: {} in {} of the bytes ({} frames): the input is mixed\nrun:  {}\n",
+                    other.label,
+                    percent(other.beyond(best) as f64 / other.score.total.max(1) as f64),
+                    other.score.frames,
+                    other.command(&args.source, None)
+                ));
+            }
+            Ok(())
+        }
+    };
+    write_stdout(&text)?;
+    result
+}
+
+/// "verdict: …" and "run: …" for the winner.
+fn found_text(text: &mut String, best: &Ranked, source: &Path, baud: Option<u32>) {
+    let at = baud.map_or(String::new(), |b| format!(" at {b} baud"));
+    text.push_str(&format!(
+        "verdict: {}{at} ({} of the bytes in {} valid frames",
+        best.label,
+        percent(best.score.share()),
+        best.score.frames
+    ));
+    if best.score.crc_errors > 0 {
+        text.push_str(", ");
+        text.push_str(&crate::exit::count(
+            best.score.crc_errors,
+            "CRC error",
+            "CRC errors",
+        ));
+    }
+    text.push_str(")\n");
+    if best.inverted {
+        text.push_str(&format!("fix:  {INVERTED_FIX}\n"));
+        if baud.is_none() {
+            text.push_str(
+                "      this capture holds the inverted bytes; invert them back before decoding: \
+                 python3 -c \"import sys; sys.stdout.buffer.write(bytes(255 - b for b in \
+                 sys.stdin.buffer.read()))\" < CAPTURE > fixed.bin\n",
+            );
+        }
+        text.push_str(&format!("then: {}\n", best.command(source, baud)));
+    } else {
+        text.push_str(&format!("run:  {}\n", best.command(source, baud)));
+    }
+}
+
+enum LiveError {
+    /// A character device that is not a terminal: read it as a file.
+    NotATty,
+    Failed(Failure),
+}
+
+/// One baud rate's listen.
+struct Listen {
+    baud: u32,
+    batches: Vec<Batch>,
+    bytes: u64,
+}
+
+/// `busnoop detect /dev/ttyUSB0`: listens at each rate in turn, passively (the device is
+/// opened read-only, as for a capture), and ranks every (rate, protocol) pair.
+fn live(path: &Path, args: &DetectArgs) -> Result<(), LiveError> {
+    let bauds: Vec<u32> = if args.bauds.is_empty() {
+        USUAL_BAUDS.to_vec()
+    } else {
+        args.bauds.clone()
+    };
+    let listen = Duration::from_millis(args.listen_ms);
+    eprintln!(
+        "busnoop: listening to {} for {} ms at each of {} baud rates",
+        path.display(),
+        args.listen_ms,
+        bauds.len()
+    );
+    let mut listens = Vec::new();
+    for &baud in &bauds {
+        let cfg = SerialConfig {
+            line: Line::n81(baud),
+            lines: args.dtr_rts,
+        };
+        let mut port = match serial::open(path, &cfg) {
+            Ok(p) => p,
+            Err(e) if serial::is_not_a_tty(&e) && listens.is_empty() => {
+                return Err(LiveError::NotATty);
+            }
+            Err(e) => return Err(LiveError::Failed(serial::open_failure(path, &e))),
+        };
+        listens.push(listen_once(port.as_mut(), path, baud, listen).map_err(LiveError::Failed)?);
+    }
+    let mut text = format!("{}: a serial line\n", path.display());
+    let report = judge_live(&listens);
+    for (l, best) in listens.iter().zip(&report.per_rate) {
+        text.push_str(&format!("  {:>7} baud: {:>7} bytes", l.baud, l.bytes));
+        match best {
+            Some(r) => text.push_str(&format!(
+                ", best {} ({} in {} frames)\n",
+                r.label,
+                percent(r.score.share()),
+                r.score.frames
+            )),
+            None => text.push('\n'),
+        }
+    }
+    let result = match &report.best {
+        _ if listens.iter().all(|l| l.bytes == 0) => Err(Failure::NothingDecoded(format!(
+            "no bytes arrived at any rate in {} ms each: check the wiring (the adapter's RX to \
+             the bus line, GND to ground) and that the bus is talking",
+            args.listen_ms
+        ))),
+        Some((i, r)) => {
+            found_text(&mut text, r, path, Some(listens[*i].baud));
+            Ok(())
+        }
+        None => {
+            text.push_str("verdict: no known protocol at any of these rates\n");
+            Err(Failure::NoProtocol(format!(
+                "no known protocol on {}: bytes arrive but nothing decodes at any rate tried \
+                 (another protocol, an unusual baud rate, or a line that needs inverting)",
+                path.display()
+            )))
+        }
+    };
+    write_stdout(&text).map_err(LiveError::Failed)?;
+    result.map_err(LiveError::Failed)
+}
+
+/// Reads `port` for `listen`, stamping every read with its time since the start.
+fn listen_once(
+    port: &mut dyn serialport::SerialPort,
+    path: &Path,
+    baud: u32,
+    listen: Duration,
+) -> Result<Listen, Failure> {
+    use std::io::ErrorKind::*;
+    let start = Instant::now();
+    let mut batches = Vec::new();
+    let mut bytes = 0u64;
+    let mut buf = [0u8; 4096];
+    while start.elapsed() < listen {
+        match port.read(&mut buf) {
+            Ok(0) => {
+                return Err(Failure::Disconnected {
+                    path: path.to_owned(),
+                    frames: 0,
+                });
+            }
+            Ok(n) => {
+                let t = start.elapsed().as_micros() as u64;
+                if (bytes as usize) < SCAN_BYTES {
+                    batches.push(Batch::single(buf[..n].to_vec(), Some(t)));
+                }
+                bytes += n as u64;
+            }
+            Err(e) if matches!(e.kind(), TimedOut | WouldBlock | Interrupted) => {}
+            Err(e) => {
+                tracing::info!("{}: {e}", path.display());
+                return Err(Failure::Disconnected {
+                    path: path.to_owned(),
+                    frames: 0,
+                });
+            }
+        }
+    }
+    Ok(Listen {
+        baud,
+        batches,
+        bytes,
+    })
+}
+
+/// The outcome of a live detection.
+struct LiveReport {
+    /// The best candidate at each rate, when one was recognised.
+    per_rate: Vec<Option<Ranked>>,
+    /// Index of the rate and the winner.
+    best: Option<(usize, Ranked)>,
+}
+
+/// Ranks every rate's bytes; the winner is the best share over all rates, ties (a pty, or a
+/// line that looks the same at two rates) going to the protocol's own default rate.
+fn judge_live(listens: &[Listen]) -> LiveReport {
+    let mut per_rate: Vec<Option<Ranked>> = Vec::new();
+    for l in listens {
+        let ranked = rank(
+            candidates(Kind::Serial, Some(l.baud)),
+            &l.batches,
+            Kind::Serial,
+        );
+        let best = ranked.into_iter().next().filter(|r| r.score.recognised());
+        per_rate.push(best);
+    }
+    let key = |i: usize, r: &Ranked| {
+        let share = (r.score.share() * 50.0).round() as i64; // 2 % steps
+        let default = i64::from(listens[i].baud == r.protocol.line.baud);
+        (share, default, r.score.frames)
+    };
+    let best_i = per_rate
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.as_ref().map(|r| (i, key(i, r))))
+        .max_by_key(|&(_, k)| k)
+        .map(|(i, _)| i);
+    let best = best_i.and_then(|i| per_rate[i].take().map(|r| (i, r)));
+    LiveReport { per_rate, best }
+}
+
+/// Keeps the first [`SCAN_BYTES`] of what a reader yields, for [`advise`] after the run.
+pub struct Tee {
+    inner: Box<dyn ChunkReader>,
+    kept: Arc<Mutex<Kept>>,
+}
+
+/// What a [`Tee`] kept.
+#[derive(Default)]
+pub struct Kept {
+    pub batches: Vec<Batch>,
+    /// Every byte that went through, kept or not.
+    pub total: u64,
+}
+
+impl Tee {
+    pub fn new(inner: Box<dyn ChunkReader>) -> (Self, Arc<Mutex<Kept>>) {
+        let kept = Arc::new(Mutex::new(Kept::default()));
+        (
+            Tee {
+                inner,
+                kept: kept.clone(),
+            },
+            kept,
+        )
+    }
+}
+
+impl ChunkReader for Tee {
+    fn next_batch(
+        &mut self,
+        tx: &std::sync::mpsc::SyncSender<Message>,
+    ) -> Result<Option<Chunk>, Failure> {
+        let chunk = self.inner.next_batch(tx)?;
+        // The input's bytes: a byte batch, or the container bytes a capture reader hands on
+        // (it keeps them when asked to, see `cli::run_capture`).
+        if let Some(chunk) = &chunk
+            && let Ok(mut k) = self.kept.lock()
+        {
+            let keep = (k.total as usize) < SCAN_BYTES;
+            let n = match chunk {
+                Chunk::Bytes(b) => {
+                    if keep {
+                        k.batches.push(b.clone());
+                    }
+                    b.bytes.len()
+                }
+                Chunk::Packets(c) => {
+                    if keep {
+                        k.batches.push(Batch::single(c.input.clone(), None));
+                    }
+                    c.input.len()
+                }
+            };
+            k.total += n as u64;
+        }
+        Ok(chunk)
+    }
+}
+
+/// What to tell a user after a run of `protocol` on a file or stream.
+#[derive(Debug, PartialEq)]
+pub enum Advice {
+    /// Nothing to say.
+    Fine,
+    /// A note for stderr (the run still succeeded).
+    Note(String),
+    /// Nothing at all decoded: the message for the failure.
+    NothingDecoded(String),
+}
+
+/// After a run of `protocol` over an input of `kind` that yielded `valid_frames`: is another
+/// protocol a much better fit, or did almost nothing decode? `kept` is the start of the input.
+pub fn advise(
+    protocol: &Protocol,
+    kind: Kind,
+    kept: &Kept,
+    valid_frames: u64,
+    source: &Path,
+) -> Advice {
+    let name = if source.as_os_str() == "-" {
+        "standard input".to_string()
+    } else {
+        source.display().to_string()
+    };
+    if kept.total == 0 {
+        return Advice::NothingDecoded(format!("empty input: {name} holds no bytes"));
+    }
+    let ranked = rank(candidates(kind, None), &kept.batches, kind);
+    let own = ranked
+        .iter()
+        .find(|r| r.protocol.command == protocol.command && !r.inverted);
+    let own_share = own.map_or(0.0, |r| r.score.share());
+    let better = ranked
+        .iter()
+        .find(|r| r.protocol.command != protocol.command || r.inverted)
+        .filter(|r| {
+            r.score.recognised() && r.score.share() >= 0.5 && r.score.share() >= own_share + 0.3
+        });
+    let suggestion = better.map(|b| {
+        if b.inverted {
+            format!(
+                "it looks like S.Port with inverted bytes ({} of the bytes in {} frames once \
+                 inverted): {}",
+                percent(b.score.share()),
+                b.score.frames,
+                INVERTED_FIX
+            )
+        } else {
+            format!(
+                "it looks like {} ({} of the bytes in {} valid frames); try: {}",
+                b.label,
+                percent(b.score.share()),
+                b.score.frames,
+                b.command(source, None)
+            )
+        }
+    });
+    let unknown = || {
+        format!(
+            "`busnoop detect {}` finds no known protocol in it",
+            shell_quote(source)
+        )
+    };
+    if valid_frames == 0
+        && let Some(o) = own.filter(|o| o.score.recognised())
+    {
+        // The protocol is right, the options are not (an S-Bus mode, a UDP port).
+        return Advice::NothingDecoded(format!(
+            "no {} frame in {name} with these options, but {} of its bytes are in valid {} \
+             frames with the defaults; try: {}",
+            protocol.name,
+            percent(o.score.share()),
+            o.label,
+            o.command(source, None)
+        ));
+    }
+    if valid_frames == 0
+        && suggestion.is_none()
+        && let Some(o) = own.filter(|o| {
+            o.score.crc_errors + o.score.truncated >= MIN_FRAMES
+                && o.score.bad_bytes * 2 >= o.score.total
+        })
+    {
+        // Frames of this protocol are there, but not one passes its check.
+        return Advice::NothingDecoded(format!(
+            "no valid {} frame in {name}, though {} and {} look like {}: a noisy line, or \
+             bytes changed on the way (capture at the wrong baud rate, a wrong inversion)",
+            protocol.name,
+            crate::exit::count(
+                o.score.crc_errors,
+                "frame with a bad check",
+                "frames with a bad check"
+            ),
+            crate::exit::count(o.score.truncated, "truncated frame", "truncated frames"),
+            protocol.name
+        ));
+    }
+    if valid_frames == 0 {
+        return Advice::NothingDecoded(format!(
+            "no {} frame in {name}; {}",
+            protocol.name,
+            suggestion.unwrap_or_else(unknown)
+        ));
+    }
+    if let Some(s) = suggestion {
+        return Advice::Note(format!(
+            "note: only {} of the bytes are in valid {} frames; {s}",
+            percent(own_share),
+            protocol.name
+        ));
+    }
+    if own_share < MIN_SHARE && !ranked.first().is_some_and(|r| r.score.recognised()) {
+        return Advice::Note(format!(
+            "note: only {} of the bytes are in valid {} frames; {}",
+            percent(own_share),
+            protocol.name,
+            unknown()
+        ));
+    }
+    Advice::Fine
+}
+
+/// A path as a shell word: as it is when it holds only safe characters, else single-quoted.
+pub fn shell_quote(p: &Path) -> String {
+    let s = p.to_string_lossy();
+    if !s.is_empty()
+        && s.bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"/._-+,:@%=".contains(&b))
+    {
+        s.into_owned()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
+
+fn write_stdout(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
+        Err(e) => Err(Failure::Output(format!(
+            "cannot write to standard output: {e}"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests;
