@@ -9,6 +9,7 @@ use crate::protocol::Kind;
 use crate::protocol::{Decoder, PcapBytes};
 use crate::row::Class;
 use crate::row::{Collected, OwnedRow};
+use crate::sbus::Resolved;
 use crate::source::{Batch, ChunkReader, Message, Opened};
 
 /// Split points derived from the data itself, so a fuzzer explores chunkings too.
@@ -182,7 +183,9 @@ pub fn recording(data: &[u8]) {
 }
 
 /// S-Bus serial decoder in every mode: chunking invariance, and every input byte in exactly one
-/// row (Timeout rows carry none); an accepted data-mode telegram starts with 0xB5.
+/// row (Timeout rows carry none); an accepted telegram passes its CRC under the reading the rows
+/// were made with (the mode given, or the one auto mode settled on), and in data mode starts
+/// with 0xB5.
 pub fn sbus_serial(data: &[u8]) {
     use crate::sbus::{Mode, Options, SerialDecoder};
     for mode in [
@@ -192,53 +195,61 @@ pub fn sbus_serial(data: &[u8]) {
         Mode::Break,
         Mode::Parity,
     ] {
-        let rows = same_rows_however_chunked(
-            &|| {
-                Box::new(SerialDecoder::new(Options {
-                    mode,
-                    ..Options::default()
-                }))
-            },
-            data,
-        );
+        let opts = Options {
+            mode,
+            ..Options::default()
+        };
+        let rows = same_rows_however_chunked(&|| Box::new(SerialDecoder::new(opts.clone())), data);
         let total: usize = rows.iter().map(|r| r.raw.len()).sum();
         assert_eq!(total, data.len(), "{mode:?}: bytes lost or duplicated");
+        // Which framing made the rows: a raw B5 is a frame start only in data mode; in break and
+        // parity mode it is an ordinary byte (station 181, data, a CRC byte).
+        let reading = {
+            let mut d = SerialDecoder::new(opts);
+            let mut out = Collected::default();
+            d.push(data, None, &mut out).unwrap();
+            d.finish(&mut out).unwrap();
+            d.resolved()
+        };
         for r in &rows {
-            if matches!(mode, Mode::Data | Mode::Secure)
-                && matches!(
-                    r.kind.as_str(),
-                    "Request" | "Response" | "ACK" | "NAK" | "Retry"
-                )
-            {
-                assert_eq!(r.raw.first(), Some(&0xB5), "{r:?}");
+            let accepted = matches!(
+                r.kind.as_str(),
+                "Request" | "Response" | "ACK" | "NAK" | "Retry"
+            );
+            if accepted && reading == Some(Resolved::Data) {
+                assert_eq!(r.raw.first(), Some(&0xB5), "{mode:?}: {r:?}");
             }
             if r.kind == crate::row::kind::TIMEOUT {
                 assert!(r.raw.is_empty());
             }
-            if r.class != Class::Error
-                && matches!(
-                    r.kind.as_str(),
-                    "Request" | "Response" | "ACK" | "NAK" | "Retry"
-                )
-            {
-                assert!(sbus_serial_crc_ok(&r.raw), "bad CRC accepted: {r:?}");
+            if accepted && r.class != Class::Error {
+                let reading = reading.unwrap_or_else(|| {
+                    panic!("{mode:?}: a telegram before auto mode settled: {r:?}")
+                });
+                assert!(
+                    sbus_serial_crc_ok(&r.raw, reading),
+                    "{mode:?} (read as {reading:?}): bad CRC accepted: {r:?}"
+                );
             }
         }
     }
 }
 
-/// Whether the wire bytes of an accepted serial S-Bus telegram pass its CRC: data mode over the
-/// escaped or the unescaped bytes (either is accepted), secure telegrams over the inner
-/// telegram, break/parity mode over all bytes before the CRC; a lone ACK/NAK character has none.
-fn sbus_serial_crc_ok(raw: &[u8]) -> bool {
+/// Whether the wire bytes of an accepted serial S-Bus telegram pass its CRC under `reading`:
+/// data mode over the escaped or the unescaped bytes (either is accepted), secure telegrams
+/// over the inner telegram; break/parity mode over all bytes before the CRC (B5 and C5 travel
+/// raw there, no DLE), where a lone ACK/NAK character has none.
+fn sbus_serial_crc_ok(raw: &[u8], reading: Resolved) -> bool {
     use crate::sbus::telegram::crc16;
-    if raw.first() != Some(&0xB5) {
-        // Break / parity mode.
+    if reading != Resolved::Data {
         if raw.len() <= 2 && matches!(raw.first(), Some(0x06 | 0x15)) {
             return true;
         }
         let n = raw.len();
         return n >= 3 && crc16(&raw[..n - 2]) == u16::from_be_bytes([raw[n - 2], raw[n - 1]]);
+    }
+    if raw.first() != Some(&0xB5) {
+        return false;
     }
     // Tokens: a byte, or a DLE pair standing for one byte; (wire bytes, value).
     let mut tokens: Vec<(&[u8], u8)> = Vec::new();
@@ -377,5 +388,38 @@ pub fn sab(data: &[u8]) {
             let total: usize = rows.iter().map(|r| r.raw.len()).sum();
             assert_eq!(total, data.len(), "SAB v1 bytes lost or duplicated");
         }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// From the proptest seed of `sbus::tests::garbage_never_panics` (its biased input): in
+    /// break and parity mode one request of station 0xB5 (181), command 0xAC, 79 data bytes
+    /// and the CRC `B5 C5`, which is CRC-16/XMODEM over the 83 bytes before it. B5 and C5
+    /// travel raw in those modes; read as data mode the same bytes are a dozen broken frames.
+    pub(crate) const STATION_B5_REQUEST: [u8; 85] = [
+        0xB5, 0xAC, 0x11, 0x00, 0xC5, 0xB5, 0xC5, 0x06, 0x06, 0xB5, 0x00, 0xC5, 0xAD, 0x06, 0x00,
+        0xC5, 0xC5, 0xC5, 0x34, 0x00, 0x00, 0x00, 0x22, 0xA0, 0xC5, 0x22, 0x34, 0x52, 0xCB, 0xB5,
+        0x06, 0x0B, 0x64, 0x5F, 0x00, 0x1D, 0xB5, 0xB5, 0xB5, 0xEF, 0xB5, 0x00, 0x06, 0x5F, 0xB5,
+        0x00, 0xB5, 0x00, 0x00, 0x1C, 0xC5, 0xC5, 0x47, 0x64, 0xB5, 0x06, 0x06, 0x95, 0x00, 0x00,
+        0xC5, 0x52, 0x06, 0xA1, 0x00, 0x06, 0x47, 0xB5, 0xB5, 0x06, 0xB5, 0x06, 0x16, 0x06, 0xE8,
+        0x00, 0xB5, 0xC5, 0x16, 0xCB, 0xB5, 0x23, 0xB9, 0xB5, 0xC5,
+    ];
+
+    #[test]
+    fn a_break_mode_telegram_of_station_b5_is_checked_as_break_mode() {
+        let raw = &STATION_B5_REQUEST;
+        assert_eq!(crate::sbus::telegram::crc16(&raw[..83]), 0xB5C5);
+        // Break/parity reading: CRC over every byte before it.
+        assert!(sbus_serial_crc_ok(raw, Resolved::Break));
+        assert!(sbus_serial_crc_ok(raw, Resolved::Parity));
+        // The data-mode reading takes the final C5 for a dangling DLE and `B9 B5` for the CRC:
+        // these bytes are no data-mode telegram (nor does the data-mode framer make one of them).
+        assert!(!sbus_serial_crc_ok(raw, Resolved::Data));
+        // The whole invariant check, every mode: it used to read the break-mode row as data
+        // mode because it starts with B5, and panic "bad CRC accepted".
+        sbus_serial(raw);
     }
 }

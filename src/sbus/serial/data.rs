@@ -619,4 +619,26 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn every_raw_b5_starts_a_new_telegram() {
+        // In data mode a raw B5 is only ever a frame start (B5 and C5 inside a telegram travel as
+        // DLE pairs), so no telegram can hold a bare B5 after its FS. The break-mode request of
+        // station B5 with its many raw B5 bytes is, read as data mode, 17 frames, none valid:
+        // the bad CRCs and cut telegrams are reported, and every byte is in exactly one of them.
+        let wire = crate::selfcheck::tests::STATION_B5_REQUEST;
+        let (_, evs) = run(&wire);
+        let starts = wire.iter().filter(|&&b| b == FS).count();
+        assert_eq!(evs.len(), starts, "{evs:?}");
+        let mut at = 0;
+        for e in &evs {
+            assert!(matches!(e, Ev::Frame { .. }), "{e:?}");
+            assert_eq!(e.offset(), at as u64, "{e:?}");
+            assert_eq!(e.wire()[0], FS, "{e:?}");
+            assert!(!e.wire()[1..].contains(&FS), "a bare B5 inside {e:?}");
+            assert!(!e.crc().ok(), "{e:?}");
+            at += e.wire().len();
+        }
+        assert_eq!(at, wire.len());
+    }
 }

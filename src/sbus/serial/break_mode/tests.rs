@@ -228,3 +228,25 @@ fn run_with(parity: bool, bytes: &[u8]) -> Vec<Ev> {
     )
     .1
 }
+
+#[test]
+fn station_b5_with_raw_b5_and_c5_is_one_request() {
+    // No FS and no DLE in SM0/SM1: a telegram may start with B5 (station 181) and hold any
+    // number of raw B5 and C5 bytes, its CRC included (`B5 C5` here). The selfcheck once read
+    // such a row as data mode and took it for a bad CRC accepted
+    // (`selfcheck::tests::a_break_mode_telegram_of_station_b5_is_checked_as_break_mode`).
+    let wire = crate::selfcheck::tests::STATION_B5_REQUEST;
+    for parity in [false, true] {
+        let (_, evs) = feed(
+            &mut BreakFramer::new(parity, None, None),
+            &[(wire.to_vec(), None)],
+        );
+        assert_eq!(evs.len(), 1, "parity {parity}: {evs:?}");
+        assert!(
+            is_request(&evs[0], 0xB5, 0xAC, &wire[2..83]),
+            "parity {parity}: {evs:?}"
+        );
+        assert_eq!(evs[0].wire(), wire);
+        assert_eq!(evs[0].crc(), CrcCheck::Ok(CrcBasis::Both));
+    }
+}
