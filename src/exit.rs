@@ -27,6 +27,9 @@ pub mod code {
     pub const OUTPUT: u8 = 8;
     /// Reading the input failed after it was opened, or its content cannot be used.
     pub const INPUT: u8 = 9;
+    /// The project file (`busnoop.toml`, `--config`) cannot be used: bad TOML, an unknown key,
+    /// a value out of range.
+    pub const CONFIG: u8 = 10;
     /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
     pub const SIGINT: u8 = 130;
     /// Standard output was closed by the reader (`busnoop … | head`): 128 + 13 (SIGPIPE).
@@ -62,6 +65,8 @@ pub enum Failure {
     Usage(String),
     /// Anything else.
     Internal(String),
+    /// The project file is unusable (the message names the file and the line).
+    Config(String),
 }
 
 /// How a run was stopped by a signal.
@@ -106,6 +111,7 @@ impl Failure {
             Failure::BrokenPipe => code::BROKEN_PIPE,
             Failure::Internal(_) => code::INTERNAL,
             Failure::Usage(_) => code::USAGE,
+            Failure::Config(_) => code::CONFIG,
         }
     }
 
@@ -163,9 +169,11 @@ impl fmt::Display for Failure {
                 count(*frames, "frame", "frames"),
                 path.display()
             ),
-            Failure::Output(m) | Failure::Input(m) | Failure::Internal(m) | Failure::Usage(m) => {
-                f.write_str(m)
-            }
+            Failure::Output(m)
+            | Failure::Input(m)
+            | Failure::Internal(m)
+            | Failure::Usage(m)
+            | Failure::Config(m) => f.write_str(m),
             Failure::Signal(i) => write!(f, "stopped by signal {}", i.signal),
             Failure::BrokenPipe => f.write_str("output closed"),
         }

@@ -9,9 +9,11 @@
 
 pub mod cli;
 pub mod exit;
+pub mod filter;
 pub mod fmt;
 pub mod pairing;
 pub mod pcap;
+pub mod project;
 pub mod protocol;
 pub mod protocols;
 pub mod record;
@@ -27,5 +29,6 @@ pub mod sink;
 pub mod source;
 pub mod sport;
 pub mod stats;
+pub mod stats_json;
 pub mod summary;
 pub mod time;

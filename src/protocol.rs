@@ -99,6 +99,8 @@ pub struct Protocol {
     /// The same in words, for the message that refuses another kind ("raw wire bytes, EdgeTX
     /// logs or busnoop recordings").
     pub accepts_text: &'static str,
+    /// What its table can show (ID range, types, sensors, devices), for checking filters.
+    pub vocab: &'static crate::filter::Vocab,
 }
 
 impl Protocol {

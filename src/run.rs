@@ -5,6 +5,7 @@ use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
 use crate::exit::{Failure, Interrupt};
+use crate::filter::{Select, Selection};
 use crate::protocol::Decoder;
 use crate::record::Recorder;
 use crate::row::RowOut;
@@ -12,6 +13,16 @@ use crate::row::{Class, Row};
 use crate::signal::Stop;
 use crate::sink::Table;
 use crate::source::{Batch, Feed, Message};
+
+/// The decoder's rows go through the filter and the names into the table.
+macro_rules! select {
+    ($d:expr) => {
+        Select {
+            table: $d.table,
+            selection: $d.selection,
+        }
+    };
+}
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
 const TICK: Duration = Duration::from_millis(20);
@@ -35,6 +46,8 @@ pub struct Context<'a> {
     pub protocol: &'a str,
     /// The source is a live serial device: decoders get `idle` calls with the current time.
     pub live: bool,
+    /// Filters and names between the decoder and the table.
+    pub selection: &'a Selection,
 }
 
 /// Feeds every message from `feed` through `decoder` into `table` until the source ends, fails,
@@ -54,6 +67,7 @@ pub fn drive(
         recorder: ctx.recorder,
         protocol: ctx.protocol,
         live: ctx.live,
+        selection: ctx.selection,
         clock: None,
         bytes: 0,
         first_byte: None,
@@ -76,12 +90,13 @@ pub fn drive(
         decoder,
         table,
         recorder,
+        selection,
         ..
     } = state;
     // Flush whatever is open, even after an error of the source.
     let output_gone = matches!(result, Err(Failure::Output(_) | Failure::BrokenPipe));
     if !output_gone {
-        let _ = decoder.finish(table);
+        let _ = decoder.finish(&mut Select { table, selection });
     }
     let recorded = match recorder {
         Some(r) => r.flush(),
@@ -109,6 +124,7 @@ struct Driver<'a> {
     recorder: Option<&'a mut Recorder>,
     protocol: &'a str,
     live: bool,
+    selection: &'a Selection,
     /// Maps capture time to this process's clock: the instant of capture time 0.
     clock: Option<Instant>,
     bytes: u64,
@@ -184,7 +200,9 @@ impl Driver<'_> {
                         && let Some(zero) = self.clock
                     {
                         let now = zero.elapsed().as_micros() as u64;
-                        self.decoder.idle(now, self.table).map_err(Failure::from)?;
+                        self.decoder
+                            .idle(now, &mut select!(self))
+                            .map_err(Failure::from)?;
                     }
                     self.watch();
                     self.flush()?;
@@ -256,7 +274,7 @@ impl Driver<'_> {
             r.data(bytes, time)?;
         }
         self.decoder
-            .push(bytes, time, self.table)
+            .push(bytes, time, &mut select!(self))
             .map_err(Failure::from)
     }
 
@@ -292,7 +310,9 @@ impl Driver<'_> {
             r.link(false, micros)?;
         }
         // Close what the unplug cut off; the decoder goes on after the gap.
-        self.decoder.finish(self.table).map_err(Failure::from)?;
+        self.decoder
+            .finish(&mut select!(self))
+            .map_err(Failure::from)?;
         self.down_at = Some(micros);
         let data = format!(
             "adapter disconnected after {}; waiting for it",
@@ -329,7 +349,9 @@ impl Driver<'_> {
         gap: bool,
     ) -> Result<(), Failure> {
         if gap {
-            self.decoder.finish(self.table).map_err(Failure::from)?;
+            self.decoder
+                .finish(&mut select!(self))
+                .map_err(Failure::from)?;
         }
         let row = Row {
             kind,
@@ -337,7 +359,7 @@ impl Driver<'_> {
             data,
             ..Row::empty(micros)
         };
-        self.table.row(&row).map_err(Failure::from)
+        select!(self).row(&row).map_err(Failure::from)
     }
 
     /// A row busnoop itself adds to the log (gaps).
@@ -348,6 +370,6 @@ impl Driver<'_> {
             data,
             ..Row::empty(Some(micros))
         };
-        self.table.row(&row).map_err(Failure::from)
+        select!(self).row(&row).map_err(Failure::from)
     }
 }

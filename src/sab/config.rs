@@ -13,6 +13,7 @@ pub const PROTOCOL: Protocol = Protocol {
     line: Line::n81(DEFAULT_BAUD),
     accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
+    vocab: &super::vocab::VOCAB,
 };
 
 /// modm's `sab::Master` waits 10 ms for a response.

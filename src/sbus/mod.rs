@@ -19,6 +19,7 @@ pub mod serial;
 mod serial_decoder;
 mod stats;
 pub mod telegram;
+mod vocab;
 
 pub use ether_decoder::EtherDecoder;
 pub use serial_decoder::{Resolved, SerialDecoder};
@@ -42,6 +43,7 @@ pub const PROTOCOL: Protocol = Protocol {
         Kind::Pcapng,
     ],
     accepts_text: "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
+    vocab: &vocab::VOCAB,
 };
 
 /// Ether-S-Bus server port.

@@ -64,6 +64,8 @@ pub struct Table {
     /// Number of the decoder's extra columns.
     n_extra: usize,
     counter: u64,
+    /// Rows counted but not written (filtered out).
+    skipped: u64,
     anchor: Option<Anchor>,
     header_written: bool,
     csv: csv::Writer<SharedBuf>,
@@ -108,6 +110,7 @@ impl Table {
             columns,
             n_extra: extra.len(),
             counter: 0,
+            skipped: 0,
             anchor: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
@@ -120,9 +123,21 @@ impl Table {
         }
     }
 
-    /// Rows written so far.
+    /// Rows so far: written ones and skipped ones (the last Counter).
     pub fn rows(&self) -> u64 {
         self.counter
+    }
+
+    /// Counts a row a filter keeps out of the output, so that every row's Counter is its
+    /// number in the unfiltered table.
+    pub fn skip(&mut self) {
+        self.counter += 1;
+        self.skipped += 1;
+    }
+
+    /// Rows counted with [`Table::skip`].
+    pub fn skipped(&self) -> u64 {
+        self.skipped
     }
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {

@@ -5,6 +5,7 @@
 pub mod names;
 pub mod passthrough;
 pub mod values;
+pub mod vocab;
 pub mod wire;
 
 use std::fmt::Write as _;
@@ -30,6 +31,7 @@ pub const PROTOCOL: Protocol = Protocol {
     line: Line::n81(DEFAULT_BAUD),
     accepts: &[Kind::Raw, Kind::Serial, Kind::EdgeTxLog, Kind::Recording],
     accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
+    vocab: &vocab::VOCAB,
 };
 
 /// Extra columns after the eight base columns.
@@ -419,6 +421,11 @@ impl Decoder for SportDecoder {
             Column::right("Mean ms", 8),
             Column::right("Max ms", 8),
         ]);
+        r.head.push(
+            "Polls: polls of the ID; Answers: frames it sent; Mean ms, Max ms: poll interval \
+             (time between two polls of the ID)"
+                .into(),
+        );
         let counts = |p: &PhysStats| {
             [
                 p.polls,
