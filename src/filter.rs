@@ -427,7 +427,7 @@ fn check_id(id: u32, text: &str, option: &str, vocab: &Vocab) -> Result<(), Erro
     }
     let hint = (vocab.id_hint)(id).map_or(String::new(), |h| format!("; {h}"));
     Err(format!(
-        "{option} {text}: outside the {}s of this protocol, {}{hint}",
+        "{option} {text}: outside the {} range {}{hint}",
         vocab.id_name,
         range_text(vocab)
     ))
