@@ -25,7 +25,7 @@ use crate::source::{self, ChunkReader, Input};
              JSON Lines.",
     after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
-                  130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  10 bad project file, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]

@@ -88,7 +88,7 @@ fn sport_each_filter() {
         matches!(id(r), Some(1 | 8))
     });
     check("sport", SPORT, &["--not-id", "0-23"], |r| {
-        !id(r).is_some_and(|i| i <= 23)
+        id(r).is_none_or(|i| i > 23)
     });
     check("sport", SPORT, &["--type", "data"], |r| r[TYPE] == "Data");
     check("sport", SPORT, &["--type", "Poll"], |r| r[TYPE].is_empty());
@@ -100,7 +100,9 @@ fn sport_each_filter() {
     check("sport", SPORT, &["--sensor", "cels,RxBt"], |r| {
         r[SENSOR] == "Cels" || r[SENSOR] == "RxBt"
     });
-    check("sport", SPORT, &["--sensor", "0300"], |r| r[SENSOR_NO] == "300");
+    check("sport", SPORT, &["--sensor", "0300"], |r| {
+        r[SENSOR_NO] == "300"
+    });
     check("sport", SPORT, &["--device", "receiver"], |r| {
         r[DEVICE] == "Receiver"
     });
@@ -133,7 +135,11 @@ fn sport_errors_only_and_combinations() {
 
 #[test]
 fn names_on_sport_are_shown_and_filterable() {
-    let named = rows("sport", SPORT, &["--name", "Pack=1", "--name", "Pack2=0x08"]);
+    let named = rows(
+        "sport",
+        SPORT,
+        &["--name", "Pack=1", "--name", "Pack2=0x08"],
+    );
     let plain = rows("sport", SPORT, &[]);
     assert_eq!(named.len(), plain.len());
     for (n, p) in named.iter().zip(&plain) {
@@ -143,8 +149,22 @@ fn names_on_sport_are_shown_and_filterable() {
             _ => assert_eq!(n, p),
         }
     }
-    let got = rows("sport", SPORT, &["--name", "Pack=1", "--device", "pack,pack2", "--name", "Pack2=8"]);
-    let want: Vec<_> = named.into_iter().filter(|r| matches!(id(r), Some(1 | 8))).collect();
+    let got = rows(
+        "sport",
+        SPORT,
+        &[
+            "--name",
+            "Pack=1",
+            "--device",
+            "pack,pack2",
+            "--name",
+            "Pack2=8",
+        ],
+    );
+    let want: Vec<_> = named
+        .into_iter()
+        .filter(|r| matches!(id(r), Some(1 | 8)))
+        .collect();
     assert_eq!(got, want);
 }
 
@@ -154,22 +174,40 @@ fn ether_sbus_filters_and_names() {
         r[TYPE] == "NAK" || r[TYPE] == "ACK"
     });
     check("sbus", ETHER, &["--errors"], |r| r[TYPE] == "NAK");
-    check("sbus", ETHER, &["--sensor", "read dbx"], |r| r[SENSOR] == "Read DBX");
-    check("sbus", ETHER, &["--not-type", "Request"], |r| r[TYPE] != "Request");
+    check("sbus", ETHER, &["--sensor", "read dbx"], |r| {
+        r[SENSOR] == "Read DBX"
+    });
+    check("sbus", ETHER, &["--not-type", "Request"], |r| {
+        r[TYPE] != "Request"
+    });
     // Names work on Ether-S-Bus (they replace the PLC address of the station's rows), with
     // --name and with the old --station.
     for opt in ["--name", "--station"] {
         let named = rows("sbus", ETHER, &[opt, "Boiler=10"]);
-        assert!(named.iter().all(|r| id(r) != Some(10) || r[DEVICE] == "Boiler"));
+        assert!(
+            named
+                .iter()
+                .all(|r| id(r) != Some(10) || r[DEVICE] == "Boiler")
+        );
         assert!(named.iter().any(|r| r[DEVICE] == "Boiler"));
     }
-    let got = rows("sbus", ETHER, &["--name", "Boiler=10", "--device", "boiler", "--type", "NAK"]);
+    let got = rows(
+        "sbus",
+        ETHER,
+        &["--name", "Boiler=10", "--device", "boiler", "--type", "NAK"],
+    );
     assert_eq!(got.len(), 1);
     assert_eq!(got[0][DEVICE], "Boiler");
     // The station filter on a capture that has only station 10.
     let all = rows("sbus", ETHER, &[]);
     let ten = rows("sbus", ETHER, &["--id", "10"]);
-    assert_eq!(ten, all.iter().filter(|r| id(r) == Some(10)).cloned().collect::<Vec<_>>());
+    assert_eq!(
+        ten,
+        all.iter()
+            .filter(|r| id(r) == Some(10))
+            .cloned()
+            .collect::<Vec<_>>()
+    );
     assert!(rows("sbus", ETHER, &["--id", "11"]).is_empty());
 }
 
@@ -182,14 +220,26 @@ fn sab_filters_names_and_the_device_rule() {
     check("sab2", SAB, &["--errors"], |r| {
         !matches!(r[TYPE].as_str(), "Request" | "ACK")
     });
-    check("sab2", SAB, &["--sensor", "0x10"], |r| r[SENSOR_NO] == "0x10");
+    check("sab2", SAB, &["--sensor", "0x10"], |r| {
+        r[SENSOR_NO] == "0x10"
+    });
     // `--device NAME=ADDR` names (the old SAB option), `--device NAME` filters.
     let all = rows("sab2", SAB, &["--device", "sonar=5"]);
     assert!(all.iter().any(|r| r[DEVICE] == "sonar"));
     let got = rows("sab2", SAB, &["--device", "sonar=5", "--device", "SONAR"]);
-    assert_eq!(got, all.iter().filter(|r| r[DEVICE] == "sonar").cloned().collect::<Vec<_>>());
+    assert_eq!(
+        got,
+        all.iter()
+            .filter(|r| r[DEVICE] == "sonar")
+            .cloned()
+            .collect::<Vec<_>>()
+    );
     assert_eq!(rows("sab2", SAB, &["--name", "sonar=5"]), all);
-    let got = rows("sab2", SAB, &["--command", "distance=0x10", "--sensor", "Distance"]);
+    let got = rows(
+        "sab2",
+        SAB,
+        &["--command", "distance=0x10", "--sensor", "Distance"],
+    );
     assert!(!got.is_empty() && got.iter().all(|r| r[SENSOR] == "distance"));
 }
 
@@ -203,18 +253,48 @@ fn usage_errors_name_the_valid_values() {
     let sab = sab.to_str().unwrap();
     for (args, want) in [
         (vec!["sport", sport, "--id", "40"], "0-31 (0x00-0x1F)"),
-        (vec!["sport", sport, "--id", "0xA1"], "poll byte of physical ID 1"),
-        (vec!["sbus", ether, "--id", "256"], "outside the station range 0-255"),
-        (vec!["sab2", sab, "--not-id", "64"], "outside the address range 0-63"),
-        (vec!["sport", sport, "--id", "two"], "expected IDs like 2, 0x1B or 0-9"),
-        (vec!["sport", sport, "--sensor", "VFAZ"], "the Sensor column shows"),
+        (
+            vec!["sport", sport, "--id", "0xA1"],
+            "poll byte of physical ID 1",
+        ),
+        (
+            vec!["sbus", ether, "--id", "256"],
+            "outside the station range 0-255",
+        ),
+        (
+            vec!["sab2", sab, "--not-id", "64"],
+            "outside the address range 0-63",
+        ),
+        (
+            vec!["sport", sport, "--id", "two"],
+            "expected IDs like 2, 0x1B or 0-9",
+        ),
+        (
+            vec!["sport", sport, "--sensor", "VFAZ"],
+            "the Sensor column shows",
+        ),
         (vec!["sport", sport, "--type", "Dta"], "types: Data, Null"),
-        (vec!["sbus", ether, "--type", "Poll"], "types: Request, Response"),
+        (
+            vec!["sbus", ether, "--type", "Poll"],
+            "types: Request, Response",
+        ),
         (vec!["sbus", ether, "--hide-polls"], "S-Bus has no polls"),
-        (vec!["sab2", sab, "--hide-null"], "SAB has no keep-alive rows"),
-        (vec!["sport", sport, "--device", "Boiler"], "the Device column shows ASS-70"),
-        (vec!["sab2", sab, "--device", "sonar"], "until devices are named"),
-        (vec!["sab2", sab, "--sensor", "speed"], "--command NAME=CODE"),
+        (
+            vec!["sab2", sab, "--hide-null"],
+            "SAB has no keep-alive rows",
+        ),
+        (
+            vec!["sport", sport, "--device", "Boiler"],
+            "the Device column shows ASS-70",
+        ),
+        (
+            vec!["sab2", sab, "--device", "sonar"],
+            "until devices are named",
+        ),
+        (
+            vec!["sab2", sab, "--sensor", "speed"],
+            "--command NAME=CODE",
+        ),
         (vec!["sbus", ether, "--sensor", "Q7"], "R100, F5"),
         (vec!["sport", sport, "--name", "Pack"], "expected NAME=ID"),
         (vec!["sport", sport, "--name", "Pack=32"], "0-31"),
@@ -259,7 +339,13 @@ distance = 0x10
     let r = run_in(dir.path(), &["sport", sport]);
     assert_eq!(r.code, 0, "{}", r.stderr);
     let mut lines = r.stdout.lines();
-    assert!(lines.next().unwrap().starts_with("Counter,Millis,ID,Device"), "csv from the file");
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("Counter,Millis,ID,Device"),
+        "csv from the file"
+    );
     let body: Vec<&str> = lines.collect();
     assert!(!body.is_empty());
     for l in &body {
@@ -270,7 +356,11 @@ distance = 0x10
             assert_eq!(f[3], "Pack");
         }
     }
-    assert!(r.stderr.contains("S.Port statistics (592 rows"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("S.Port statistics (592 rows"),
+        "{}",
+        r.stderr
+    );
     // The command line wins: a list replaces the file's, -f replaces the format.
     let r = run_in(dir.path(), &["sport", sport, "--id", "8", "-f", "tsv"]);
     let body: Vec<&str> = r.stdout.lines().skip(1).collect();
@@ -283,13 +373,26 @@ distance = 0x10
     let r = run_in(dir.path(), &["sbus", ether.to_str().unwrap(), "-f", "tsv"]);
     assert!(r.stdout.contains("\tBoiler\t"), "{}", r.stdout);
     let sab = fixture(SAB);
-    let r = run_in(dir.path(), &["sab", sab.to_str().unwrap(), "-f", "tsv", "--sensor", "distance"]);
+    let r = run_in(
+        dir.path(),
+        &[
+            "sab",
+            sab.to_str().unwrap(),
+            "-f",
+            "tsv",
+            "--sensor",
+            "distance",
+        ],
+    );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stdout.contains("\tdistance\t"));
     // --config FILE from elsewhere.
     let other = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("busnoop.toml");
-    let r = run_in(other.path(), &["sport", sport, "--config", cfg.to_str().unwrap()]);
+    let r = run_in(
+        other.path(),
+        &["sport", sport, "--config", cfg.to_str().unwrap()],
+    );
     assert!(r.stdout.starts_with("Counter,Millis"), "{}", r.stdout);
 }
 
@@ -298,12 +401,32 @@ fn a_bad_project_file_is_refused_with_its_line() {
     let sport = fixture(SPORT);
     let sport = sport.to_str().unwrap();
     for (text, code, want) in [
-        ("[sport]\nbaud = 57600\nbuad = 1\n", 10, "busnoop.toml:3: unknown field `buad`"),
-        ("[sport.filter]\n\nhide_polls = true\n", 10, "busnoop.toml:3: unknown field `hide_polls`"),
+        (
+            "[sport]\nbaud = 57600\nbuad = 1\n",
+            10,
+            "busnoop.toml:3: unknown field `buad`",
+        ),
+        (
+            "[sport.filter]\n\nhide_polls = true\n",
+            10,
+            "busnoop.toml:3: unknown field `hide_polls`",
+        ),
         ("[sport]\nformat = \"xml\"\n", 10, "busnoop.toml:2:"),
-        ("[sport]\ntimeout-ms = 5\n", 10, "busnoop.toml:2: [sport] has no key `timeout-ms`"),
-        ("[sport.filter]\nid = 99\n", 10, "busnoop.toml: [sport.filter] id 99: outside the physical ID range"),
-        ("[sport.names]\nX = 99\n", 10, "busnoop.toml: [sport] names X=99: outside"),
+        (
+            "[sport]\ntimeout-ms = 5\n",
+            10,
+            "busnoop.toml:2: [sport] has no key `timeout-ms`",
+        ),
+        (
+            "[sport.filter]\nid = 99\n",
+            10,
+            "busnoop.toml: [sport.filter] id 99: outside the physical ID range",
+        ),
+        (
+            "[sport.names]\nX = 99\n",
+            10,
+            "busnoop.toml: [sport] names X=99: outside",
+        ),
         ("[sport\n", 10, "busnoop.toml:1:"),
     ] {
         let dir = tempfile::tempdir().unwrap();
@@ -348,9 +471,17 @@ fn stats_as_json_count_hidden_rows() {
     assert!(receiver["Mean ms"].is_f64());
     assert!(v["head"][0].as_str().unwrap().contains("poll interval"));
     // The text form says how many rows the filters hid.
-    let r = run(&["sport", sport.to_str().unwrap(), "-f", "tsv", "--hide-polls", "--stats"]);
+    let r = run(&[
+        "sport",
+        sport.to_str().unwrap(),
+        "-f",
+        "tsv",
+        "--hide-polls",
+        "--stats",
+    ]);
     assert!(
-        r.stderr.contains("S.Port statistics (592 rows, 131 shown, 461 hidden by filters)"),
+        r.stderr
+            .contains("S.Port statistics (592 rows, 131 shown, 461 hidden by filters)"),
         "{}",
         r.stderr
     );
