@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::exit::{Failure, code};
+use crate::filter::Selection;
 use crate::pace::{Paced, Pacer};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::record::Recorder;
@@ -28,7 +29,7 @@ use crate::top::view::Info;
     after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
                   10 nothing decoded (empty input, or no frame of the protocol), \
-                  11 detect: no known protocol, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  11 detect: no known protocol, 12 bad project file, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -110,7 +111,8 @@ pub struct SbusArgs {
     #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
     pub gap_ms: Option<u64>,
 
-    /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`.
+    /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`; the same
+    /// as --name.
     #[arg(long = "station", value_name = "NAME=ADDR", value_parser = crate::sbus::parse_station)]
     pub stations: Vec<(String, u8)>,
 
@@ -169,20 +171,15 @@ pub struct SabArgs {
     #[arg(long, value_enum, default_value_t = SabFraming::Auto)]
     pub framing: SabFraming,
 
-    /// Name an address in the Device column (repeatable): `--device motor=5`,
-    /// `--device imu=0x12`.
-    #[arg(long, value_name = "NAME=ADDR", value_parser = crate::sab::parse_device)]
-    pub device: Vec<(String, u8)>,
-
     /// Name a command in the Sensor column (repeatable): `--command speed=0x34`,
     /// `--command reset=7`.
     #[arg(long, value_name = "NAME=CODE", value_parser = crate::sab::parse_command)]
     pub command: Vec<(String, u8)>,
 
-    /// Master timeout: a request without a response within this time gets a `Timeout` row.
-    #[arg(long, value_name = "MS", default_value_t = crate::sab::DEFAULT_TIMEOUT_MS,
-          value_parser = clap::value_parser!(u64).range(MS_RANGE))]
-    pub timeout_ms: u64,
+    /// Master timeout: a request without a response within this time gets a `Timeout` row
+    /// [default: 10].
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
+    pub timeout_ms: Option<u64>,
 
     /// SAB2 payload limit (modm's template parameter `N` of `sab2::Interface`): longer frames
     /// are flagged as overlong.
@@ -217,9 +214,9 @@ impl SabArgs {
                 SabFraming::Hdlc => FramingChoice::Hdlc,
             },
             baud,
-            timeout_micros: self.timeout_ms * 1000,
+            timeout_micros: self.timeout_ms.unwrap_or(crate::sab::DEFAULT_TIMEOUT_MS) * 1000,
             max_payload: self.max_payload as usize,
-            devices: self.device.clone(),
+            devices: Vec::new(),
             commands: self.command.clone(),
         }
     }
@@ -242,6 +239,9 @@ pub struct CaptureArgs {
 
     #[command(flatten)]
     pub live: LiveArgs,
+
+    #[command(flatten)]
+    pub select: crate::project::SelectArgs,
 }
 
 /// Options for live capture.
@@ -279,6 +279,15 @@ pub enum ColorChoice {
     Never,
 }
 
+/// `--stats-format`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StatsFormat {
+    /// The table for people.
+    Text,
+    /// One JSON object (see docs/config.md, "Statistics as JSON").
+    Json,
+}
+
 /// How times are shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum TimeMode {
@@ -311,6 +320,11 @@ pub struct OutputArgs {
     /// Print a per-device summary on stderr at the end (and on Ctrl-C).
     #[arg(long)]
     pub stats: bool,
+
+    /// Form of the --stats summary: `text`, or `json` (one JSON object, the last line on
+    /// stderr; implies --stats).
+    #[arg(long, value_enum, value_name = "FORM")]
+    pub stats_format: Option<StatsFormat>,
 
     /// `abs` adds a `Time` column with wall-clock times when the source has them.
     #[arg(long, value_enum, default_value_t = TimeMode::Rel)]
@@ -417,21 +431,95 @@ fn init_tracing(verbose: u8) {
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<(), Failure> {
+    use crate::project::{self, File};
+    let (protocol, capture) = match &cli.command {
+        Command::Sport(a) => (&crate::sport::PROTOCOL, &a.capture),
+        Command::Sbus(a) => (&crate::sbus::PROTOCOL, &a.capture),
+        Command::Sab2(a) => (&crate::sab::PROTOCOL, &a.capture),
+        Command::Ports => return list_ports(),
+        Command::Detect(a) => return crate::detect::run(a),
+        Command::Completions { shell } => return crate::manual::completions(*shell),
+        Command::Man { dir } => return crate::manual::man(dir.as_deref()),
+    };
+    let file = File::load(&capture.select)?;
+    let section = file
+        .as_ref()
+        .map(|(f, p)| (f.section(protocol.command), p.as_path()));
+    let named = |pairs: &[(String, u8)]| -> Vec<String> {
+        pairs.iter().map(|(n, a)| format!("{n}={a}")).collect()
+    };
     match cli.command {
-        Command::Sport(args) => run_capture(&args.capture, &crate::sport::PROTOCOL, |_, _| {
-            crate::sport::decoder()
-        }),
-        Command::Sbus(args) => run_capture(&args.capture, &crate::sbus::PROTOCOL, |kind, line| {
-            crate::sbus::decoder(args.options(line.baud), kind)
-        }),
-        Command::Sab2(args) => run_capture(&args.capture, &crate::sab::PROTOCOL, |_, line| {
-            crate::sab::decoder(args.options(line.baud))
-        }),
-        Command::Detect(args) => crate::detect::run(&args),
-        Command::Ports => list_ports(),
-        Command::Completions { shell } => crate::manual::completions(shell),
-        Command::Man { dir } => crate::manual::man(dir.as_deref()),
+        Command::Sport(mut args) => {
+            let sel = project::selection(&args.capture.select, protocol, section, &[], &[])?;
+            prepare(&mut args.capture, section);
+            run_capture(&args.capture, protocol, &sel, |_, _| {
+                crate::sport::decoder()
+            })
+        }
+        Command::Sbus(mut args) => {
+            let sel = project::selection(
+                &args.capture.select,
+                protocol,
+                section,
+                &named(&args.stations),
+                &[],
+            )?;
+            prepare(&mut args.capture, section);
+            if args.timeout_ms.is_none() {
+                args.timeout_ms = section.and_then(|s| s.0.timeout_ms);
+            }
+            args.stations = names_u8(&sel.names);
+            run_capture(&args.capture, protocol, &sel, |kind, line| {
+                crate::sbus::decoder(args.options(line.baud), kind)
+            })
+        }
+        Command::Sab2(mut args) => {
+            let mut commands = Vec::new();
+            if let Some((s, path)) = section {
+                for c in project::file_commands(s) {
+                    commands.push(crate::sab::parse_command(&c).map_err(|e| {
+                        Failure::Config(format!("{}: [sab2.commands] {e}", path.display()))
+                    })?);
+                }
+            }
+            commands.append(&mut args.command);
+            args.command = commands;
+            let sensors: Vec<String> = args.command.iter().map(|(n, _)| n.clone()).collect();
+            let sel = project::selection(&args.capture.select, protocol, section, &[], &sensors)?;
+            prepare(&mut args.capture, section);
+            if args.timeout_ms.is_none() {
+                args.timeout_ms = section.and_then(|s| s.0.timeout_ms);
+            }
+            let devices = names_u8(&sel.names);
+            run_capture(&args.capture, protocol, &sel, |_, line| {
+                let mut o = args.options(line.baud);
+                o.devices = devices;
+                crate::sab::decoder(o)
+            })
+        }
+        Command::Ports | Command::Detect(_) | Command::Completions { .. } | Command::Man { .. } => {
+            unreachable!("handled above")
+        }
     }
+}
+
+/// The project file's defaults under the command line's options; `--stats-format` implies
+/// `--stats`.
+fn prepare(capture: &mut CaptureArgs, section: Option<(&crate::project::Section, &Path)>) {
+    if let Some((s, _)) = section {
+        crate::project::apply_defaults(s, &mut capture.output, &mut capture.live.baud);
+    }
+    if capture.output.stats_format.is_some() {
+        capture.output.stats = true;
+    }
+}
+
+/// Names whose IDs fit a byte (S-Bus stations, SAB addresses), for the decoders' statistics.
+fn names_u8(names: &crate::filter::Names) -> Vec<(String, u8)> {
+    names
+        .pairs()
+        .filter_map(|(n, id)| Some((n.to_owned(), u8::try_from(id).ok()?)))
+        .collect()
 }
 
 /// The failure for an input of a kind `protocol` cannot read.
@@ -466,6 +554,7 @@ fn is_dash(p: &Path) -> bool {
 pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
+    selection: &Selection,
     decoder_for: impl FnOnce(Kind, &Line) -> Box<dyn Decoder>,
 ) -> Result<(), Failure> {
     let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
@@ -563,6 +652,7 @@ pub fn run_capture(
         protocol: protocol.name,
         live,
         source: &source_name,
+        selection,
     };
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
@@ -602,11 +692,26 @@ pub fn run_capture(
         };
         (result, table.rows())
     };
-    report(decoder.as_ref(), out.stats, protocol.name, rows, &result);
-    // Frames that decoded: the table counts its frame rows; the view alone has the decoder's count.
+    let stats = match (out.stats, out.stats_format) {
+        (false, _) => None,
+        (true, Some(StatsFormat::Json)) => Some(StatsFormat::Json),
+        (true, _) => Some(StatsFormat::Text),
+    };
+    let hidden = table.as_ref().map_or(0, Table::skipped);
+    report(
+        decoder.as_ref(),
+        stats,
+        protocol.name,
+        rows,
+        hidden,
+        &result,
+    );
+    // Frames that decoded: the table counts its frame rows, the decoder its valid frames.
+    // (Rows a filter hid are not in the table's count; the decoder's count has them.)
     let frames = table
         .as_ref()
-        .map_or(decoder.valid_frames(), |t| t.frames());
+        .map_or(0, |t| t.frames())
+        .max(decoder.valid_frames());
     // A clean run needs no second look; otherwise the start of the input is scored against
     // every protocol (`busnoop detect`'s scoring).
     if result.is_ok()
@@ -846,21 +951,31 @@ fn list_ports() -> Result<(), Failure> {
 /// something went wrong.
 fn report(
     decoder: &dyn Decoder,
-    stats: bool,
+    stats: Option<StatsFormat>,
     protocol: &str,
     rows: u64,
+    hidden: u64,
     result: &Result<(), Failure>,
 ) {
     if matches!(result, Err(Failure::BrokenPipe)) {
         return;
     }
-    if stats {
-        eprintln!("{protocol} statistics ({rows} rows)");
+    if stats == Some(StatsFormat::Text) {
+        if hidden > 0 {
+            eprintln!(
+                "{protocol} statistics ({rows} rows, {} shown, {hidden} hidden by filters)",
+                rows - hidden
+            );
+        } else {
+            eprintln!("{protocol} statistics ({rows} rows)");
+        }
         eprintln!("{}", decoder.stats());
     }
     // When the output failed, the one line that matters is the write error (printed last).
+    let problems = decoder.problems().line();
     if !matches!(result, Err(Failure::Output(_)))
-        && let Some(p) = decoder.problems().line()
+        && stats != Some(StatsFormat::Json)
+        && let Some(p) = &problems
     {
         eprintln!("busnoop: {p}");
     }
@@ -869,6 +984,17 @@ fn report(
             "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
             i.input_note()
         );
+    }
+    if stats == Some(StatsFormat::Json) {
+        let json = crate::stats_json::to_json(
+            &decoder.stats(),
+            protocol,
+            rows,
+            hidden,
+            decoder.valid_frames(),
+            problems.as_deref(),
+        );
+        eprintln!("{json}");
     }
 }
 

@@ -32,6 +32,9 @@ pub mod code {
     pub const NOTHING_DECODED: u8 = 10;
     /// `detect`: bytes, but no known protocol in them.
     pub const NO_PROTOCOL: u8 = 11;
+    /// The project file (`busnoop.toml`, `--config`) cannot be used: bad TOML, an unknown key,
+    /// a value out of range.
+    pub const CONFIG: u8 = 12;
     /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
     pub const SIGINT: u8 = 130;
     /// Standard output was closed by the reader (`busnoop … | head`): 128 + 13 (SIGPIPE).
@@ -71,6 +74,8 @@ pub enum Failure {
     Usage(String),
     /// Anything else.
     Internal(String),
+    /// The project file is unusable (the message names the file and the line).
+    Config(String),
 }
 
 /// How a run was stopped by a signal.
@@ -117,6 +122,7 @@ impl Failure {
             Failure::BrokenPipe => code::BROKEN_PIPE,
             Failure::Internal(_) => code::INTERNAL,
             Failure::Usage(_) => code::USAGE,
+            Failure::Config(_) => code::CONFIG,
         }
     }
 
@@ -179,7 +185,8 @@ impl fmt::Display for Failure {
             | Failure::Internal(m)
             | Failure::Usage(m)
             | Failure::NothingDecoded(m)
-            | Failure::NoProtocol(m) => f.write_str(m),
+            | Failure::NoProtocol(m)
+            | Failure::Config(m) => f.write_str(m),
             Failure::Signal(i) => write!(f, "stopped by signal {}", i.signal),
             Failure::BrokenPipe => f.write_str("output closed"),
         }

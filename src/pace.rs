@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use crate::row::{OutputError, Row, RowOut, RowResult};
-use crate::run::Sink;
+use crate::sink::Sink;
 
 /// Longer silences of the capture are replayed as one second.
 pub const MAX_SILENCE: u64 = 10_000_000;
@@ -133,6 +133,9 @@ impl<S: Sink + ?Sized> Sink for Paced<'_, S> {
     }
     fn quit(&self) -> bool {
         self.inner.quit()
+    }
+    fn skip(&mut self) {
+        self.inner.skip()
     }
 }
 

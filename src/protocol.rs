@@ -106,6 +106,8 @@ pub struct Protocol {
     /// extra columns in order (the last one's is unused: it is not padded). A column grows for
     /// a longer value.
     pub pretty_widths: &'static [usize],
+    /// What its table can show (ID range, types, sensors, devices), for checking filters.
+    pub vocab: &'static crate::filter::Vocab,
 }
 
 impl Protocol {

@@ -5,15 +5,25 @@ use std::sync::mpsc::RecvTimeoutError;
 use std::time::{Duration, Instant};
 
 use crate::exit::{Failure, Interrupt};
+use crate::filter::{Select, Selection};
 use crate::protocol::Decoder;
 use crate::record::Recorder;
-use crate::row::OutputError;
 use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::signal::Stop;
-use crate::sink::Table;
+use crate::sink::Sink;
 use crate::source::capture::Captured;
 use crate::source::{Batch, Feed, Message};
+
+/// The decoder's rows go through the filter and the names into the table.
+macro_rules! select {
+    ($d:expr) => {
+        Select {
+            table: $d.table,
+            selection: $d.selection,
+        }
+    };
+}
 
 /// How often the driver wakes up without data (to notice signals and let decoders time out).
 const TICK: Duration = Duration::from_millis(20);
@@ -31,32 +41,6 @@ const UNIT: usize = 4096;
 /// After this long without a single byte from a live port, the user gets a hint once.
 const SILENT_AFTER: Duration = Duration::from_secs(5);
 
-/// Where the driver writes rows: the table, or the live view (which may also write the table).
-pub trait Sink: RowOut {
-    /// Writes everything buffered; called after every batch and on every idle tick.
-    fn flush(&mut self) -> Result<(), OutputError>;
-    /// Flushes and closes the output at the end of the run.
-    fn close(&mut self) -> Result<(), OutputError>;
-    /// The wall-clock time of the capture's start became known.
-    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>);
-    /// The user asked to stop (the live view's `q`): the driver ends as at the end of the input.
-    fn quit(&self) -> bool {
-        false
-    }
-}
-
-impl Sink for Table {
-    fn flush(&mut self) -> Result<(), OutputError> {
-        Table::flush(self)
-    }
-    fn close(&mut self) -> Result<(), OutputError> {
-        Table::close(self)
-    }
-    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>) {
-        Table::set_anchor(self, anchor)
-    }
-}
-
 /// What the driver needs besides the decoder and the table.
 pub struct Context<'a> {
     pub stop: &'a Stop,
@@ -68,6 +52,8 @@ pub struct Context<'a> {
     pub live: bool,
     /// The source's name, for the hint about a silent port.
     pub source: &'a str,
+    /// Filters and names between the decoder and the table.
+    pub selection: &'a Selection,
 }
 
 /// Feeds every message from `feed` through `decoder` into `table` until the source ends, fails,
@@ -90,6 +76,7 @@ pub fn drive(
         source: ctx.source,
         started: Instant::now(),
         silent_hinted: false,
+        selection: ctx.selection,
         clock: None,
         bytes: 0,
         first_byte: None,
@@ -112,12 +99,13 @@ pub fn drive(
         decoder,
         table,
         recorder,
+        selection,
         ..
     } = state;
     // Flush whatever is open, even after an error of the source.
     let output_gone = matches!(result, Err(Failure::Output(_) | Failure::BrokenPipe));
     if !output_gone {
-        let _ = decoder.finish(table);
+        let _ = decoder.finish(&mut Select { table, selection });
     }
     let recorded = match recorder {
         Some(r) => r.flush(),
@@ -148,6 +136,7 @@ struct Driver<'a> {
     source: &'a str,
     started: Instant,
     silent_hinted: bool,
+    selection: &'a Selection,
     /// Maps capture time to this process's clock: the instant of capture time 0.
     clock: Option<Instant>,
     bytes: u64,
@@ -210,7 +199,7 @@ impl Driver<'_> {
                 }
                 Ok(Message::CaptureError(e)) => self
                     .decoder
-                    .capture_error(&e, self.table)
+                    .capture_error(&e, &mut select!(self))
                     .map_err(Failure::from)?,
                 Ok(Message::ReadUpTo(n)) => {
                     // Exact for raw bytes; parsed inputs (logs, recordings) take up more room
@@ -238,7 +227,9 @@ impl Driver<'_> {
                         && let Some(zero) = self.clock
                     {
                         let now = zero.elapsed().as_micros() as u64;
-                        self.decoder.idle(now, self.table).map_err(Failure::from)?;
+                        self.decoder
+                            .idle(now, &mut select!(self))
+                            .map_err(Failure::from)?;
                     }
                     self.watch();
                     self.flush()?;
@@ -318,7 +309,9 @@ impl Driver<'_> {
             if stop.signal().is_some() {
                 return Ok(false);
             }
-            self.decoder.packet(&p, self.table).map_err(Failure::from)?;
+            self.decoder
+                .packet(&p, &mut select!(self))
+                .map_err(Failure::from)?;
         }
         Ok(true)
     }
@@ -328,7 +321,7 @@ impl Driver<'_> {
             r.data(bytes, time)?;
         }
         self.decoder
-            .push(bytes, time, self.table)
+            .push(bytes, time, &mut select!(self))
             .map_err(Failure::from)
     }
 
@@ -377,7 +370,9 @@ impl Driver<'_> {
             r.link(false, micros)?;
         }
         // Close what the unplug cut off; the decoder goes on after the gap.
-        self.decoder.finish(self.table).map_err(Failure::from)?;
+        self.decoder
+            .finish(&mut select!(self))
+            .map_err(Failure::from)?;
         self.down_at = Some(micros);
         let data = format!(
             "adapter disconnected after {}; waiting for it",
@@ -414,7 +409,9 @@ impl Driver<'_> {
         gap: bool,
     ) -> Result<(), Failure> {
         if gap {
-            self.decoder.finish(self.table).map_err(Failure::from)?;
+            self.decoder
+                .finish(&mut select!(self))
+                .map_err(Failure::from)?;
         }
         let row = Row {
             kind,
@@ -422,7 +419,7 @@ impl Driver<'_> {
             data,
             ..Row::empty(micros)
         };
-        self.table.row(&row).map_err(Failure::from)
+        select!(self).row(&row).map_err(Failure::from)
     }
 
     /// A row busnoop itself adds to the log (gaps).
@@ -433,6 +430,6 @@ impl Driver<'_> {
             data,
             ..Row::empty(Some(micros))
         };
-        self.table.row(&row).map_err(Failure::from)
+        select!(self).row(&row).map_err(Failure::from)
     }
 }

@@ -15,6 +15,7 @@ pub const PROTOCOL: Protocol = Protocol {
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor#(0x10) Sensor Data | Addr Resp ms Framing Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 36, 4, 7, 7, 0],
+    vocab: &super::vocab::VOCAB,
 };
 
 /// modm's `sab::Master` waits 10 ms for a response.

@@ -22,6 +22,7 @@ pub mod pairing;
 pub mod sample;
 pub mod stats;
 pub mod sync;
+mod vocab;
 
 pub use config::{
     BITS_PER_BYTE, COLUMNS, DEFAULT_BAUD, DEFAULT_TIMEOUT_MS, FramingChoice, Options, PROTOCOL,

@@ -144,6 +144,11 @@ impl Stats {
             reason.describe(*framing, &mut line);
             r.head.push(line);
         }
+        r.head.push(
+            "Resp min/median/max ms: response time, request to response; Late: responses after \
+             the timeout"
+                .into(),
+        );
         let counts = |a: &AddrStats| {
             [
                 a.requests + a.reserved,

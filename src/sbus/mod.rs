@@ -19,6 +19,7 @@ pub mod serial;
 mod serial_decoder;
 mod stats;
 pub mod telegram;
+mod vocab;
 
 pub use ether_decoder::EtherDecoder;
 pub use serial_decoder::{Resolved, SerialDecoder};
@@ -45,6 +46,7 @@ pub const PROTOCOL: Protocol = Protocol {
     // Counter Millis ID Device(IP:port) Type Sensor#(DB4000[2]) Sensor(command) Data | Resp ms
     // Seq Note
     pretty_widths: &[7, 8, 3, 15, 9, 9, 22, 40, 7, 5, 0],
+    vocab: &vocab::VOCAB,
 };
 
 /// Ether-S-Bus server port.

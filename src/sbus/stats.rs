@@ -141,6 +141,9 @@ pub(super) fn report<'a>(
     ]);
     let mut r = Report::new(&columns);
     r.head.push(head);
+    r.head.push(
+        "Min/Med/Max ms: response time, request to answer; Late: answers after the timeout".into(),
+    );
     for (id, name, st) in rows {
         let mut cells = vec![id, name.to_owned()];
         cells.extend(
@@ -303,22 +306,23 @@ mod tests {
         let text = r.to_string();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], "data mode");
+        assert!(lines[1].starts_with("Min/Med/Max ms: response time"));
         assert_eq!(
-            lines[1],
+            lines[2],
             "  ID  Device                 Requests Response    ACK    NAK  Retry Timeout BadCRC  Late   Min ms   Med ms   Max ms"
         );
         assert_eq!(
-            lines[2],
+            lines[3],
             "   5  PCD                           3        2      0      1      0       0      0     0     12.3     12.3     12.3"
         );
-        assert_eq!(lines[3], "      NAK reasons: 0x0002 password ×1");
+        assert_eq!(lines[4], "      NAK reasons: 0x0002 password ×1");
         assert_eq!(
-            lines[4],
+            lines[5],
             "      length mismatches 0, broadcasts 1, sequence numbers skipped 0"
         );
-        assert!(lines[5].starts_with("valid telegrams 6, "));
-        assert!(lines[6].starts_with("CRC basis of data-mode telegrams"));
-        assert_eq!(lines.len(), 7);
+        assert!(lines[6].starts_with("valid telegrams 6, "));
+        assert!(lines[7].starts_with("CRC basis of data-mode telegrams"));
+        assert_eq!(lines.len(), 8);
         assert!(
             report("e".into(), std::iter::empty(), &t, true)
                 .to_string()

@@ -68,6 +68,8 @@ pub struct Table {
     counter: u64,
     /// Rows of whole frames (with wire bytes, not an error or a note).
     frames: u64,
+    /// Rows counted but not written (filtered out).
+    skipped: u64,
     anchor: Option<Anchor>,
     header_written: bool,
     csv: csv::Writer<SharedBuf>,
@@ -124,6 +126,7 @@ impl Table {
             n_extra: extra.len(),
             counter: 0,
             frames: 0,
+            skipped: 0,
             anchor: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
@@ -145,7 +148,7 @@ impl Table {
         }
     }
 
-    /// Rows written so far.
+    /// Rows so far: written ones and skipped ones (the last Counter).
     pub fn rows(&self) -> u64 {
         self.counter
     }
@@ -154,6 +157,18 @@ impl Table {
     /// errors, garbage, timeouts or notes): "did anything decode".
     pub fn frames(&self) -> u64 {
         self.frames
+    }
+
+    /// Counts a row a filter keeps out of the output, so that every row's Counter is its
+    /// number in the unfiltered table.
+    pub fn skip(&mut self) {
+        self.counter += 1;
+        self.skipped += 1;
+    }
+
+    /// Rows counted with [`Table::skip`].
+    pub fn skipped(&self) -> u64 {
+        self.skipped
     }
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
@@ -500,6 +515,38 @@ impl Table {
 impl RowOut for Table {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         self.write(row)
+    }
+}
+
+/// Where the driver writes rows: the table, or the live view (which may also write the table).
+pub trait Sink: RowOut {
+    /// Writes everything buffered; called after every batch and on every idle tick.
+    fn flush(&mut self) -> Result<(), OutputError>;
+    /// Flushes and closes the output at the end of the run.
+    fn close(&mut self) -> Result<(), OutputError>;
+    /// The wall-clock time of the capture's start became known.
+    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>);
+    /// The user asked to stop (the live view's `q`): the driver ends as at the end of the input.
+    fn quit(&self) -> bool {
+        false
+    }
+    /// A row a filter keeps out: counted (so that every row's Counter is its number in the
+    /// unfiltered table), not shown.
+    fn skip(&mut self);
+}
+
+impl Sink for Table {
+    fn flush(&mut self) -> Result<(), OutputError> {
+        Table::flush(self)
+    }
+    fn close(&mut self) -> Result<(), OutputError> {
+        Table::close(self)
+    }
+    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>) {
+        Table::set_anchor(self, anchor)
+    }
+    fn skip(&mut self) {
+        Table::skip(self)
     }
 }
 

@@ -5,6 +5,7 @@
 pub mod names;
 pub mod passthrough;
 pub mod values;
+pub mod vocab;
 pub mod wire;
 
 use std::fmt::Write as _;
@@ -32,6 +33,7 @@ pub const PROTOCOL: Protocol = Protocol {
     accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 30, 4, 0],
+    vocab: &vocab::VOCAB,
 };
 
 /// Extra columns after the eight base columns.
@@ -421,6 +423,11 @@ impl Decoder for SportDecoder {
             Column::right("Mean ms", 8),
             Column::right("Max ms", 8),
         ]);
+        r.head.push(
+            "Polls: polls of the ID; Answers: frames it sent; Mean ms, Max ms: poll interval \
+             (time between two polls of the ID)"
+                .into(),
+        );
         let counts = |p: &PhysStats| {
             [
                 p.polls,

@@ -17,7 +17,7 @@ use ratatui::crossterm::event::{self, Event, KeyCode, KeyEvent, KeyEventKind, Ke
 
 use crate::pace::Pacer;
 use crate::row::{OutputError, Row, RowOut, RowResult};
-use crate::run::Sink;
+use crate::sink::Sink;
 use crate::sink::Table;
 use model::Model;
 use view::{Info, Ui};
@@ -324,5 +324,11 @@ impl Sink for Top<'_> {
 
     fn quit(&self) -> bool {
         self.quit
+    }
+
+    fn skip(&mut self) {
+        if let Some(t) = self.table.as_deref_mut() {
+            t.skip();
+        }
     }
 }

@@ -1,0 +1,737 @@
+//! Choosing rows and naming devices, for every protocol: `--id`, `--not-id`, `--type`,
+//! `--not-type`, `--hide-polls`, `--hide-null`, `--errors`, `--sensor`, `--device` and `--name`.
+//!
+//! Pure code: a [`Spec`] (the option values as the user wrote them, from the command line or
+//! the project file) is checked against what a protocol can show ([`Vocab`], from its
+//! descriptor) and compiled into a [`Filter`] and [`Names`]. A filter that could never match on
+//! this protocol (an ID outside its range, an unknown sensor or type) is refused with the list
+//! of valid values. [`Select`] sits between the decoder and the table: it puts the names into
+//! the Device column and lets through the rows the filter keeps; the table still counts the
+//! others, so a row's Counter is the same with or without a filter.
+//!
+//! Rules: several filters combine with AND, the values of one filter with OR. Matching costs
+//! no allocation per row.
+
+use std::ops::RangeInclusive;
+
+use crate::row::{Class, Row, RowOut, RowResult};
+use crate::sink::Sink;
+
+/// What a protocol's table can show, for checking filters and names before the run.
+#[derive(Debug)]
+pub struct Vocab {
+    /// Valid values of the ID column.
+    pub ids: RangeInclusive<u32>,
+    /// What the ID is, in messages ("physical ID", "station", "address").
+    pub id_name: &'static str,
+    /// A hint for an ID outside the range (S.Port: "0xA1 is the header byte of ID 1").
+    pub id_hint: fn(u32) -> Option<String>,
+    /// Every value of the Type column (the shared kinds of [`crate::row::kind`] included).
+    pub types: &'static [&'static str],
+    /// The protocol polls: a poll nobody answered is a row with an ID and an empty Type
+    /// (`--hide-polls`, `--type Poll`).
+    pub polls: bool,
+    /// The protocol has keep-alive rows (`Class::Quiet`, `--hide-null`).
+    pub keepalives: bool,
+    /// The names the Sensor column can show without options (S.Port app IDs, S-Bus commands).
+    pub sensors: fn() -> Vec<String>,
+    /// What the Sensor # column looks like, for the hint.
+    pub sensor_no_text: &'static str,
+    /// Whether a value could appear in the Sensor # column.
+    pub sensor_no: fn(&str) -> bool,
+    /// The Sensor # column holds hex numbers: `--sensor 0210` matches `210`.
+    pub sensor_no_hex: bool,
+    /// The Device column without names: the name at an ID, or `None` when the protocol's
+    /// devices are not known in advance (Ether-S-Bus shows PLC addresses).
+    pub devices: Option<fn(u32) -> &'static str>,
+}
+
+/// The name a poll row answers to in `--type`.
+pub const POLL: &str = "Poll";
+
+/// Options as the user wrote them (each `Vec` holds the values of a repeatable option; a value
+/// may itself be a comma-separated list).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Spec {
+    pub id: Vec<String>,
+    pub not_id: Vec<String>,
+    pub types: Vec<String>,
+    pub not_types: Vec<String>,
+    pub hide_polls: bool,
+    pub hide_null: bool,
+    pub errors: bool,
+    pub sensor: Vec<String>,
+    pub device: Vec<String>,
+    /// `NAME=ID` values.
+    pub names: Vec<String>,
+}
+
+/// A usage error: the message names the option and the valid values.
+pub type Error = String;
+
+/// Names for IDs, shown in the Device column.
+#[derive(Clone, Debug, Default)]
+pub struct Names {
+    by_id: Vec<Option<Box<str>>>,
+}
+
+impl Names {
+    /// The name of `id`, if one was given.
+    pub fn get(&self, id: u32) -> Option<&str> {
+        self.by_id.get(id as usize)?.as_deref()
+    }
+
+    /// Every (name, ID), in ID order.
+    pub fn pairs(&self) -> impl Iterator<Item = (&str, u32)> {
+        self.by_id
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| Some((n.as_deref()?, i as u32)))
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.by_id.iter().all(Option::is_none)
+    }
+
+    /// Names `id` (a later name for the same ID wins).
+    pub fn set(&mut self, name: &str, id: u32) {
+        let i = id as usize;
+        if self.by_id.len() <= i {
+            self.by_id.resize(i + 1, None);
+        }
+        self.by_id[i] = Some(name.into());
+    }
+
+    /// Parses `NAME=ID` values (`Boiler=10`, `imu=0x12`) for `option`, checking the ID range.
+    pub fn parse(values: &[String], option: &str, vocab: &Vocab) -> Result<Names, Error> {
+        let mut names = Names::default();
+        for v in values {
+            let (name, id) = v.rsplit_once('=').ok_or_else(|| {
+                format!("{option} {v:?}: expected NAME=ID, for example {option} Boiler=10")
+            })?;
+            let name = name.trim();
+            if name.is_empty() {
+                return Err(format!("{option} {v:?}: the name is empty"));
+            }
+            let id = parse_number(id.trim())
+                .ok_or_else(|| format!("{option} {v:?}: {id:?} is not a number (10 or 0x0A)"))?;
+            check_id(id, v, option, vocab)?;
+            names.set(name, id);
+        }
+        Ok(names)
+    }
+}
+
+/// A compiled filter: which rows to show.
+#[derive(Clone, Debug, Default)]
+pub struct Filter {
+    ids: Vec<RangeInclusive<u32>>,
+    not_ids: Vec<RangeInclusive<u32>>,
+    types: Vec<Box<str>>,
+    not_types: Vec<Box<str>>,
+    hide_polls: bool,
+    hide_null: bool,
+    errors: bool,
+    sensors: Vec<Pattern>,
+    devices: Vec<Box<str>>,
+    /// Any rule at all (otherwise every row is kept without looking).
+    active: bool,
+}
+
+/// A `--sensor` value: the text, and its value when it reads as a hex number (`0210`, `0x34`),
+/// so that `0210` matches the Sensor # `210`.
+#[derive(Clone, Debug)]
+struct Pattern {
+    text: Box<str>,
+    number: Option<u32>,
+}
+
+impl Filter {
+    /// Checks `spec` against `vocab` (`names`: the names given, which `--device` may use;
+    /// `sensors`: names the Sensor column gets from options, SAB's `--command`).
+    pub fn new(
+        spec: &Spec,
+        vocab: &Vocab,
+        names: &Names,
+        sensors: &[String],
+        protocol: &str,
+    ) -> Result<Filter, Error> {
+        let mut f = Filter {
+            ids: id_list(&spec.id, "--id", vocab)?,
+            not_ids: id_list(&spec.not_id, "--not-id", vocab)?,
+            types: type_list(&spec.types, "--type", vocab, protocol)?,
+            not_types: type_list(&spec.not_types, "--not-type", vocab, protocol)?,
+            hide_polls: spec.hide_polls,
+            hide_null: spec.hide_null,
+            errors: spec.errors,
+            sensors: Vec::new(),
+            devices: Vec::new(),
+            active: false,
+        };
+        if spec.hide_polls && !vocab.polls {
+            return Err(format!(
+                "--hide-polls: {protocol} has no polls (every request is shown with its answer); \
+                 to hide a type use --not-type, e.g. --not-type Request"
+            ));
+        }
+        if spec.hide_null && !vocab.keepalives {
+            return Err(format!(
+                "--hide-null: {protocol} has no keep-alive rows; to hide a type use --not-type"
+            ));
+        }
+        let mut known: Option<Vec<String>> = None;
+        for v in split(&spec.sensor) {
+            let number = if vocab.sensor_no_hex {
+                parse_hex(v)
+            } else {
+                None
+            };
+            let ok = (vocab.sensor_no)(v) || sensors.iter().any(|s| s.eq_ignore_ascii_case(v)) || {
+                let k = known.get_or_insert_with(|| (vocab.sensors)());
+                k.iter().any(|s| s.eq_ignore_ascii_case(v))
+            };
+            if !ok {
+                let mut k = known.take().unwrap_or_else(|| (vocab.sensors)());
+                k.extend(sensors.iter().cloned());
+                k.sort_unstable_by_key(|s| s.to_ascii_lowercase());
+                k.dedup_by(|a, b| a.eq_ignore_ascii_case(b));
+                let names = if k.is_empty() {
+                    "no names without options".to_string()
+                } else {
+                    k.join(", ")
+                };
+                return Err(format!(
+                    "--sensor {v:?}: no {protocol} row can show it; the Sensor column shows \
+                     {names}; the Sensor # column {}",
+                    vocab.sensor_no_text
+                ));
+            }
+            f.sensors.push(Pattern {
+                text: v.into(),
+                number,
+            });
+        }
+        for v in split(&spec.device) {
+            let named = names.pairs().any(|(n, _)| n.eq_ignore_ascii_case(v));
+            if let Some(device) = vocab.devices
+                && !named
+            {
+                let shown = |id: u32| names.get(id).unwrap_or_else(|| device(id));
+                if !vocab
+                    .ids
+                    .clone()
+                    .any(|id| shown(id).eq_ignore_ascii_case(v))
+                {
+                    let mut all: Vec<&str> = vocab.ids.clone().map(shown).collect();
+                    all.retain(|s| !s.is_empty());
+                    all.sort_unstable();
+                    all.dedup();
+                    let all = if all.is_empty() {
+                        "nothing until devices are named (--name NAME=ID)".to_string()
+                    } else {
+                        all.join(", ")
+                    };
+                    return Err(format!(
+                        "--device {v:?}: no {protocol} device has this name; the Device column \
+                         shows {all}"
+                    ));
+                }
+            }
+            f.devices.push(v.into());
+        }
+        f.active = !(f.ids.is_empty()
+            && f.not_ids.is_empty()
+            && f.types.is_empty()
+            && f.not_types.is_empty()
+            && !f.hide_polls
+            && !f.hide_null
+            && !f.errors
+            && f.sensors.is_empty()
+            && f.devices.is_empty());
+        Ok(f)
+    }
+
+    /// Whether any rule is set.
+    pub fn is_active(&self) -> bool {
+        self.active
+    }
+
+    /// Whether `row` is shown.
+    #[inline]
+    pub fn keep(&self, row: &Row<'_>) -> bool {
+        !self.active || self.check(row)
+    }
+
+    fn check(&self, row: &Row<'_>) -> bool {
+        let poll = is_poll(row);
+        let type_is = |t: &str| {
+            if poll {
+                t == POLL
+            } else {
+                t.eq_ignore_ascii_case(row.kind)
+            }
+        };
+        if !self.types.is_empty() && !self.types.iter().any(|t| type_is(t)) {
+            return false;
+        }
+        if self.not_types.iter().any(|t| type_is(t)) {
+            return false;
+        }
+        // busnoop's own rows (an adapter gap, a clock jump) belong to no device: only the type
+        // filters hide them, so a filtered log still shows where the capture has holes.
+        if row.class == Class::Info {
+            return true;
+        }
+        if !self.ids.is_empty()
+            && !row
+                .id
+                .is_some_and(|id| self.ids.iter().any(|r| r.contains(&id)))
+        {
+            return false;
+        }
+        if row
+            .id
+            .is_some_and(|id| self.not_ids.iter().any(|r| r.contains(&id)))
+        {
+            return false;
+        }
+        if self.hide_polls && poll {
+            return false;
+        }
+        if self.hide_null && row.class == Class::Quiet {
+            return false;
+        }
+        if self.errors && !matches!(row.class, Class::Warning | Class::Error | Class::Info) {
+            return false;
+        }
+        if !self.sensors.is_empty() && !self.sensors.iter().any(|p| p.matches(row)) {
+            return false;
+        }
+        if !self.devices.is_empty()
+            && !self
+                .devices
+                .iter()
+                .any(|d| d.eq_ignore_ascii_case(row.device))
+        {
+            return false;
+        }
+        true
+    }
+}
+
+impl Pattern {
+    fn matches(&self, row: &Row<'_>) -> bool {
+        if self.text.eq_ignore_ascii_case(row.sensor)
+            || self.text.eq_ignore_ascii_case(row.sensor_no)
+        {
+            return true;
+        }
+        match self.number {
+            Some(n) => !row.sensor_no.is_empty() && parse_hex(row.sensor_no) == Some(n),
+            None => false,
+        }
+    }
+}
+
+/// A poll nobody answered: a row with an ID and no Type.
+fn is_poll(row: &Row<'_>) -> bool {
+    row.kind.is_empty() && row.id.is_some()
+}
+
+/// The filter and the names, between the decoder and the table.
+#[derive(Clone, Debug, Default)]
+pub struct Selection {
+    pub filter: Filter,
+    pub names: Names,
+}
+
+impl Selection {
+    /// Whether it changes nothing (no filter, no names).
+    pub fn is_noop(&self) -> bool {
+        !self.filter.is_active() && self.names.is_empty()
+    }
+}
+
+/// A [`RowOut`] that names devices and filters rows into a [`Sink`] (the table or the live
+/// view); rows it drops are still counted there.
+pub struct Select<'a> {
+    pub table: &'a mut dyn Sink,
+    pub selection: &'a Selection,
+}
+
+impl RowOut for Select<'_> {
+    #[inline]
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        let sel = self.selection;
+        let named;
+        let row = match row.id.and_then(|id| sel.names.get(id)) {
+            Some(name) => {
+                named = Row {
+                    device: name,
+                    ..*row
+                };
+                &named
+            }
+            None => row,
+        };
+        if sel.filter.keep(row) {
+            self.table.row(row)
+        } else {
+            self.table.skip();
+            Ok(())
+        }
+    }
+}
+
+/// The values of a repeatable list option, split at commas, trimmed, empty ones dropped.
+fn split(values: &[String]) -> impl Iterator<Item = &str> {
+    values
+        .iter()
+        .flat_map(|v| v.split(','))
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+}
+
+/// A decimal or `0x` hex number.
+pub fn parse_number(s: &str) -> Option<u32> {
+    match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+        Some(h) => u32::from_str_radix(h, 16).ok(),
+        None => s.parse().ok(),
+    }
+}
+
+/// A hex number with or without `0x` (`0210`, `0x34`, `F105`).
+fn parse_hex(s: &str) -> Option<u32> {
+    let h = s
+        .strip_prefix("0x")
+        .or_else(|| s.strip_prefix("0X"))
+        .unwrap_or(s);
+    if h.is_empty() || h.len() > 8 {
+        return None;
+    }
+    u32::from_str_radix(h, 16).ok()
+}
+
+fn range_text(vocab: &Vocab) -> String {
+    let (a, b) = (*vocab.ids.start(), *vocab.ids.end());
+    format!("{a}-{b} (0x{a:02X}-0x{b:02X})")
+}
+
+fn check_id(id: u32, text: &str, option: &str, vocab: &Vocab) -> Result<(), Error> {
+    if vocab.ids.contains(&id) {
+        return Ok(());
+    }
+    let hint = (vocab.id_hint)(id).map_or(String::new(), |h| format!("; {h}"));
+    Err(format!(
+        "{option} {text}: outside the {} range {}{hint}",
+        vocab.id_name,
+        range_text(vocab)
+    ))
+}
+
+/// `2,8`, `0x1B`, `0-9`, `0x10-0x1F`.
+fn id_list(
+    values: &[String],
+    option: &str,
+    vocab: &Vocab,
+) -> Result<Vec<RangeInclusive<u32>>, Error> {
+    let mut out = Vec::new();
+    for v in split(values) {
+        let bad = || {
+            format!(
+                "{option} {v:?}: expected IDs like 2, 0x1B or 0-9 ({}s {})",
+                vocab.id_name,
+                range_text(vocab)
+            )
+        };
+        let (a, b) = match v.split_once('-') {
+            Some((a, b)) => (
+                parse_number(a.trim()).ok_or_else(bad)?,
+                parse_number(b.trim()).ok_or_else(bad)?,
+            ),
+            None => {
+                let n = parse_number(v).ok_or_else(bad)?;
+                (n, n)
+            }
+        };
+        if a > b {
+            return Err(format!("{option} {v:?}: the range is empty ({a} > {b})"));
+        }
+        check_id(a, v, option, vocab)?;
+        check_id(b, v, option, vocab)?;
+        out.push(a..=b);
+    }
+    Ok(out)
+}
+
+fn type_list(
+    values: &[String],
+    option: &str,
+    vocab: &Vocab,
+    protocol: &str,
+) -> Result<Vec<Box<str>>, Error> {
+    let mut out = Vec::new();
+    for v in split(values) {
+        let found = vocab
+            .types
+            .iter()
+            .copied()
+            .chain(vocab.polls.then_some(POLL))
+            .find(|t| t.eq_ignore_ascii_case(v));
+        match found {
+            Some(t) => out.push(t.into()),
+            None => {
+                let mut all: Vec<&str> = vocab.types.to_vec();
+                if vocab.polls {
+                    all.push(POLL);
+                }
+                return Err(format!(
+                    "{option} {v:?}: {protocol} rows have no such type; types: {}",
+                    all.join(", ")
+                ));
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn no_hint(_: u32) -> Option<String> {
+        None
+    }
+
+    fn sensors() -> Vec<String> {
+        vec!["Alt".into(), "Cels".into(), "RxBt".into()]
+    }
+
+    fn hex_no(s: &str) -> bool {
+        parse_hex(s).is_some_and(|n| n <= 0xFFFF)
+    }
+
+    fn device(id: u32) -> &'static str {
+        ["Vario", "FLVSS", ""][id as usize % 3]
+    }
+
+    const VOCAB: Vocab = Vocab {
+        ids: 0..=31,
+        id_name: "physical ID",
+        id_hint: no_hint,
+        types: &["Data", "Null", "BadCRC", "Garbage"],
+        polls: true,
+        keepalives: true,
+        sensors,
+        sensor_no_text: "app IDs in hex",
+        sensor_no: hex_no,
+        sensor_no_hex: true,
+        devices: Some(device),
+    };
+
+    fn spec(f: impl FnOnce(&mut Spec)) -> Spec {
+        let mut s = Spec::default();
+        f(&mut s);
+        s
+    }
+
+    fn filter(s: &Spec) -> Result<Filter, Error> {
+        let names = Names::parse(&s.names, "--name", &VOCAB)?;
+        Filter::new(s, &VOCAB, &names, &[], "S.Port")
+    }
+
+    fn row(id: Option<u32>, kind: &'static str, class: Class) -> Row<'static> {
+        Row {
+            id,
+            kind,
+            class,
+            device: "FLVSS",
+            sensor_no: "210",
+            sensor: "Cels",
+            ..Row::empty(Some(0))
+        }
+    }
+
+    #[test]
+    fn no_rule_keeps_everything() {
+        let f = filter(&Spec::default()).unwrap();
+        assert!(!f.is_active());
+        assert!(f.keep(&row(None, "Garbage", Class::Error)));
+    }
+
+    #[test]
+    fn ids_lists_ranges_and_hex() {
+        let f = filter(&spec(|s| {
+            s.id = vec!["2,8".into(), "0x1B".into(), "10-12".into()]
+        }))
+        .unwrap();
+        for (id, keep) in [
+            (2, true),
+            (8, true),
+            (27, true),
+            (11, true),
+            (3, false),
+            (13, false),
+        ] {
+            assert_eq!(f.keep(&row(Some(id), "Data", Class::Plain)), keep, "{id}");
+        }
+        assert!(
+            !f.keep(&row(None, "Garbage", Class::Error)),
+            "no ID, no match"
+        );
+        let f = filter(&spec(|s| s.not_id = vec!["0-9".into()])).unwrap();
+        assert!(!f.keep(&row(Some(3), "Data", Class::Plain)));
+        assert!(f.keep(&row(Some(10), "Data", Class::Plain)));
+        assert!(
+            f.keep(&row(None, "Garbage", Class::Error)),
+            "no ID is not excluded"
+        );
+    }
+
+    #[test]
+    fn id_errors_name_the_range() {
+        let e = filter(&spec(|s| s.id = vec!["40".into()])).unwrap_err();
+        assert!(e.contains("0-31 (0x00-0x1F)"), "{e}");
+        let e = filter(&spec(|s| s.id = vec!["x".into()])).unwrap_err();
+        assert!(e.contains("expected IDs like"), "{e}");
+        let e = filter(&spec(|s| s.id = vec!["9-2".into()])).unwrap_err();
+        assert!(e.contains("empty"), "{e}");
+    }
+
+    #[test]
+    fn types_are_case_insensitive_and_checked() {
+        let f = filter(&spec(|s| s.types = vec!["data,badcrc".into()])).unwrap();
+        assert!(f.keep(&row(Some(1), "Data", Class::Plain)));
+        assert!(f.keep(&row(Some(1), "BadCRC", Class::Error)));
+        assert!(!f.keep(&row(Some(1), "Null", Class::Quiet)));
+        assert!(
+            !f.keep(&row(Some(1), "", Class::Plain)),
+            "a poll is not Data"
+        );
+        let f = filter(&spec(|s| s.types = vec!["poll".into()])).unwrap();
+        assert!(f.keep(&row(Some(1), "", Class::Plain)));
+        assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
+        let e = filter(&spec(|s| s.types = vec!["Dta".into()])).unwrap_err();
+        assert!(
+            e.contains("types: Data, Null, BadCRC, Garbage, Poll"),
+            "{e}"
+        );
+        let f = filter(&spec(|s| s.not_types = vec!["Null".into()])).unwrap();
+        assert!(!f.keep(&row(Some(1), "Null", Class::Quiet)));
+    }
+
+    #[test]
+    fn shortcuts() {
+        let f = filter(&spec(|s| s.hide_polls = true)).unwrap();
+        assert!(!f.keep(&row(Some(1), "", Class::Plain)));
+        assert!(f.keep(&row(Some(1), "Data", Class::Plain)));
+        let f = filter(&spec(|s| s.hide_null = true)).unwrap();
+        assert!(!f.keep(&row(Some(1), "Null", Class::Quiet)));
+        let f = filter(&spec(|s| s.errors = true)).unwrap();
+        assert!(f.keep(&row(Some(1), "BadCRC", Class::Error)));
+        assert!(f.keep(&row(Some(1), "Data", Class::Warning)));
+        assert!(
+            f.keep(&row(None, "LinkDown", Class::Info)),
+            "gaps stay visible"
+        );
+        assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
+        let no_polls = Vocab {
+            polls: false,
+            keepalives: false,
+            ..VOCAB
+        };
+        let names = Names::default();
+        let e = Filter::new(
+            &spec(|s| s.hide_polls = true),
+            &no_polls,
+            &names,
+            &[],
+            "S-Bus",
+        )
+        .unwrap_err();
+        assert!(e.contains("S-Bus has no polls"), "{e}");
+        let e = Filter::new(
+            &spec(|s| s.hide_null = true),
+            &no_polls,
+            &names,
+            &[],
+            "S-Bus",
+        )
+        .unwrap_err();
+        assert!(e.contains("no keep-alive"), "{e}");
+    }
+
+    #[test]
+    fn sensors_by_name_or_number() {
+        let f = filter(&spec(|s| s.sensor = vec!["cels".into()])).unwrap();
+        assert!(f.keep(&row(Some(1), "Data", Class::Plain)));
+        for v in ["0210", "210", "0x210"] {
+            let f = filter(&spec(|s| s.sensor = vec![v.into()])).unwrap();
+            assert!(f.keep(&row(Some(1), "Data", Class::Plain)), "{v}");
+        }
+        let f = filter(&spec(|s| s.sensor = vec!["Alt".into()])).unwrap();
+        assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
+        let e = filter(&spec(|s| s.sensor = vec!["VFAZ".into()])).unwrap_err();
+        assert!(e.contains("shows Alt, Cels, RxBt"), "{e}");
+        let f = Filter::new(
+            &spec(|s| s.sensor = vec!["speed".into()]),
+            &VOCAB,
+            &Names::default(),
+            &["speed".into()],
+            "SAB",
+        );
+        assert!(f.is_ok(), "names from options count");
+    }
+
+    #[test]
+    fn devices_and_names() {
+        let s = spec(|s| {
+            s.names = vec!["Pack=1".into()];
+            s.device = vec!["pack".into()];
+        });
+        let f = filter(&s).unwrap();
+        let names = Names::parse(&s.names, "--name", &VOCAB).unwrap();
+        assert_eq!(names.get(1), Some("Pack"));
+        let t = crate::sink::Table::new(
+            crate::sink::Output::memory(),
+            crate::sink::TableOptions {
+                format: crate::sink::Format::Tsv,
+                color: false,
+                raw: false,
+                time_abs: false,
+                utc: false,
+            },
+            &[],
+        );
+        let mut t = t;
+        let sel = Selection { filter: f, names };
+        let mut out = Select {
+            table: &mut t,
+            selection: &sel,
+        };
+        out.row(&row(Some(0), "Data", Class::Plain)).unwrap();
+        out.row(&row(Some(1), "Data", Class::Plain)).unwrap();
+        t.flush().unwrap();
+        let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 2, "{text}");
+        assert!(lines[1].starts_with("2\t0\t1\tPack\tData"), "{text}");
+        assert_eq!(t.rows(), 2);
+        let e = filter(&spec(|s| s.device = vec!["Boiler".into()])).unwrap_err();
+        assert!(e.contains("shows FLVSS, Vario"), "{e}");
+        assert!(filter(&spec(|s| s.device = vec!["vario".into()])).is_ok());
+    }
+
+    #[test]
+    fn name_errors() {
+        let e = Names::parse(&["Boiler".into()], "--name", &VOCAB).unwrap_err();
+        assert!(e.contains("expected NAME=ID"), "{e}");
+        let e = Names::parse(&["=3".into()], "--name", &VOCAB).unwrap_err();
+        assert!(e.contains("empty"), "{e}");
+        let e = Names::parse(&["a=99".into()], "--name", &VOCAB).unwrap_err();
+        assert!(e.contains("0-31"), "{e}");
+        let n = Names::parse(&["a=1".into(), "b=0x1".into()], "--name", &VOCAB).unwrap();
+        assert_eq!(n.get(1), Some("b"), "the later name wins");
+        assert_eq!(n.pairs().count(), 1);
+    }
+}

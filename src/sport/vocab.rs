@@ -1,0 +1,103 @@
+//! What an S.Port table can show, for checking filters and names (`crate::filter`).
+
+use crate::filter::Vocab;
+use crate::row::kind;
+
+/// Physical IDs 0-31; the Sensor column names app IDs as EdgeTX does; Sensor # is the app ID
+/// in hex.
+pub const VOCAB: Vocab = Vocab {
+    ids: 0..=31,
+    id_name: "physical ID",
+    id_hint,
+    types: &[
+        "Data",
+        "Null",
+        "MaintOff",
+        "MaintOn",
+        "Read",
+        "Write",
+        "Reply",
+        "FwUpdate",
+        "Unknown",
+        kind::BAD_CRC,
+        kind::TRUNCATED,
+        kind::GARBAGE,
+        kind::LINK_DOWN,
+        kind::LINK_UP,
+        kind::TIME_JUMP,
+    ],
+    polls: true,
+    keepalives: true,
+    sensors,
+    sensor_no_text: "shows app IDs in hex (0210, F101)",
+    sensor_no,
+    sensor_no_hex: true,
+    devices: Some(device),
+};
+
+/// A poll byte (`0xA1`) given where a physical ID is expected.
+fn id_hint(id: u32) -> Option<String> {
+    let b = u8::try_from(id).ok()?;
+    super::wire::header_ok(b).then(|| {
+        format!(
+            "0x{b:02X} is the poll byte of physical ID {}: use --id {}",
+            b & 0x1F,
+            b & 0x1F
+        )
+    })
+}
+
+/// Every sensor label of an app ID busnoop knows (EdgeTX's names), each once.
+fn sensors() -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut label = String::new();
+    let mut hex = String::new();
+    for app_id in 0..=u16::MAX {
+        label.clear();
+        hex.clear();
+        super::values::label(app_id, &mut label);
+        super::values::push_hex_id(&mut hex, app_id);
+        // Hub frames of unknown IDs are named by number (`Hub 0x41`): not worth listing.
+        if !label.is_empty()
+            && label != hex
+            && !label.starts_with("Hub 0x")
+            && !out.contains(&label)
+        {
+            out.push(label.clone());
+        }
+    }
+    out
+}
+
+/// An app ID in hex, with or without `0x` (`0210`, `210`, `0xF101`).
+fn sensor_no(s: &str) -> bool {
+    let h = s
+        .strip_prefix("0x")
+        .or_else(|| s.strip_prefix("0X"))
+        .unwrap_or(s);
+    !h.is_empty() && h.len() <= 4 && h.bytes().all(|b| b.is_ascii_hexdigit())
+}
+
+fn device(id: u32) -> &'static str {
+    super::names::device(id as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn knows_the_common_sensors_and_hints_at_poll_bytes() {
+        let s = sensors();
+        for name in ["Cels", "RxBt", "RSSI", "Alt", "Volts"] {
+            assert!(s.iter().any(|n| n == name), "{name} in {s:?}");
+        }
+        assert!(
+            !s.iter()
+                .any(|n| n.len() == 4 && n.bytes().all(|b| b.is_ascii_hexdigit()))
+        );
+        assert!(id_hint(0xA1).unwrap().contains("physical ID 1"));
+        assert!(id_hint(40).is_none());
+        assert!(sensor_no("0210") && sensor_no("0xF101") && !sensor_no("12345"));
+    }
+}
