@@ -10,6 +10,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fmt;
+pub mod numbers;
 pub mod pairing;
 pub mod pcap;
 pub mod protocol;
