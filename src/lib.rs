@@ -13,6 +13,7 @@ pub mod exit;
 pub mod filter;
 pub mod fmt;
 pub mod manual;
+pub mod numbers;
 pub mod pace;
 pub mod pairing;
 pub mod pcap;

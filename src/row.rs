@@ -48,6 +48,28 @@ pub enum Class {
     Info,
 }
 
+/// One number of a row, named (`Cell1`, `VFAS`, `R100`): see [`Row::parts`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Part<'a> {
+    /// Column name in the wide export and key in JSON (`Cell1`, `Lat`, `RB1V`, `R100`).
+    pub name: &'a str,
+    /// Unit (`V`, `m`), or "".
+    pub unit: &'a str,
+    /// Plain decimal with the sensor's full wire precision (`3.918`); what the sinks print.
+    pub text: &'a str,
+    /// The same number (for the wide export and plots).
+    pub value: f64,
+}
+
+impl Part<'static> {
+    pub const EMPTY: Part<'static> = Part {
+        name: "",
+        unit: "",
+        text: "",
+        value: 0.0,
+    };
+}
+
 /// One row of the table. Strings are borrowed from the decoder's scratch buffers so that
 /// producing a row allocates nothing.
 #[derive(Clone, Copy, Debug)]
@@ -66,6 +88,11 @@ pub struct Row<'a> {
     pub data: &'a str,
     /// Values of the decoder's extra columns, in the order of its column list.
     pub extra: &'a [&'a str],
+    /// Every number the row carries, in wire order; empty when it carries none (and for frames
+    /// whose check failed). The first is the `Value` column; a packed value (an FLVSS frame's two
+    /// cells, a pair of halves, several registers) has one part per number, so every number is
+    /// reachable (JSON `parts`, one wide column each).
+    pub parts: &'a [Part<'a>],
     /// The row's bytes as they were on the wire (for `--raw` and recordings).
     pub raw: &'a [u8],
 }
@@ -83,8 +110,14 @@ impl<'a> Row<'a> {
             sensor: "",
             data: "",
             extra: &[],
+            parts: &[],
             raw: &[],
         }
+    }
+
+    /// The `Value` column: the first number's text, or "".
+    pub fn value(&self) -> &'a str {
+        self.parts.first().map_or("", |p| p.text)
     }
 }
 
@@ -139,10 +172,17 @@ pub struct OwnedRow {
     pub sensor: String,
     pub data: String,
     pub extra: Vec<String>,
+    /// (name, unit, text) of every number.
+    pub parts: Vec<(String, String, String)>,
     pub raw: Vec<u8>,
 }
 
 impl OwnedRow {
+    /// The `Value` column.
+    pub fn value(&self) -> &str {
+        self.parts.first().map_or("", |p| p.2.as_str())
+    }
+
     pub fn millis(&self) -> Option<u64> {
         self.micros.map(|m| m / 1000)
     }
@@ -160,6 +200,11 @@ impl RowOut for Collected {
             sensor: row.sensor.to_owned(),
             data: row.data.to_owned(),
             extra: row.extra.iter().map(|s| (*s).to_owned()).collect(),
+            parts: row
+                .parts
+                .iter()
+                .map(|p| (p.name.to_owned(), p.unit.to_owned(), p.text.to_owned()))
+                .collect(),
             raw: row.raw.to_vec(),
         });
         Ok(())

@@ -39,7 +39,7 @@ fn noise(n: usize, seed: u64) -> Vec<u8> {
         .collect()
 }
 
-const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote";
+const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote";
 
 #[test]
 fn empty_file() {

@@ -85,8 +85,8 @@ fn demo_session_sab2() {
     assert_eq!(
         t.columns,
         [
-            "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data", "Addr",
-            "Resp ms", "Framing", "Note"
+            "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data", "Value",
+            "Addr", "Resp ms", "Framing", "Note"
         ]
     );
     assert_eq!(t.rows.len(), 24);
@@ -104,6 +104,7 @@ fn demo_session_sab2() {
             "0x10",
             "distance",
             "23 01 (291)",
+            "",
             "0x05",
             "1.215",
             "hdlc",
@@ -256,7 +257,7 @@ fn standard_input_and_other_formats() {
         .success();
     let text = String::from_utf8(out.get_output().stdout.clone()).unwrap();
     let first = text.lines().next().unwrap();
-    assert!(first.starts_with(r#"{"counter":1,"millis":0,"id":1,"device":"","type":"Request","sensor_no":"0x02","sensor":"","data":"55 (85)","addr":"0x01","resp_ms":"","framing":"hdlc","note":"framing hdlc: "#), "{first}");
+    assert!(first.starts_with(r#"{"counter":1,"millis":0,"id":1,"device":null,"type":"Request","sensor_no":"0x02","sensor":null,"data":"55 (85)","value":null,"addr":"0x01","resp_ms":null,"framing":"hdlc","note":"framing hdlc: "#), "{first}");
     assert_eq!(text.lines().count(), 24);
 
     let dir = tempfile::tempdir().unwrap();
@@ -268,9 +269,9 @@ fn standard_input_and_other_formats() {
         .assert()
         .success();
     let mut r = csv::Reader::from_path(&csv).unwrap();
-    assert_eq!(&r.headers().unwrap()[12], "Raw");
+    assert_eq!(&r.headers().unwrap()[13], "Raw");
     let rec = r.records().next().unwrap().unwrap();
-    assert_eq!(&rec[12], "7E 01 02 55 E1 5F 7E");
+    assert_eq!(&rec[13], "7E 01 02 55 E1 5F 7E");
 }
 
 #[test]

@@ -485,7 +485,7 @@ fn time_going_back_in_an_edgetx_log_is_a_row_and_keeps_the_logged_time() {
     // Millis never goes back; the Time column shows what the log says.
     let millis: Vec<u64> = rows.iter().map(|r| r[1].parse().unwrap()).collect();
     assert!(millis.windows(2).all(|w| w[0] <= w[1]), "{millis:?}");
-    let times: Vec<&str> = rows.iter().map(|r| r[10].as_str()).collect();
+    let times: Vec<&str> = rows.iter().map(|r| r[11].as_str()).collect();
     assert!(times[0].contains("22:41:05.000"), "{times:?}");
     assert!(times[3].contains("22:41:01.000"), "{times:?}");
     assert!(times[4].contains("22:41:01.012"), "{times:?}");

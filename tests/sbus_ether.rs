@@ -112,7 +112,7 @@ fn compare(tshark: &str, rows: &[Vec<String>]) {
         let n = f(fr, "frame.number");
         let ctx = format!("frame {n}: tshark {fr:?}\nbusnoop {row:?}");
         // Counter, Millis, ID, Device, Type, Sensor #, Sensor, Data, Resp ms, Seq, Note
-        assert_eq!(row[9], f(fr, "sbus.seq"), "{ctx}");
+        assert_eq!(row[10], f(fr, "sbus.seq"), "{ctx}");
         assert_eq!(f(fr, "sbus.crc.status"), "1", "{ctx}");
         assert_ne!(row[4], "BadCRC", "{ctx}");
         let millis = (f(fr, "frame.time_relative").parse::<f64>().unwrap() * 1000.0) as u64;
@@ -222,8 +222,8 @@ fn check_pairing(response_to: &str, row: &[String], rows: &[Vec<String>], ctx: &
         (&req[2], &req[5], &req[6]),
         "{ctx}"
     );
-    assert_eq!(row[9], req[9], "{ctx}");
-    assert!(!row[8].is_empty(), "response time: {ctx}");
+    assert_eq!(row[10], req[10], "{ctx}");
+    assert!(!row[9].is_empty(), "response time: {ctx}");
 }
 
 fn cmd_code(name: &str) -> u8 {
@@ -455,10 +455,10 @@ fn generated_session_with_faults() {
     assert!(!nak[5].is_empty() && !nak[2].is_empty(), "paired: {nak:?}");
     assert!(
         rows.iter()
-            .any(|r| r[10].contains("sequence gap: 3 skipped"))
+            .any(|r| r[11].contains("sequence gap: 3 skipped"))
     );
     let timeout = rows.iter().find(|r| r[4] == "Timeout").unwrap();
-    assert_eq!(timeout[10], "no answer within 1000 ms");
+    assert_eq!(timeout[11], "no answer within 1000 ms");
     assert!(rows.iter().any(|r| r[3] == "10.0.0.6:5050"));
     // --stats per PLC with sequence gaps
     let out = Command::cargo_bin("busnoop")
@@ -476,7 +476,7 @@ fn generated_session_with_faults() {
     );
     let gaps = rows
         .iter()
-        .filter(|r| r[10].contains("sequence gap: 3 skipped"))
+        .filter(|r| r[11].contains("sequence gap: 3 skipped"))
         .count();
     assert!(gaps >= 5, "{gaps}");
     assert!(err.contains(&format!("sequence gaps {gaps}")), "{err}");
@@ -597,7 +597,7 @@ fn absolute_time_from_the_capture() {
         &["--time", "abs", "--utc"],
     );
     // pcap header time 0x6B0227EC = 1795303404 s
-    assert_eq!(rows[0][11], "2026-11-21T23:23:24.000Z");
+    assert_eq!(rows[0][12], "2026-11-21T23:23:24.000Z");
 }
 
 #[test]
@@ -749,7 +749,7 @@ fn broken_captures_are_reported_not_fatal() {
     assert_eq!(rows[1][4], "Truncated");
     assert_eq!(rows[2][4], "Fragment");
     assert!(
-        rows[2][10].contains("10.0.0.1:1234 -> 10.0.0.5:5050"),
+        rows[2][11].contains("10.0.0.1:1234 -> 10.0.0.5:5050"),
         "{rows:?}"
     );
     // not a capture at all is a raw serial file; an EdgeTX log is refused

@@ -56,7 +56,7 @@ fn decode(bytes: &[u8], args: &[&str]) -> Vec<Row> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tResp ms\tSeq\tNote"
+        "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tResp ms\tSeq\tNote"
     );
     lines
         .map(|l| {
@@ -68,8 +68,8 @@ fn decode(bytes: &[u8], args: &[&str]) -> Vec<Row> {
                 sensor_no: c[5].into(),
                 sensor: c[6].into(),
                 data: c[7].into(),
-                seq: c[9].into(),
-                note: c[10].into(),
+                seq: c[10].into(),
+                note: c[11].into(),
             }
         })
         .collect()
@@ -270,7 +270,7 @@ fn ether_seed_telegrams() {
         .collect();
     assert_eq!(rows.len(), 2);
     assert_eq!(
-        rows[0][..10],
+        rows[0][..11],
         [
             "1",
             "0",
@@ -281,11 +281,12 @@ fn ether_seed_telegrams() {
             "Read register(s)",
             "R0",
             "",
+            "",
             "182"
         ]
     );
     assert_eq!(
-        rows[1][..10],
+        rows[1][..11],
         [
             "2",
             "0",
@@ -295,6 +296,7 @@ fn ether_seed_telegrams() {
             "R0",
             "Read register(s)",
             "R0=305419896",
+            "",
             "0.0",
             "182"
         ]

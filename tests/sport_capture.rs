@@ -81,8 +81,12 @@ fn values_match_the_radio_csv() {
         .iter()
         .filter(|r| r.sensor == "Cels" && r.id == Some(1))
     {
+        // busnoop shows the wire's 2 mV steps; the radio keeps raw / 5 hundredths (4.122 → 4.12).
         for part in r.data.split(' ').filter(|p| p.starts_with("cell")) {
-            cells.insert(part.to_string());
+            let (name, v) = part.split_once('=').unwrap();
+            let mv: u32 = v.replace('.', "").parse().unwrap();
+            let h = mv / 2 / 5;
+            cells.insert(format!("{name}={}.{:02}", h / 100, h % 100));
         }
     }
     let want: BTreeSet<String> = [
@@ -119,5 +123,6 @@ fn values_match_the_radio_csv() {
             second.insert(part.split('=').nth(1).unwrap().to_string());
         }
     }
-    assert_eq!(second, ["0.04", "4.13"].map(String::from).into());
+    // At full wire precision: 4.130 and 4.138 V (the radio keeps 4.13 for both) and 0.042 V.
+    assert_eq!(second, ["0.042", "4.130", "4.138"].map(String::from).into());
 }

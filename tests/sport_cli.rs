@@ -63,8 +63,8 @@ fn csv_output_parses_with_the_same_columns() {
     assert_eq!(recs.len(), 30);
     let alt = recs.iter().find(|r| &r[6] == "Alt").unwrap();
     assert_eq!(
-        (&alt[0], &alt[1], &alt[5], &alt[7], &alt[8]),
-        ("23", "264", "100", "65.43", "m")
+        (&alt[0], &alt[1], &alt[5], &alt[7], &alt[8], &alt[9]),
+        ("23", "264", "100", "65.43", "65.43", "m")
     );
 }
 
@@ -155,7 +155,9 @@ fn output_file_format_comes_from_the_extension() {
         .success()
         .stdout("");
     let text = std::fs::read_to_string(&csv_path).unwrap();
-    assert!(text.starts_with("Counter,Millis,ID,Device,Type,Sensor #,Sensor,Data,Unit,Note\r\n"));
+    assert!(
+        text.starts_with("Counter,Millis,ID,Device,Type,Sensor #,Sensor,Data,Value,Unit,Note\r\n")
+    );
     assert!(text.ends_with("\r\n"));
 
     let jsonl = dir.path().join("out.jsonl");
@@ -353,7 +355,7 @@ fn empty_file_gives_just_the_header() {
         .arg(&empty)
         .assert()
         .code(10)
-        .stdout("Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote\n")
+        .stdout("Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote\n")
         .stderr(format!(
             "busnoop: empty input: {} holds no bytes\n",
             empty.display()

@@ -115,11 +115,17 @@ fn cli_prints_the_sample_rows_as_tsv() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(
         lines[0],
-        "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote"
+        "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote"
     );
-    assert_eq!(lines[1], "1\t0\t26\tTemp\t\t\t\t\t\t");
-    assert_eq!(lines[2], "2\t12\t0\tVario\tNull\t\t\t\t\t");
-    assert_eq!(lines[9], "9\t96\t2\tFAS-40S\tData\t210\tVolts\t0.00\tV\t");
-    assert_eq!(lines[23], "23\t264\t0\tVario\tData\t100\tAlt\t65.43\tm\t");
+    assert_eq!(lines[1], "1\t0\t26\tTemp\t\t\t\t\t\t\t");
+    assert_eq!(lines[2], "2\t12\t0\tVario\tNull\t\t\t\t\t\t");
+    assert_eq!(
+        lines[9],
+        "9\t96\t2\tFAS-40S\tData\t210\tVolts\t0.00\t0.00\tV\t"
+    );
+    assert_eq!(
+        lines[23],
+        "23\t264\t0\tVario\tData\t100\tAlt\t65.43\t65.43\tm\t"
+    );
     assert_eq!(lines.len(), 31);
 }

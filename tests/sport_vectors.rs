@@ -20,6 +20,15 @@ fn label(canonical: &str) -> &str {
 
 /// The canonical one-line decode of `vectors/README.md`, rebuilt from a busnoop row, for the
 /// categories where the two describe the same thing.
+/// The vectors give cells as EdgeTX keeps them (`raw / 5` hundredths); busnoop shows the wire's
+/// 2 mV steps (`4.122`). Turns busnoop's `name=4.122` back into the radio's `name=4.12`.
+fn radio_cell(part: &str) -> String {
+    let (name, v) = part.split_once('=').unwrap();
+    let mv: u32 = v.replace('.', "").parse().unwrap();
+    let hundredths = mv / 2 / 5;
+    format!("{name}={}.{:02}", hundredths / 100, hundredths % 100)
+}
+
 fn canonical(row: &OwnedRow, app_id: u16, value: u32) -> String {
     let unit = row.extra[0].as_str();
     match row.kind.as_str() {
@@ -37,7 +46,7 @@ fn canonical(row: &OwnedRow, app_id: u16, value: u32) -> String {
                     .split(' ')
                     .map(|p| {
                         if p.starts_with("cell") {
-                            format!("{p}{unit}")
+                            format!("{}{unit}", radio_cell(p))
                         } else {
                             p.to_string()
                         }
@@ -45,8 +54,10 @@ fn canonical(row: &OwnedRow, app_id: u16, value: u32) -> String {
                     .collect();
                 format!("Cels {}", parts.join(" "))
             }
-            "GPS" => format!("GPS {} {unit}", row.data),
-            "Hub Cell" => format!("hub Cell {}{unit}", row.data),
+            // busnoop rounds to 1e-7 degree, the vectors truncate to 1e-6: dropping the last
+            // digit gives the same (a wire step is 1/600000 degree, never close to the boundary).
+            "GPS" => format!("GPS {} {unit}", &row.data[..row.data.len() - 1]),
+            "Hub Cell" => format!("hub Cell {}{unit}", radio_cell(&row.data)),
             s if s.starts_with("Hub ") => format!("hub id=0x{app_id:02X} v16={}", row.data),
             "A1" | "A2" | "RxBt" => {
                 // The vectors give the raw byte and EdgeTX's one-decimal display; busnoop shows two

@@ -180,6 +180,7 @@ impl Mapper {
             sensor,
             data: &sc.data,
             extra: &extra,
+            parts: &[],
             raw: p.raw,
         };
         let _ = out.row(&row);

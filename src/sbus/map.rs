@@ -81,6 +81,7 @@ pub(super) fn put_row(
         sensor,
         data: &sc.data,
         extra: &extra,
+        parts: &[],
         raw,
     })
 }

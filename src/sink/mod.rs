@@ -94,6 +94,13 @@ impl io::Write for SharedBuf {
     }
 }
 
+/// The column after `Data` in TSV, CSV and JSON Lines (not in pretty output, where Data says
+/// the same): the row's first number ([`Row::value`]).
+pub const VALUE_COLUMN: &str = "Value";
+
+/// Extra columns whose cells are numbers (JSON writes them as numbers).
+const NUMERIC_EXTRA: [&str; 2] = ["Resp ms", "Seq"];
+
 /// Pretty-output column widths for the base columns, when the protocol gives none (see
 /// [`crate::protocol::Protocol::pretty_widths`]).
 const PRETTY_WIDTHS: [usize; 8] = [7, 8, 3, 10, 9, 8, 10, 30];
@@ -105,6 +112,9 @@ pub const PRETTY_GROW_MAX: usize = 60;
 impl Table {
     pub fn new(out: Output, opts: TableOptions, extra: &[&'static str]) -> Self {
         let mut columns: Vec<&'static str> = BASE_COLUMNS.to_vec();
+        if opts.format != Format::Pretty {
+            columns.push(VALUE_COLUMN);
+        }
         columns.extend_from_slice(extra);
         if opts.raw {
             columns.push("Raw");
@@ -302,6 +312,8 @@ impl Table {
             buf.push(b'\t');
             push_tsv_field(buf, field);
         }
+        buf.push(b'\t');
+        buf.extend_from_slice(row.value().as_bytes());
         for i in 0..n_extra {
             buf.push(b'\t');
             push_tsv_field(buf, row.extra.get(i).copied().unwrap_or(""));
@@ -333,6 +345,7 @@ impl Table {
         for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
             let _ = self.csv.write_field(field);
         }
+        let _ = self.csv.write_field(row.value());
         for i in 0..self.n_extra {
             let _ = self
                 .csv
@@ -397,9 +410,34 @@ impl Table {
         for (k, v) in base {
             push_json_pair(buf, k, v);
         }
-        for (i, name) in columns[BASE_COLUMNS.len()..][..n_extra].iter().enumerate() {
+        buf.extend_from_slice(b",\"value\":");
+        match row.parts.first() {
+            Some(p) => buf.extend_from_slice(p.text.as_bytes()),
+            None => buf.extend_from_slice(b"null"),
+        }
+        for (i, name) in columns[BASE_COLUMNS.len() + 1..][..n_extra]
+            .iter()
+            .enumerate()
+        {
             push_json_key(buf, name);
-            push_json_str(buf, row.extra.get(i).copied().unwrap_or(""));
+            let v = row.extra.get(i).copied().unwrap_or("");
+            if NUMERIC_EXTRA.contains(name) && is_json_number(v) {
+                buf.extend_from_slice(v.as_bytes());
+            } else {
+                push_json_str(buf, v);
+            }
+        }
+        if !row.parts.is_empty() {
+            buf.extend_from_slice(b",\"parts\":{");
+            for (i, p) in row.parts.iter().enumerate() {
+                if i > 0 {
+                    buf.push(b',');
+                }
+                push_json_str(buf, p.name);
+                buf.push(b':');
+                buf.extend_from_slice(p.text.as_bytes());
+            }
+            buf.push(b'}');
         }
         if self.opts.raw {
             buf.extend_from_slice(b",\"raw\":\"");
@@ -595,7 +633,23 @@ fn push_json_pair(buf: &mut Vec<u8>, key: &str, value: &str) {
     push_json_str(buf, value);
 }
 
+/// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
+fn is_json_number(s: &str) -> bool {
+    let b = s.strip_prefix('-').unwrap_or(s).as_bytes();
+    let (int, frac) = match b.iter().position(|&c| c == b'.') {
+        Some(i) => (&b[..i], Some(&b[i + 1..])),
+        None => (b, None),
+    };
+    let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
+    digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
+}
+
+/// A JSON string, or `null` for an empty cell.
 fn push_json_str(buf: &mut Vec<u8>, s: &str) {
+    if s.is_empty() {
+        buf.extend_from_slice(b"null");
+        return;
+    }
     buf.push(b'"');
     for &b in s.as_bytes() {
         match b {
@@ -616,6 +670,7 @@ fn push_json_str(buf: &mut Vec<u8>, s: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::row::Part;
 
     fn sample_row() -> Row<'static> {
         Row {
@@ -628,6 +683,12 @@ mod tests {
             sensor: "Alt",
             data: "65.43",
             extra: &["m", "a \"quoted\", note"],
+            parts: &[Part {
+                name: "Alt",
+                unit: "m",
+                text: "65.43",
+                value: 65.43,
+            }],
             raw: &[0x7E, 0x00],
         }
     }
@@ -652,11 +713,11 @@ mod tests {
         let lines: Vec<&str> = s.lines().collect();
         assert_eq!(
             lines[0],
-            "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tUnit\tNote\tRaw"
+            "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote\tRaw"
         );
         assert_eq!(
             lines[1],
-            "1\t4280\t0\tVario\tData\t100\tAlt\t65.43\tm\ta \"quoted\", note\t7E 00"
+            "1\t4280\t0\tVario\tData\t100\tAlt\t65.43\t65.43\tm\ta \"quoted\", note\t7E 00"
         );
     }
 
@@ -667,8 +728,10 @@ mod tests {
         let headers = r.headers().unwrap().clone();
         assert_eq!(&headers[5], "Sensor #");
         let rec = r.records().next().unwrap().unwrap();
-        assert_eq!(&rec[9], "a \"quoted\", note");
+        assert_eq!(&headers[8], "Value");
+        assert_eq!(&rec[10], "a \"quoted\", note");
         assert_eq!(&rec[7], "65.43");
+        assert_eq!(&rec[8], "65.43");
     }
 
     #[test]
@@ -676,7 +739,7 @@ mod tests {
         let s = render(Format::Jsonl, true);
         assert_eq!(
             s.trim_end(),
-            r#"{"counter":1,"millis":4280,"id":0,"device":"Vario","type":"Data","sensor_no":"100","sensor":"Alt","data":"65.43","unit":"m","note":"a \"quoted\", note","raw":"7E 00"}"#
+            r#"{"counter":1,"millis":4280,"id":0,"device":"Vario","type":"Data","sensor_no":"100","sensor":"Alt","data":"65.43","value":65.43,"unit":"m","note":"a \"quoted\", note","parts":{"Alt":65.43},"raw":"7E 00"}"#
         );
     }
 
@@ -718,6 +781,7 @@ mod tests {
             sensor: "Read",
             data,
             extra: &["1.5", "note"],
+            parts: &[],
             raw: &[],
         };
         t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
@@ -763,6 +827,16 @@ mod tests {
             data_grown,
             "an overflow does not widen the column"
         );
+    }
+
+    #[test]
+    fn json_numbers() {
+        for ok in ["0", "12", "-1.50", "0.005", "18446744073709551615"] {
+            assert!(is_json_number(ok), "{ok}");
+        }
+        for bad in ["", "-", "01", ".5", "1.", "1e3", "0x10", "1 2", "NaN"] {
+            assert!(!is_json_number(bad), "{bad}");
+        }
     }
 
     #[test]

@@ -93,6 +93,7 @@ struct Scratch {
     sensor: String,
     data: String,
     note: String,
+    nums: values::SportNumbers,
 }
 
 impl Scratch {
@@ -101,6 +102,7 @@ impl Scratch {
         self.sensor.clear();
         self.data.clear();
         self.note.clear();
+        self.nums.clear();
     }
 
     fn note(&mut self, text: &str) {
@@ -213,6 +215,9 @@ impl Mapper {
                     }
                     unit = describe(b[0], s.header, app_id, value, sc);
                     if !ok {
+                        // A number that failed its check is not one to chart: Data shows it,
+                        // Value stays empty.
+                        sc.nums.clear();
                         let expected = wire::crc(&b[..7]);
                         let type_name = names::frame_type(b[0]).unwrap_or("unknown");
                         let mut note = String::new();
@@ -260,17 +265,20 @@ impl Mapper {
             }
         }
         let extra = [unit, sc.note.as_str()];
-        out.row(&Row {
-            micros: Some(micros),
-            id: Some(phys as u32),
-            device: names::device(phys),
-            kind,
-            class,
-            sensor_no: &sc.sensor_no,
-            sensor: &sc.sensor,
-            data: &sc.data,
-            extra: &extra,
-            raw: s.wire(),
+        sc.nums.with_parts(|parts| {
+            out.row(&Row {
+                micros: Some(micros),
+                id: Some(phys as u32),
+                device: names::device(phys),
+                kind,
+                class,
+                sensor_no: &sc.sensor_no,
+                sensor: &sc.sensor,
+                data: &sc.data,
+                extra: &extra,
+                parts,
+                raw: s.wire(),
+            })
         })
     }
 
@@ -304,6 +312,7 @@ impl Mapper {
             sensor: "",
             data: &sc.data,
             extra: &extra,
+            parts: &[],
             raw: g.bytes(),
         })
     }
@@ -314,7 +323,14 @@ fn describe(kind: u8, header: u8, app_id: u16, value: u32, sc: &mut Scratch) -> 
     match kind {
         0x10 => {
             values::push_sensor_no(&mut sc.sensor_no, app_id);
-            values::decode(app_id, value, &mut sc.sensor, &mut sc.data)
+            values::decode_numbers(
+                header & 0x1F,
+                app_id,
+                value,
+                &mut sc.sensor,
+                &mut sc.data,
+                &mut sc.nums,
+            )
         }
         0x00 => {
             // Keep-alive: the sample leaves Sensor #/Sensor/Data empty; Pawelsky-style sensors

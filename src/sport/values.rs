@@ -2,11 +2,45 @@
 //! (`radio/src/telemetry/frsky_sport.cpp` sportSensors[], `frsky_defs.h`, `sensor_names.h`).
 //!
 //! [`decode`] writes the `Sensor` and `Data` columns of a data frame into reusable buffers and
-//! returns the unit; nothing here allocates once the buffers have grown.
+//! returns the unit; [`decode_numbers`] also keeps every number of the frame ([`Numbers`]) for
+//! the `Value` column, JSON and the wide export. Nothing here allocates once the buffers have
+//! grown.
+//!
+//! Numbers keep the full wire precision (FLVSS cells: 12 bits of 2 mV, raw 1959 → 3.918 V; SBEC
+//! mV and mA → 3 decimals; GPS 1/10000 minute → degrees with 7 decimals), where EdgeTX rounds
+//! (`raw / 5` hundredths for cells, `/ 10` for the SBEC). `docs/sport.md` lists every scale and
+//! its source.
 
 use std::fmt::Write as _;
 
-use crate::fmt::{push_fixed, push_i64, push_u64};
+use crate::fmt::{push_fixed, push_u64};
+use crate::numbers::Numbers;
+
+/// The numbers one S.Port frame can carry (a servo frame has three).
+pub type SportNumbers = Numbers<4>;
+
+/// The physical ID flight controllers answer on (Betaflight/INAV FSSP_SENSOR_ID1): their AccX/Y/Z
+/// are in 0.01 g, see [`acc_prec`].
+pub const FC_PHYS: u8 = 0x1B;
+
+/// The name EdgeTX gives a sensor in its logs and the wide export (`VFAS(V)`), where busnoop's
+/// `Sensor` column follows the S-Port_Snoop sample (`Volts`).
+fn log_name(label: &'static str) -> &'static str {
+    match label {
+        "Vario" => "VSpd",
+        "Amps" => "Curr",
+        "Volts" => "VFAS",
+        l => l,
+    }
+}
+
+/// Decimals of AccX/Y/Z: EdgeTX reads 0.001 g (prec 3, OpenTX PR #7847) and FrSky's own sensors
+/// send that; Betaflight (`lrintf(100 * acc.accADC[X] * acc.dev.acc_1G_rec)`, "Multiply by 100
+/// to show as x.xx g on Taranis") and INAV (`lrintf(100 * acc.accADCf[X])`) send 0.01 g from the
+/// flight-controller slot (physical ID 0x1B), so that slot is read as 0.01 g.
+pub fn acc_prec(phys: u8) -> u8 {
+    if phys == FC_PHYS { 2 } else { 3 }
+}
 
 /// What kind of value an app ID carries, for the scalar table.
 #[derive(Clone, Copy)]
@@ -105,10 +139,8 @@ fn pair(base: u16) -> Option<Pair> {
         0x0BA0 => p("CH3A/CH4A", ("CH3A", "A", 2), ("CH4A", "A", 2)),
         0x0BB0 => p("CH5A/CH6A", ("CH5A", "A", 2), ("CH6A", "A", 2)),
         0x0BC0 => p("CH7A/CH8A", ("CH7A", "A", 2), ("CH8A", "A", 2)),
-        0x0E50 => Pair {
-            divisor: 10,
-            ..p("BecV/BecA", ("BecV", "V", 2), ("BecA", "A", 2))
-        },
+        // The SBEC sends mV and mA; EdgeTX divides by 10, busnoop keeps the mV and mA.
+        0x0E50 => p("BecV/BecA", ("BecV", "V", 3), ("BecA", "A", 3)),
         _ => return None,
     })
 }
@@ -179,7 +211,22 @@ pub fn label(app_id: u16, out: &mut String) {
 }
 
 /// Writes the `Sensor` and `Data` columns for a data frame and returns the unit (may be empty).
+/// Reads AccX/Y/Z as a FrSky sensor sends them (0.001 g).
 pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -> &'static str {
+    let mut nums = SportNumbers::default();
+    decode_numbers(0, app_id, value, sensor, data, &mut nums)
+}
+
+/// [`decode`] for a frame from physical ID `phys`, keeping its numbers in `nums`. Returns the
+/// unit of the first number (the `Value` column), or of the Data column when it has none.
+pub fn decode_numbers(
+    phys: u8,
+    app_id: u16,
+    value: u32,
+    sensor: &mut String,
+    data: &mut String,
+    nums: &mut SportNumbers,
+) -> &'static str {
     let base = app_id & 0xFFF0;
     if let Some(s) = scalar(base) {
         sensor.push_str(s.label);
@@ -187,7 +234,13 @@ pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -
             Sign::S32 => value as i32 as i64,
             Sign::U32 => value as i64,
         };
-        push_fixed(data, raw, s.prec);
+        let prec = if matches!(base, 0x0700..=0x0720) {
+            acc_prec(phys)
+        } else {
+            s.prec
+        };
+        nums.fixed(log_name(s.label), s.unit, raw, prec);
+        data.push_str(nums.first_text());
         return s.unit;
     }
     if let Some(p) = pair(base) {
@@ -206,19 +259,36 @@ pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -
             data.push('=');
             push_fixed(data, v, prec);
             data.push_str(unit);
+            nums.fixed(name, unit, v, prec);
         }
-        return "";
+        return p.first.1;
     }
+    let unit = other(app_id, value, sensor, data, nums);
+    if nums.is_empty() {
+        unit
+    } else {
+        nums.first_unit()
+    }
+}
+
+/// The app IDs that are neither plain scalars nor pairs.
+fn other(
+    app_id: u16,
+    value: u32,
+    sensor: &mut String,
+    data: &mut String,
+    nums: &mut SportNumbers,
+) -> &'static str {
     match app_id {
-        0x0000..=0x00FF => hub(app_id as u8, value, sensor, data),
+        0x0000..=0x00FF => hub(app_id as u8, value, sensor, data, nums),
         0x0300..=0x030F => {
             sensor.push_str("Cels");
-            cells(value, data);
+            cells(value, data, nums);
             "V"
         }
         0x0800..=0x080F => {
             sensor.push_str("GPS");
-            gps(value, data);
+            gps(value, data, nums);
             "deg"
         }
         0x0850..=0x085F => date_time(value, sensor, data),
@@ -229,7 +299,8 @@ pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -
         }
         0x0B70..=0x0B7F => {
             sensor.push_str("EscT");
-            push_u64(data, (value & 0xFF) as u64);
+            nums.int("EscT", "degC", (value & 0xFF) as i64);
+            data.push_str(nums.first_text());
             "degC"
         }
         0x0B80..=0x0B8F => {
@@ -240,43 +311,52 @@ pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -
         0x5000..=0x50FF => super::passthrough::decode(app_id, value, sensor, data),
         0x6800..=0x680F => {
             sensor.push_str("Servo");
-            servo(value, data);
+            servo(value, data, nums);
             ""
         }
         0xF010 => {
             sensor.push_str("VFR");
-            push_i64(data, 100 - (value & 0xFF) as i64);
+            nums.int("VFR", "%", 100 - (value & 0xFF) as i64);
+            data.push_str(nums.first_text());
             "%"
         }
         0xF101 => {
             sensor.push_str("RSSI");
-            push_u64(data, (value & 0xFF) as u64);
+            nums.int("RSSI", "dB", (value & 0xFF) as i64);
+            data.push_str(nums.first_text());
             "dB"
         }
         0xF102..=0xF104 => {
-            sensor.push_str(match app_id {
+            let name = match app_id {
                 0xF102 => "A1",
                 0xF103 => "A2",
                 _ => "RxBt",
-            });
-            push_receiver_volts(data, value as u8);
+            };
+            sensor.push_str(name);
+            nums.fixed(name, "V", receiver_centivolts(value as u8), 2);
+            data.push_str(nums.first_text());
             "V"
         }
         0xF105 => {
             sensor.push_str("SWR");
-            push_u64(data, (value & 0xFF) as u64);
+            nums.int("SWR", "", (value & 0xFF) as i64);
+            data.push_str(nums.first_text());
             ""
         }
         0xF106 => {
             sensor.push_str("XJT version");
-            push_u64(data, (value & 0xFFFF) as u64);
+            nums.int("XJT version", "", (value & 0xFFFF) as i64);
+            data.push_str(nums.first_text());
             ""
         }
         0xF107 => {
             sensor.push_str("R9PW");
             let dbm = value as u8;
             match r9_power_mw(dbm) {
-                Some(mw) => push_u64(data, mw),
+                Some(mw) => {
+                    nums.int("R9PW", "mW", mw as i64);
+                    data.push_str(nums.first_text());
+                }
                 None => {
                     data.push_str("dBm=");
                     push_u64(data, dbm as u64);
@@ -286,18 +366,29 @@ pub fn decode(app_id: u16, value: u32, sensor: &mut String, data: &mut String) -
         }
         _ => {
             push_hex_id(sensor, app_id);
-            push_u64(data, value as u64);
+            nums.int_with(|n| push_hex_id(n, app_id), "", value as i64);
+            data.push_str(nums.first_text());
             ""
         }
     }
 }
 
 /// Receiver analog inputs: low byte, 0..255 = 0..13.2 V with EdgeTX's default ratio. Two
-/// decimals, as the radio's CSV log writes them (raw 98 → 5.07).
+/// decimals, as the radio's CSV log writes them (raw 98 → 5.07): one raw step is 52 mV, so a
+/// third decimal would only show the ratio's arithmetic, not the wire.
 pub fn push_receiver_volts(data: &mut String, raw: u8) {
-    // 13.2 V full scale: volts*100 = raw * 1320 / 255, rounded half up.
-    let hundredths = (raw as i64 * 1320 * 2 + 255) / (2 * 255);
-    push_fixed(data, hundredths, 2);
+    push_fixed(data, receiver_centivolts(raw), 2);
+}
+
+/// Hundredths of a volt of a receiver analog input (raw * 1320 / 255, rounded half up).
+fn receiver_centivolts(raw: u8) -> i64 {
+    (raw as i64 * 1320 * 2 + 255) / (2 * 255)
+}
+
+/// `Cell1` … `Cell16` (1-based, as the radio's logs name them).
+fn cell_name(out: &mut String, index: u32) {
+    out.push_str("Cell");
+    push_u64(out, index as u64 + 1);
 }
 
 fn r9_power_mw(dbm: u8) -> Option<u64> {
@@ -315,9 +406,10 @@ fn r9_power_mw(dbm: u8) -> Option<u64> {
     })
 }
 
-/// FLVSS cells: bits 0-3 first index, 4-7 count, 8-19 and 20-31 two cells in 2 mV units.
-/// EdgeTX keeps `raw / 5` hundredths of a volt (integer division).
-fn cells(value: u32, data: &mut String) {
+/// FLVSS cells: bits 0-3 first index, 4-7 count, 8-19 and 20-31 two cells in 2 mV units,
+/// shown to the millivolt (raw 1959 → 3.918). EdgeTX keeps `raw / 5` hundredths of a volt
+/// (integer division: 3.91).
+fn cells(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let index = value & 0x0F;
     let count = (value >> 4) & 0x0F;
     let c0 = (value >> 8) & 0x0FFF;
@@ -329,18 +421,23 @@ fn cells(value: u32, data: &mut String) {
             data.push_str(" cell");
             push_u64(data, i as u64);
             data.push('=');
-            push_fixed(data, (c / 5) as i64, 2);
+            push_fixed(data, (c * 2) as i64, 3);
+            nums.fixed_with(|n| cell_name(n, i), "V", (c * 2) as i64, 3);
         }
     }
 }
 
 /// GPS latitude/longitude: bit 31 = longitude, bit 30 = negative, bits 0-29 = 1/10000 minute.
-fn gps(value: u32, data: &mut String) {
+/// Degrees with 7 decimals, rounded (one wire step is 1/600000 degree, 0.19 m).
+fn gps(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let lon = value & 0x8000_0000 != 0;
     let neg = value & 0x4000_0000 != 0;
-    let micro = (value & 0x3FFF_FFFF) as i64 * 5 / 3;
+    // 1e-7 degree = raw * 1e7 / 600000 = raw * 50 / 3, rounded half up.
+    let e7 = ((value & 0x3FFF_FFFF) as i64 * 100 + 3) / 6;
+    let v = if neg { -e7 } else { e7 };
     data.push_str(if lon { "lon=" } else { "lat=" });
-    push_fixed(data, if neg { -micro } else { micro }, 6);
+    push_fixed(data, v, 7);
+    nums.fixed(if lon { "Lon" } else { "Lat" }, "deg", v, 7);
 }
 
 /// GPS date (low byte ≠ 0) or time (low byte = 0).
@@ -357,7 +454,13 @@ fn date_time(value: u32, sensor: &mut String, data: &mut String) -> &'static str
 }
 
 /// Legacy hub data: cells (ID 0x06) are byte-swapped 16-bit values, the rest plain 16-bit.
-fn hub(id: u8, value: u32, sensor: &mut String, data: &mut String) -> &'static str {
+fn hub(
+    id: u8,
+    value: u32,
+    sensor: &mut String,
+    data: &mut String,
+    nums: &mut SportNumbers,
+) -> &'static str {
     if id == 0x06 {
         sensor.push_str("Hub Cell");
         let lo = value as u8;
@@ -367,17 +470,24 @@ fn hub(id: u8, value: u32, sensor: &mut String, data: &mut String) -> &'static s
         data.push_str("idx");
         push_u64(data, idx as u64);
         data.push('=');
-        push_fixed(data, (raw / 5) as i64, 2);
+        push_fixed(data, (raw * 2) as i64, 3);
+        nums.fixed_with(|n| cell_name(n, idx as u32), "V", (raw * 2) as i64, 3);
         return "V";
     }
     sensor.push_str("Hub ");
+    let start = sensor.len();
     match hub_name(id) {
         Some(n) => sensor.push_str(n),
         None => {
             let _ = write!(sensor, "0x{id:02X}");
         }
     }
-    push_u64(data, (value & 0xFFFF) as u64);
+    nums.int_with(
+        |n| n.push_str(&sensor[start..]),
+        "",
+        (value & 0xFFFF) as i64,
+    );
+    data.push_str(nums.first_text());
     ""
 }
 
@@ -462,8 +572,11 @@ fn rb_extra(value: u32, data: &mut String) {
 }
 
 /// Xact servo: byte0 A×10, byte1 V×10, byte2 °C, byte3 0 = OK, else STALL.
-fn servo(value: u32, data: &mut String) {
+fn servo(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let [a, v, t, s] = value.to_le_bytes();
+    nums.fixed("SrvA", "A", a as i64, 1);
+    nums.fixed("SrvV", "V", v as i64, 1);
+    nums.int("SrvT", "degC", t as i64);
     data.push_str("SrvA=");
     push_fixed(data, a as i64, 1);
     data.push_str("A SrvV=");
@@ -507,10 +620,10 @@ mod tests {
 
     #[test]
     fn packed_values() {
-        assert_eq!(d(0x0300, 0x8188_0D30).1, "count=3 cell0=4.12 cell1=4.14");
-        assert_eq!(d(0x0300, 0x0008_3432).1, "count=3 cell2=4.20");
-        assert_eq!(d(0x0800, 0x8071_0700).1, "lon=12.345600");
-        assert_eq!(d(0x0800, 0x4071_0700).1, "lat=-12.345600");
+        assert_eq!(d(0x0300, 0x8188_0D30).1, "count=3 cell0=4.122 cell1=4.144");
+        assert_eq!(d(0x0300, 0x0008_3432).1, "count=3 cell2=4.200");
+        assert_eq!(d(0x0800, 0x8071_0700).1, "lon=12.3456000");
+        assert_eq!(d(0x0800, 0x4071_0700).1, "lat=-12.3456000");
         assert_eq!(
             d(0x0850, 0x0E07_0BFF),
             ("Date".into(), "2014-07-11".into(), "")
@@ -523,12 +636,12 @@ mod tests {
         assert_eq!(d(0xF101, 0x9612_005A).1, "90");
         assert_eq!(
             d(0x0006, 0xD007),
-            ("Hub Cell".into(), "idx0=4.00".into(), "V")
+            ("Hub Cell".into(), "idx0=4.000".into(), "V")
         );
         assert_eq!(d(0x0010, 638).0, "Hub BARO_ALT_BP");
         assert_eq!(d(0x0B00, 5000 | 120 << 16).1, "RB1V=5.000V RB1A=1.20A");
         assert_eq!(d(0x0730, 0xFF9C_0064).1, "Roll=1.00deg Ptch=-1.00deg");
-        assert_eq!(d(0x0E50, 5000 | 1200 << 16).1, "BecV=5.00V BecA=1.20A");
+        assert_eq!(d(0x0E50, 5000 | 1200 << 16).1, "BecV=5.000V BecA=1.200A");
         assert_eq!(d(0x0B60, 123 | 456 << 16).1, "Erpm=12300rpm EscC=456mAh");
         assert_eq!(d(0x0B20, 0x0001_0004).1, "RBCS=CH3 KO RBS=Rx1 Ovl");
         assert_eq!(d(0x0B20, 0).1, "RBCS=OK RBS=Rx OK");
@@ -539,6 +652,69 @@ mod tests {
         );
         assert_eq!(d(0xF107, 20).1, "100");
         assert_eq!(d(0xF010, 5).1, "95");
+    }
+
+    /// (phys, app ID, value) → (Value text, unit of the Value, every part as name=text).
+    fn n(phys: u8, app_id: u16, value: u32) -> (String, &'static str, String) {
+        let (mut s, mut v, mut nums) = (String::new(), String::new(), SportNumbers::default());
+        let unit = decode_numbers(phys, app_id, value, &mut s, &mut v, &mut nums);
+        let parts = nums.with_parts(|p| {
+            p.iter()
+                .map(|p| format!("{}={}{}", p.name, p.text, p.unit))
+                .collect::<Vec<_>>()
+                .join(" ")
+        });
+        (nums.first_text().to_owned(), unit, parts)
+    }
+
+    #[test]
+    fn full_wire_precision_and_numbers() {
+        // 12 bits of 2 mV: raw 1959 (0x7A7) is 3.918 V, where the radio keeps 3.91.
+        let v = 0x7A7 << 8 | 1 << 4;
+        assert_eq!(d(0x0300, v).1, "count=1 cell0=3.918");
+        assert_eq!(
+            n(1, 0x0300, v),
+            ("3.918".into(), "V", "Cell1=3.918V".into())
+        );
+        assert_eq!(
+            n(1, 0x0300, 0x8188_0D30).2,
+            "Cell1=4.122V Cell2=4.144V",
+            "both cells of a frame are parts"
+        );
+        assert_eq!(n(1, 0x0300, 0x0008_3432).2, "Cell3=4.200V");
+        assert_eq!(
+            n(0, 0x0210, 1234),
+            ("12.34".into(), "V", "VFAS=12.34V".into())
+        );
+        assert_eq!(n(0, 0x0200, 25).2, "Curr=2.5A");
+        assert_eq!(n(0, 0x0110, 0xFFFF_FF6A).2, "VSpd=-1.50m/s");
+        assert_eq!(n(3, 0x0800, 0x4071_0700).2, "Lat=-12.3456000deg");
+        assert_eq!(n(3, 0x0800, 0x8000_0001).2, "Lon=0.0000017deg");
+        // A pair's Value is its first half, with that half's unit.
+        assert_eq!(
+            n(0, 0x0B00, 5000 | 120 << 16),
+            ("5.000".into(), "V", "RB1V=5.000V RB1A=1.20A".into())
+        );
+        assert_eq!(
+            n(0, 0x6800, 0x0023_4A0C).2,
+            "SrvA=1.2A SrvV=7.4V SrvT=35degC"
+        );
+        assert_eq!(n(24, 0xF104, 0x62).2, "RxBt=5.07V");
+        assert_eq!(n(0, 0x5100, 12345).2, "5100=12345");
+        assert_eq!(n(0, 0x0010, 638).2, "BARO_ALT_BP=638");
+        // Text values carry no number.
+        assert_eq!(n(3, 0x0850, 0x0E07_0BFF).2, "");
+        assert_eq!(n(0, 0x0B20, 0).2, "");
+    }
+
+    #[test]
+    fn acc_scale_follows_the_sender() {
+        // Flight controllers (slot 0x1B, Betaflight/INAV) send 0.01 g: FF FF FF FF is -0.01 g.
+        assert_eq!(n(FC_PHYS, 0x0700, 0xFFFF_FFFF).0, "-0.01");
+        assert_eq!(n(FC_PHYS, 0x0720, 100).0, "1.00");
+        // FrSky sensors and EdgeTX's table: 0.001 g.
+        assert_eq!(n(23, 0x0700, 0xFFFF_FFFF).0, "-0.001");
+        assert_eq!(n(23, 0x0710, 1000).2, "AccY=1.000g");
     }
 
     #[test]

@@ -416,6 +416,7 @@ mod tests {
                 sensor: &o.sensor,
                 data: &o.data,
                 extra: &extra,
+                parts: &[],
                 raw: &o.raw,
             };
             m.row(&row, o.micros.unwrap());

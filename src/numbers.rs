@@ -1,0 +1,211 @@
+//! The numbers of a row ([`crate::row::Part`]): every protocol writes them into a reusable
+//! [`Numbers`] while it builds a row, and hands them to the row as a slice, without allocating
+//! once the buffers have grown.
+//!
+//! A number is kept twice: as plain decimal text with the sensor's full wire precision (`3.918`,
+//! never `3.92` and never `3.9180000000000001`), which the sinks print as it is, and as an `f64`
+//! for the wide export and plots.
+
+use crate::fmt::push_fixed;
+use crate::row::Part;
+
+/// One number being built: ranges into the buffers.
+#[derive(Clone, Copy, Default)]
+struct Slot {
+    name: (u32, u32),
+    unit: &'static str,
+    text: (u32, u32),
+    value: f64,
+}
+
+/// The numbers of one row, at most `N` (further numbers are dropped and counted in
+/// [`Numbers::dropped`]; protocols choose `N` larger than anything a frame can carry).
+pub struct Numbers<const N: usize> {
+    names: String,
+    text: String,
+    slots: [Slot; N],
+    len: usize,
+    dropped: usize,
+}
+
+impl<const N: usize> Default for Numbers<N> {
+    fn default() -> Self {
+        Numbers {
+            names: String::new(),
+            text: String::new(),
+            slots: [Slot::default(); N],
+            len: 0,
+            dropped: 0,
+        }
+    }
+}
+
+const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+
+impl<const N: usize> Numbers<N> {
+    pub fn clear(&mut self) {
+        self.names.clear();
+        self.text.clear();
+        self.len = 0;
+        self.dropped = 0;
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Numbers that did not fit.
+    pub fn dropped(&self) -> usize {
+        self.dropped
+    }
+
+    /// The first number's text (the `Value` column), or "".
+    pub fn first_text(&self) -> &str {
+        match self.len {
+            0 => "",
+            _ => self.range(&self.text, self.slots[0].text),
+        }
+    }
+
+    /// The first number's unit, or "".
+    pub fn first_unit(&self) -> &'static str {
+        if self.len == 0 {
+            ""
+        } else {
+            self.slots[0].unit
+        }
+    }
+
+    fn range<'a>(&self, s: &'a str, (a, b): (u32, u32)) -> &'a str {
+        &s[a as usize..b as usize]
+    }
+
+    /// Starts a number: writes its name with `name` and returns its slot, or `None` when full.
+    fn start(&mut self, name: impl FnOnce(&mut String), unit: &'static str) -> Option<usize> {
+        if self.len == N {
+            self.dropped += 1;
+            return None;
+        }
+        let a = self.names.len() as u32;
+        name(&mut self.names);
+        let b = self.names.len() as u32;
+        let i = self.len;
+        self.slots[i] = Slot {
+            name: (a, b),
+            unit,
+            text: (0, 0),
+            value: 0.0,
+        };
+        Some(i)
+    }
+
+    /// `raw / 10^prec`, named with `name`.
+    pub fn fixed_with(
+        &mut self,
+        name: impl FnOnce(&mut String),
+        unit: &'static str,
+        raw: i64,
+        prec: u8,
+    ) {
+        let Some(i) = self.start(name, unit) else {
+            return;
+        };
+        let a = self.text.len() as u32;
+        push_fixed(&mut self.text, raw, prec);
+        let b = self.text.len() as u32;
+        let value = raw as f64 / POW10[(prec as usize).min(9)];
+        self.slots[i].text = (a, b);
+        self.slots[i].value = value;
+        self.len += 1;
+    }
+
+    /// `raw / 10^prec`.
+    pub fn fixed(&mut self, name: &str, unit: &'static str, raw: i64, prec: u8) {
+        self.fixed_with(|s| s.push_str(name), unit, raw, prec);
+    }
+
+    /// An integer.
+    pub fn int(&mut self, name: &str, unit: &'static str, v: i64) {
+        self.fixed(name, unit, v, 0);
+    }
+
+    /// An integer named with `name`.
+    pub fn int_with(&mut self, name: impl FnOnce(&mut String), unit: &'static str, v: i64) {
+        self.fixed_with(name, unit, v, 0);
+    }
+
+    /// An unsigned integer of up to 64 bits (exact text; the `f64` may round above 2^53).
+    pub fn uint(&mut self, name: &str, unit: &'static str, v: u64) {
+        match i64::try_from(v) {
+            Ok(v) => self.int(name, unit, v),
+            Err(_) => {
+                let Some(i) = self.start(|s| s.push_str(name), unit) else {
+                    return;
+                };
+                let a = self.text.len() as u32;
+                crate::fmt::push_u64(&mut self.text, v);
+                let b = self.text.len() as u32;
+                self.slots[i].text = (a, b);
+                self.slots[i].value = v as f64;
+                self.len += 1;
+            }
+        }
+    }
+
+    /// Calls `f` with the numbers as [`Part`]s (built on the stack).
+    pub fn with_parts<R>(&self, f: impl FnOnce(&[Part<'_>]) -> R) -> R {
+        if self.len == 0 {
+            return f(&[]);
+        }
+        let mut parts = [Part::EMPTY; N];
+        for (p, s) in parts.iter_mut().zip(&self.slots[..self.len]) {
+            *p = Part {
+                name: self.range(&self.names, s.name),
+                unit: s.unit,
+                text: self.range(&self.text, s.text),
+                value: s.value,
+            };
+        }
+        f(&parts[..self.len])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_and_value_agree() {
+        let mut n = Numbers::<4>::default();
+        n.fixed("Cell1", "V", 3918, 3);
+        n.fixed("Alt", "m", -150, 2);
+        n.uint("big", "", u64::MAX);
+        n.int("x", "", 7);
+        n.int("dropped", "", 8);
+        assert_eq!(n.len(), 4);
+        assert_eq!(n.dropped(), 1);
+        assert_eq!(n.first_text(), "3.918");
+        assert_eq!(n.first_unit(), "V");
+        n.with_parts(|p| {
+            assert_eq!(p.len(), 4);
+            assert_eq!(
+                (p[0].name, p[0].text, p[0].value),
+                ("Cell1", "3.918", 3.918)
+            );
+            assert_eq!((p[1].name, p[1].text, p[1].value), ("Alt", "-1.50", -1.5));
+            assert_eq!(p[2].text, "18446744073709551615");
+            for part in p {
+                let parsed: f64 = part.text.parse().unwrap();
+                assert_eq!(parsed, part.value, "{}", part.text);
+            }
+        });
+        n.clear();
+        assert!(n.is_empty());
+        assert_eq!(n.first_text(), "");
+        n.with_parts(|p| assert!(p.is_empty()));
+    }
+}
