@@ -712,11 +712,14 @@ pub fn run_capture(
         .as_ref()
         .map_or(0, |t| t.frames())
         .max(decoder.valid_frames());
-    // A clean run needs no second look; otherwise the start of the input is scored against
-    // every protocol (`busnoop detect`'s scoring).
+    // A clean run, or one with a few bad frames among many good ones, needs no second look;
+    // otherwise (nothing decoded, or a fifth or more of the rows are not frames: errors, garbage,
+    // timeouts) the start of the input is scored against every protocol (`busnoop detect`'s
+    // scoring, on the first 16 KiB).
     if result.is_ok()
         && let Some(kept) = kept
-        && (decoder.problems().line().is_some() || frames == 0)
+        && (frames == 0
+            || (decoder.problems().line().is_some() && rows.saturating_sub(frames) * 4 >= frames))
         && let Ok(kept) = kept.lock()
     {
         use crate::detect::{Advice, advise};

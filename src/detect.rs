@@ -25,6 +25,11 @@ use crate::source::{Batch, Chunk, ChunkReader, Input, Message};
 /// How much of a file is examined.
 pub const SCAN_BYTES: usize = 2 << 20;
 
+/// What a run keeps of its input for [`advise`]: enough frames of any protocol to tell them
+/// apart, small enough that scoring it against every candidate after a run with problems costs
+/// well under a tenth of a second (S-Bus break mode, the slowest candidate, searches CRCs).
+pub const ADVICE_BYTES: usize = 16 << 10;
+
 /// The baud rates tried on a live port, the usual ones of the field.
 pub const USUAL_BAUDS: [u32; 9] = [
     9600, 19200, 38400, 57600, 100_000, 115_200, 230_400, 400_000, 420_000,
@@ -732,7 +737,7 @@ fn judge_live(listens: &[Listen]) -> LiveReport {
     LiveReport { per_rate, best }
 }
 
-/// Keeps the first [`SCAN_BYTES`] of what a reader yields, for [`advise`] after the run.
+/// Keeps the first [`ADVICE_BYTES`] of what a reader yields, for [`advise`] after the run.
 pub struct Tee {
     inner: Box<dyn ChunkReader>,
     kept: Arc<Mutex<Kept>>,
@@ -770,17 +775,18 @@ impl ChunkReader for Tee {
         if let Some(chunk) = &chunk
             && let Ok(mut k) = self.kept.lock()
         {
-            let keep = (k.total as usize) < SCAN_BYTES;
+            let room = ADVICE_BYTES.saturating_sub(k.total as usize);
             let n = match chunk {
                 Chunk::Bytes(b) => {
-                    if keep {
-                        k.batches.push(b.clone());
+                    if room > 0 {
+                        k.batches.push(b.prefix(room));
                     }
                     b.bytes.len()
                 }
                 Chunk::Packets(c) => {
-                    if keep {
-                        k.batches.push(Batch::single(c.input.clone(), None));
+                    if room > 0 {
+                        let kept = &c.input[..room.min(c.input.len())];
+                        k.batches.push(Batch::single(kept.to_vec(), None));
                     }
                     c.input.len()
                 }

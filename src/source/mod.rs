@@ -47,6 +47,20 @@ impl Batch {
         }
     }
 
+    /// Its first `n` bytes (all of it when shorter), with their times.
+    pub fn prefix(&self, n: usize) -> Batch {
+        let n = n.min(self.bytes.len());
+        Batch {
+            bytes: self.bytes[..n].to_vec(),
+            marks: self
+                .marks
+                .iter()
+                .copied()
+                .filter(|&(at, _)| at < n || at == 0)
+                .collect(),
+        }
+    }
+
     /// The batch as `(bytes, time)` segments.
     pub fn segments(&self) -> impl Iterator<Item = (&[u8], Option<u64>)> {
         self.marks
@@ -494,6 +508,20 @@ mod tests {
         assert_eq!(detect(b"2014-07", false), None);
         assert_eq!(detect(b"2014-07", true), Some(Kind::Raw));
         assert_eq!(detect(b"", true), Some(Kind::Raw));
+    }
+
+    #[test]
+    fn a_prefix_keeps_the_times_of_its_bytes() {
+        let b = Batch {
+            bytes: vec![1, 2, 3, 4, 5],
+            marks: vec![(0, Some(10)), (2, Some(20)), (4, Some(30))],
+        };
+        let p = b.prefix(3);
+        assert_eq!(p.bytes, [1, 2, 3]);
+        let segs: Vec<_> = p.segments().map(|(s, t)| (s.to_vec(), t)).collect();
+        assert_eq!(segs, [(vec![1, 2], Some(10)), (vec![3], Some(20))]);
+        assert_eq!(b.prefix(99), b);
+        assert_eq!(b.prefix(0).segments().count(), 1);
     }
 
     #[test]
