@@ -1,3 +1,4 @@
+use super::live::{Listen, judge_live};
 use super::*;
 
 fn fixture(name: &str) -> Vec<u8> {

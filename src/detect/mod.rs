@@ -43,27 +43,16 @@ const MIN_SHARE: f64 = 0.10;
 /// that the first one leaves.
 const MIXED_SHARE: f64 = 0.15;
 
-/// `busnoop detect`.
-#[derive(clap::Args, Debug)]
-pub struct DetectArgs {
-    /// What to examine: a capture file (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap
-    /// recording, a pcap/pcapng capture), `-` for standard input, or a serial device, which is
-    /// listened to (passively, read-only) at each baud rate in turn.
+/// What `busnoop detect` examines and how (the command line's `detect` options).
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// A capture file, `-` for standard input, or a serial device.
     pub source: PathBuf,
-
     /// Serial devices: how long to listen at each baud rate.
-    #[arg(long, value_name = "MS", default_value_t = 1500,
-          value_parser = clap::value_parser!(u64).range(10..=60_000))]
     pub listen_ms: u64,
-
-    /// Serial devices: the baud rates to try, comma-separated [default: 9600, 19200, 38400,
-    /// 57600, 100000, 115200, 230400, 400000, 420000].
-    #[arg(long = "baud", value_name = "BAUD", value_delimiter = ',',
-          value_parser = clap::value_parser!(u32).range(crate::cli::BAUD_RANGE))]
+    /// Serial devices: the baud rates to try (empty: the usual ones).
     pub bauds: Vec<u32>,
-
     /// Serial devices: DTR and RTS, as for the protocol commands.
-    #[arg(long, value_enum, value_name = "MODE", default_value_t)]
     pub dtr_rts: ModemLines,
 }
 
@@ -473,7 +462,7 @@ fn kind_text(kind: Kind) -> &'static str {
 }
 
 /// Runs `busnoop detect`.
-pub fn run(args: &DetectArgs) -> Result<(), Failure> {
+pub fn run(args: &Options) -> Result<(), Failure> {
     let input = Input::parse(&args.source);
     if let Input::Device(path) = &input {
         match live(path, args) {
@@ -583,343 +572,6 @@ enum LiveError {
     Failed(Failure),
 }
 
-/// One baud rate's listen.
-struct Listen {
-    baud: u32,
-    batches: Vec<Batch>,
-    bytes: u64,
-}
-
-/// `busnoop detect /dev/ttyUSB0`: listens at each rate in turn, passively (the device is
-/// opened read-only, as for a capture), and ranks every (rate, protocol) pair.
-fn live(path: &Path, args: &DetectArgs) -> Result<(), LiveError> {
-    let bauds: Vec<u32> = if args.bauds.is_empty() {
-        USUAL_BAUDS.to_vec()
-    } else {
-        args.bauds.clone()
-    };
-    let listen = Duration::from_millis(args.listen_ms);
-    eprintln!(
-        "busnoop: listening to {} for {} ms at each of {} baud rates",
-        path.display(),
-        args.listen_ms,
-        bauds.len()
-    );
-    let mut listens = Vec::new();
-    for &baud in &bauds {
-        let cfg = SerialConfig {
-            line: Line::n81(baud),
-            lines: args.dtr_rts,
-        };
-        let mut port = match serial::open(path, &cfg) {
-            Ok(p) => p,
-            Err(e) if serial::is_not_a_tty(&e) && listens.is_empty() => {
-                return Err(LiveError::NotATty);
-            }
-            Err(e) => return Err(LiveError::Failed(serial::open_failure(path, &e))),
-        };
-        listens.push(listen_once(port.as_mut(), path, baud, listen).map_err(LiveError::Failed)?);
-    }
-    let mut text = format!("{}: a serial line\n", path.display());
-    let report = judge_live(&listens);
-    for (l, best) in listens.iter().zip(&report.per_rate) {
-        text.push_str(&format!("  {:>7} baud: {:>7} bytes", l.baud, l.bytes));
-        match best {
-            Some(r) => text.push_str(&format!(
-                ", best {} ({} in {} frames)\n",
-                r.label,
-                percent(r.score.share()),
-                r.score.frames
-            )),
-            None => text.push('\n'),
-        }
-    }
-    let result = match &report.best {
-        _ if listens.iter().all(|l| l.bytes == 0) => Err(Failure::NothingDecoded(format!(
-            "no bytes arrived at any rate in {} ms each: check the wiring (the adapter's RX to \
-             the bus line, GND to ground) and that the bus is talking",
-            args.listen_ms
-        ))),
-        Some((i, r)) => {
-            found_text(&mut text, r, path, Some(listens[*i].baud));
-            Ok(())
-        }
-        None => {
-            text.push_str("verdict: no known protocol at any of these rates\n");
-            Err(Failure::NoProtocol(format!(
-                "no known protocol on {}: bytes arrive but nothing decodes at any rate tried \
-                 (another protocol, an unusual baud rate, or a line that needs inverting)",
-                path.display()
-            )))
-        }
-    };
-    write_stdout(&text).map_err(LiveError::Failed)?;
-    result.map_err(LiveError::Failed)
-}
-
-/// Reads `port` for `listen`, stamping every read with its time since the start.
-fn listen_once(
-    port: &mut dyn serialport::SerialPort,
-    path: &Path,
-    baud: u32,
-    listen: Duration,
-) -> Result<Listen, Failure> {
-    use std::io::ErrorKind::*;
-    let start = Instant::now();
-    let mut batches = Vec::new();
-    let mut bytes = 0u64;
-    let mut buf = [0u8; 4096];
-    while start.elapsed() < listen {
-        match port.read(&mut buf) {
-            Ok(0) => {
-                return Err(Failure::Disconnected {
-                    path: path.to_owned(),
-                    frames: 0,
-                });
-            }
-            Ok(n) => {
-                let t = start.elapsed().as_micros() as u64;
-                if (bytes as usize) < SCAN_BYTES {
-                    batches.push(Batch::single(buf[..n].to_vec(), Some(t)));
-                }
-                bytes += n as u64;
-            }
-            Err(e) if matches!(e.kind(), TimedOut | WouldBlock | Interrupted) => {}
-            Err(e) => {
-                tracing::info!("{}: {e}", path.display());
-                return Err(Failure::Disconnected {
-                    path: path.to_owned(),
-                    frames: 0,
-                });
-            }
-        }
-    }
-    Ok(Listen {
-        baud,
-        batches,
-        bytes,
-    })
-}
-
-/// The outcome of a live detection.
-struct LiveReport {
-    /// The best candidate at each rate, when one was recognised.
-    per_rate: Vec<Option<Ranked>>,
-    /// Index of the rate and the winner.
-    best: Option<(usize, Ranked)>,
-}
-
-/// Ranks every rate's bytes; the winner is the best share over all rates, ties (a pty, or a
-/// line that looks the same at two rates) going to the protocol's own default rate.
-fn judge_live(listens: &[Listen]) -> LiveReport {
-    let mut per_rate: Vec<Option<Ranked>> = Vec::new();
-    for l in listens {
-        let ranked = rank(
-            candidates(Kind::Serial, Some(l.baud)),
-            &l.batches,
-            Kind::Serial,
-        );
-        let best = ranked.into_iter().next().filter(|r| r.score.recognised());
-        per_rate.push(best);
-    }
-    let key = |i: usize, r: &Ranked| {
-        let share = (r.score.share() * 50.0).round() as i64; // 2 % steps
-        let default = i64::from(listens[i].baud == r.protocol.line.baud);
-        (share, default, r.score.frames)
-    };
-    let best_i = per_rate
-        .iter()
-        .enumerate()
-        .filter_map(|(i, r)| r.as_ref().map(|r| (i, key(i, r))))
-        .max_by_key(|&(_, k)| k)
-        .map(|(i, _)| i);
-    let best = best_i.and_then(|i| per_rate[i].take().map(|r| (i, r)));
-    LiveReport { per_rate, best }
-}
-
-/// Keeps the first [`ADVICE_BYTES`] of what a reader yields, for [`advise`] after the run.
-pub struct Tee {
-    inner: Box<dyn ChunkReader>,
-    kept: Arc<Mutex<Kept>>,
-}
-
-/// What a [`Tee`] kept.
-#[derive(Default)]
-pub struct Kept {
-    pub batches: Vec<Batch>,
-    /// Every byte that went through, kept or not.
-    pub total: u64,
-}
-
-impl Tee {
-    pub fn new(inner: Box<dyn ChunkReader>) -> (Self, Arc<Mutex<Kept>>) {
-        let kept = Arc::new(Mutex::new(Kept::default()));
-        (
-            Tee {
-                inner,
-                kept: kept.clone(),
-            },
-            kept,
-        )
-    }
-}
-
-impl ChunkReader for Tee {
-    fn next_batch(
-        &mut self,
-        tx: &std::sync::mpsc::SyncSender<Message>,
-    ) -> Result<Option<Chunk>, Failure> {
-        let chunk = self.inner.next_batch(tx)?;
-        // The input's bytes: a byte batch, or the container bytes a capture reader hands on
-        // (it keeps them when asked to, see `cli::run_capture`).
-        if let Some(chunk) = &chunk
-            && let Ok(mut k) = self.kept.lock()
-        {
-            let room = ADVICE_BYTES.saturating_sub(k.total as usize);
-            let n = match chunk {
-                Chunk::Bytes(b) => {
-                    if room > 0 {
-                        k.batches.push(b.prefix(room));
-                    }
-                    b.bytes.len()
-                }
-                Chunk::Packets(c) => {
-                    if room > 0 {
-                        let kept = &c.input[..room.min(c.input.len())];
-                        k.batches.push(Batch::single(kept.to_vec(), None));
-                    }
-                    c.input.len()
-                }
-            };
-            k.total += n as u64;
-        }
-        Ok(chunk)
-    }
-}
-
-/// What to tell a user after a run of `protocol` on a file or stream.
-#[derive(Debug, PartialEq)]
-pub enum Advice {
-    /// Nothing to say.
-    Fine,
-    /// A note for stderr (the run still succeeded).
-    Note(String),
-    /// Nothing at all decoded: the message for the failure.
-    NothingDecoded(String),
-}
-
-/// After a run of `protocol` over an input of `kind` that yielded `valid_frames`: is another
-/// protocol a much better fit, or did almost nothing decode? `kept` is the start of the input.
-pub fn advise(
-    protocol: &Protocol,
-    kind: Kind,
-    kept: &Kept,
-    valid_frames: u64,
-    source: &Path,
-) -> Advice {
-    let name = if source.as_os_str() == "-" {
-        "standard input".to_string()
-    } else {
-        source.display().to_string()
-    };
-    if kept.total == 0 {
-        return Advice::NothingDecoded(format!("empty input: {name} holds no bytes"));
-    }
-    let ranked = rank(candidates(kind, None), &kept.batches, kind);
-    let own = ranked
-        .iter()
-        .find(|r| r.protocol.command == protocol.command && !r.inverted);
-    let own_share = own.map_or(0.0, |r| r.score.share());
-    let better = ranked
-        .iter()
-        .find(|r| r.protocol.command != protocol.command || r.inverted)
-        .filter(|r| {
-            r.score.recognised() && r.score.share() >= 0.5 && r.score.share() >= own_share + 0.3
-        });
-    let suggestion = better.map(|b| {
-        if b.inverted {
-            format!(
-                "it looks like S.Port with inverted bytes ({} of the bytes in {} frames once \
-                 inverted): {}",
-                percent(b.score.share()),
-                b.score.frames,
-                INVERTED_FIX
-            )
-        } else {
-            format!(
-                "it looks like {} ({} of the bytes in {} valid frames); try: {}",
-                b.label,
-                percent(b.score.share()),
-                b.score.frames,
-                b.command(source, None)
-            )
-        }
-    });
-    let unknown = || {
-        format!(
-            "`busnoop detect {}` finds no known protocol in it",
-            shell_quote(source)
-        )
-    };
-    if valid_frames == 0
-        && let Some(o) = own.filter(|o| o.score.recognised())
-    {
-        // The protocol is right, the options are not (an S-Bus mode, a UDP port).
-        return Advice::NothingDecoded(format!(
-            "no {} frame in {name} with these options, but {} of its bytes are in valid {} \
-             frames with the defaults; try: {}",
-            protocol.name,
-            percent(o.score.share()),
-            o.label,
-            o.command(source, None)
-        ));
-    }
-    if valid_frames == 0
-        && suggestion.is_none()
-        && let Some(o) = own.filter(|o| {
-            o.score.crc_errors + o.score.truncated >= MIN_FRAMES
-                && o.score.bad_bytes * 2 >= o.score.total
-        })
-    {
-        // Frames of this protocol are there, but not one passes its check.
-        return Advice::NothingDecoded(format!(
-            "no valid {} frame in {name}, though {} and {} look like {}: a noisy line, or \
-             bytes changed on the way (capture at the wrong baud rate, a wrong inversion)",
-            protocol.name,
-            crate::exit::count(
-                o.score.crc_errors,
-                "frame with a bad check",
-                "frames with a bad check"
-            ),
-            crate::exit::count(o.score.truncated, "truncated frame", "truncated frames"),
-            protocol.name
-        ));
-    }
-    if valid_frames == 0 {
-        return Advice::NothingDecoded(format!(
-            "no {} frame in {name}; {}",
-            protocol.name,
-            suggestion.unwrap_or_else(unknown)
-        ));
-    }
-    if let Some(s) = suggestion {
-        return Advice::Note(format!(
-            "note: only {} of the bytes are in valid {} frames; {s}",
-            percent(own_share),
-            protocol.name
-        ));
-    }
-    if own_share < MIN_SHARE && !ranked.first().is_some_and(|r| r.score.recognised()) {
-        return Advice::Note(format!(
-            "note: only {} of the bytes are in valid {} frames; {}",
-            percent(own_share),
-            protocol.name,
-            unknown()
-        ));
-    }
-    Advice::Fine
-}
-
 /// A path as a shell word: as it is when it holds only safe characters, else single-quoted.
 pub fn shell_quote(p: &Path) -> String {
     let s = p.to_string_lossy();
@@ -943,6 +595,12 @@ fn write_stdout(text: &str) -> Result<(), Failure> {
         ))),
     }
 }
+
+mod advise;
+mod live;
+
+pub use advise::{Advice, Kept, Tee, advise};
+use live::live;
 
 #[cfg(test)]
 mod tests;
