@@ -257,9 +257,10 @@ pub struct LiveArgs {
     #[arg(long)]
     pub reconnect: bool,
 
-    /// Keep what came off the wire while decoding: FILE.pcap with arrival times (busnoop replays
-    /// it with the original Millis; Wireshark opens it), any other name: the raw bytes; `-`: the
-    /// raw bytes on standard output (with -o FILE only).
+    /// Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng with arrival times
+    /// (busnoop replays both with the original Millis; Wireshark opens them; pcapng also names
+    /// the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: the raw bytes;
+    /// `-`: the raw bytes on standard output (with -o FILE only). Other names are refused.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
 
@@ -571,6 +572,9 @@ pub fn run_capture(
         args.output.output_file(),
         args.live.record.as_deref(),
     )?;
+    if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
+        crate::record::RecordFormat::for_path(p)?;
+    }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
             ["pcap", "pcapng", "bin"]
@@ -617,7 +621,14 @@ pub fn run_capture(
     let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
     let mut recorder = match &args.live.record {
         Some(_) if record_to_stdout => Some(Recorder::stdout(timed)),
-        Some(p) => Some(Recorder::create(p, timed)?),
+        Some(p) => {
+            let mut r = Recorder::create(p, timed)?;
+            r.describe(
+                &args.source.to_string_lossy(),
+                &crate::record::line_description(protocol.name, &line),
+            );
+            Some(r)
+        }
         None => None,
     };
     let out = &args.output;
