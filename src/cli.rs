@@ -264,6 +264,12 @@ pub struct LiveArgs {
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
 
+    /// Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with its
+    /// capture time, for Wireshark (sport: link type USER0, sab2: USER1; dissectors in
+    /// contrib/wireshark/, see docs/wireshark.md). Filters apply, as to the table.
+    #[arg(long, value_name = "FILE.pcapng")]
+    pub export: Option<PathBuf>,
+
     /// The device's DTR and RTS outputs: low drops them right after opening (an RS-485 adapter
     /// whose driver follows RTS stays off the bus); keep leaves them as the driver sets them
     /// (raised on open), for adapters powered or enabled by them.
@@ -575,6 +581,17 @@ pub fn run_capture(
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
+    if let Some(p) = args.live.export.as_deref() {
+        crate::export::check(p, protocol.command)?;
+        // The export is neither the input nor the table (nor the recording).
+        check_distinct(&input, args.output.output_file(), Some(p))?;
+        if args.live.record.as_deref() == Some(p) {
+            return Err(Failure::Usage(format!(
+                "--record and --export name the same file {}",
+                p.display()
+            )));
+        }
+    }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
             ["pcap", "pcapng", "bin"]
@@ -631,6 +648,15 @@ pub fn run_capture(
         }
         None => None,
     };
+    let mut export = match &args.live.export {
+        Some(p) => Some(crate::export::Exporter::create(
+            p,
+            protocol.command,
+            &args.source.to_string_lossy(),
+            &crate::record::line_description(protocol.name, &line),
+        )?),
+        None => None,
+    };
     let out = &args.output;
     // With --top and no -o, the view is the only output.
     let mut table = match (out.top, out.output_file()) {
@@ -679,7 +705,18 @@ pub fn run_capture(
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)
             .map_err(|e| Failure::Output(format!("cannot set up the terminal for --top: {e}")))?;
-        let result = drive(decoder.as_mut(), &rx, &mut view, ctx);
+        let result = match export.as_mut() {
+            Some(export) => drive(
+                decoder.as_mut(),
+                &rx,
+                &mut crate::export::Exporting {
+                    inner: &mut view,
+                    export,
+                },
+                ctx,
+            ),
+            None => drive(decoder.as_mut(), &rx, &mut view, ctx),
+        };
         if result.is_ok() {
             view.hold();
         }
@@ -689,17 +726,25 @@ pub fn run_capture(
         (result, rows)
     } else {
         let table = table.as_mut().expect("a table without --top");
+        let mut exporting;
+        let sink: &mut dyn crate::sink::Sink = match export.as_mut() {
+            Some(export) => {
+                exporting = crate::export::Exporting {
+                    inner: &mut *table,
+                    export,
+                };
+                &mut exporting
+            }
+            None => &mut *table,
+        };
         let result = match pacer {
             Some(pacer) => drive(
                 decoder.as_mut(),
                 &rx,
-                &mut Paced {
-                    inner: table,
-                    pacer,
-                },
+                &mut Paced { inner: sink, pacer },
                 ctx,
             ),
-            None => drive(decoder.as_mut(), &rx, table, ctx),
+            None => drive(decoder.as_mut(), &rx, sink, ctx),
         };
         (result, table.rows())
     };

@@ -86,9 +86,7 @@ impl RecordFormat {
         if is("bin") || is("raw") {
             return Ok(RecordFormat::Raw);
         }
-        if ext.is_none()
-            && std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
-        {
+        if ext.is_none() && std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
             return Ok(RecordFormat::Raw);
         }
         let what = match path.extension() {
@@ -290,7 +288,10 @@ mod tests {
             let Err(Failure::Usage(m)) = f(bad) else {
                 panic!("{bad} accepted")
             };
-            assert!(m.contains(".pcap (") && m.contains(".pcapng") && m.contains(".raw"), "{m}");
+            assert!(
+                m.contains(".pcap (") && m.contains(".pcapng") && m.contains(".raw"),
+                "{m}"
+            );
         }
         assert!(Recorder::create(&std::env::temp_dir().join("busnoop-x.txt"), true).is_err());
     }
@@ -314,8 +315,10 @@ mod tests {
         assert_eq!(pcap::pcapng_link_type(&bytes), Some(linktype::RTAC_SERIAL));
         let mut got = Vec::new();
         let mut s = pcap::PcapStream::default();
-        s.push(&bytes, &mut |p| got.push(rtac::parse(p.data).map(|(e, _, d)| (e, d.to_vec()))))
-            .unwrap();
+        s.push(&bytes, &mut |p| {
+            got.push(rtac::parse(p.data).map(|(e, _, d)| (e, d.to_vec())))
+        })
+        .unwrap();
         assert_eq!(
             got,
             [

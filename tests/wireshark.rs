@@ -104,3 +104,153 @@ fn an_unknown_recording_extension_is_refused_with_the_known_ones() {
         );
     }
 }
+
+/// tshark, when it is installed (CI installs it); `None` with a message otherwise.
+fn tshark() -> Option<Command> {
+    let ok = Command::new("tshark")
+        .arg("-v")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        eprintln!("tshark is not installed: skipping the Wireshark comparison");
+        return None;
+    }
+    let mut c = Command::new("tshark");
+    // A clean profile: no user preferences or plugins change what it decodes.
+    c.env(
+        "WIRESHARK_CONFIG_DIR",
+        std::env::temp_dir().join("busnoop-no-wireshark-profile"),
+    );
+    Some(c)
+}
+
+/// The table's rows that carry frame bytes, one per frame (TSV with --raw), by column name.
+fn frame_rows(tsv: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = tsv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split('\t').collect();
+    let mut rows: Vec<std::collections::HashMap<String, String>> = Vec::new();
+    for l in lines {
+        let row: std::collections::HashMap<String, String> = header
+            .iter()
+            .zip(l.split('\t'))
+            .map(|(h, f)| (h.to_string(), f.to_string()))
+            .collect();
+        if row["Raw"].is_empty() {
+            continue;
+        }
+        if rows
+            .last()
+            .is_some_and(|p| p["Raw"] == row["Raw"] && p["Millis"] == row["Millis"])
+        {
+            continue;
+        }
+        rows.push(row);
+    }
+    rows
+}
+
+/// The S.Port export of `input`, decoded by tshark with busnoop-sport.lua, against the table:
+/// frame for frame the same physical IDs, app IDs, CRC status and (when `all_values`, or when
+/// the dissector names the sensor) values.
+fn sport_export_matches(input: &Path, all_values: bool) {
+    let Some(mut tshark) = tshark() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let export = dir.path().join("export.pcapng");
+    let table = ok(&busnoop()
+        .arg("sport")
+        .arg(input)
+        .args(["-f", "tsv", "--raw", "--export"])
+        .arg(&export)
+        .output()
+        .unwrap());
+    let rows = frame_rows(&table);
+    let lua = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/contrib/wireshark/busnoop-sport.lua"
+    );
+    let out = tshark
+        .arg("-X")
+        .arg(format!("lua_script:{lua}"))
+        .arg("-r")
+        .arg(&export)
+        .args(["-T", "fields", "-E", "occurrence=a"])
+        .args([
+            "-e",
+            "sport.phys_id",
+            "-e",
+            "sport.app_id",
+            "-e",
+            "sport.value",
+        ])
+        .args(["-e", "sport.crc_status", "-e", "_ws.expert.message"])
+        .output()
+        .unwrap();
+    let fields = ok(&out);
+    let packets: Vec<Vec<&str>> = fields.lines().map(|l| l.split('\t').collect()).collect();
+    assert_eq!(packets.len(), rows.len(), "{fields}");
+    assert!(rows.len() > 20);
+    let mut bad = 0;
+    for (row, pkt) in rows.iter().zip(&packets) {
+        let what = format!("{row:?} against {pkt:?}");
+        assert_eq!(row["ID"], pkt[0], "{what}");
+        let crc_bad = row["Type"] == "BadCRC";
+        if row["Type"].is_empty() {
+            assert_eq!(pkt[3], "", "a poll has no CRC: {what}");
+            continue;
+        }
+        assert_eq!(pkt[3], if crc_bad { "bad" } else { "good" }, "{what}");
+        if crc_bad {
+            bad += 1;
+            assert!(pkt[4].split(',').any(|m| m == "Bad CRC"), "{what}");
+            continue;
+        }
+        if !row["Sensor #"].is_empty() {
+            let app = u16::from_str_radix(&row["Sensor #"], 16).unwrap();
+            assert_eq!(pkt[1], format!("0x{app:04x}"), "{what}");
+        }
+        if all_values || !pkt[2].is_empty() {
+            assert_eq!(row["Value"], pkt[2], "{what}");
+        }
+    }
+    if all_values {
+        assert!(bad > 0, "the input has a bad CRC to show");
+    }
+}
+
+#[test]
+fn tshark_decodes_the_sport_export_like_the_table() {
+    // The sample with one frame's CRC spoiled (a Volts frame: 7E 22 10 10 02 .. DD).
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    let at = bytes
+        .windows(10)
+        .position(|w| w == [0x7E, 0x22, 0x10, 0x10, 0x02, 0, 0, 0, 0, 0xDD])
+        .unwrap();
+    bytes[at + 9] = 0xDC;
+    let input = dir.path().join("sample.bin");
+    std::fs::write(&input, bytes).unwrap();
+    sport_export_matches(&input, true);
+    sport_export_matches(&fixture("edgetx-MODELE24-2014-07-11-sport.log"), false);
+}
+
+#[test]
+fn export_names_and_protocols_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    for (protocol, name, says) in [
+        ("sport", "e.pcap", "FILE.pcapng"),
+        ("sbus", "e.pcapng", "--export is available for"),
+    ] {
+        let target = dir.path().join(name);
+        let out = busnoop()
+            .arg(protocol)
+            .arg(fixture("sport-sample.bin"))
+            .arg("--export")
+            .arg(&target)
+            .output()
+            .unwrap();
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(says), "{err}");
+        assert!(!target.exists());
+    }
+}

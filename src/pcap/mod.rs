@@ -144,8 +144,16 @@ pub fn pcapng_link_type(prefix: &[u8]) -> Option<u32> {
 /// determinable from the start" (`Ok(None)`: not pcapng, or another block first).
 pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, ()> {
     let u32_at = |at: usize, le: bool| -> Result<u32, ()> {
-        let b: [u8; 4] = prefix.get(at..at + 4).ok_or(())?.try_into().map_err(|_| ())?;
-        Ok(if le { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) })
+        let b: [u8; 4] = prefix
+            .get(at..at + 4)
+            .ok_or(())?
+            .try_into()
+            .map_err(|_| ())?;
+        Ok(if le {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
     };
     match prefix.get(..4) {
         None => return Err(()),
@@ -169,7 +177,11 @@ pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, ()> {
         .ok_or(())?
         .try_into()
         .map_err(|_| ())?;
-    Ok(Some(if le { u16::from_le_bytes(b) } else { u16::from_be_bytes(b) } as u32))
+    Ok(Some(if le {
+        u16::from_le_bytes(b)
+    } else {
+        u16::from_be_bytes(b)
+    } as u32))
 }
 
 /// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),

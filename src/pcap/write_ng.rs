@@ -123,8 +123,19 @@ mod tests {
     fn reads_back_with_link_type_times_and_bytes() {
         let mut out = Vec::new();
         section_header(&mut out);
-        interface(&mut out, 250, Some("/dev/ttyUSB0"), Some("sport 57600 baud"));
-        packet(&mut out, 0, 1_700_000_000_123_456, b"abc", Some("link down"));
+        interface(
+            &mut out,
+            250,
+            Some("/dev/ttyUSB0"),
+            Some("sport 57600 baud"),
+        );
+        packet(
+            &mut out,
+            0,
+            1_700_000_000_123_456,
+            b"abc",
+            Some("link down"),
+        );
         packet(&mut out, 0, 1_700_000_001_000_000, b"", None);
         assert_eq!(out.len() % 4, 0);
         let mut got = Vec::new();
