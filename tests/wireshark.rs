@@ -254,3 +254,60 @@ fn export_names_and_protocols_are_checked() {
         assert!(!target.exists());
     }
 }
+
+#[test]
+fn tshark_decodes_the_sab_export_like_the_table() {
+    for session in ["sab1-session.bin", "sab2-session.bin"] {
+        let Some(mut tshark) = tshark() else { return };
+        let dir = tempfile::tempdir().unwrap();
+        let export = dir.path().join("export.pcapng");
+        let table = ok(&busnoop()
+            .arg("sab2")
+            .arg(fixture(session))
+            .args(["-f", "tsv", "--raw", "--export"])
+            .arg(&export)
+            .output()
+            .unwrap());
+        let rows = frame_rows(&table);
+        let lua = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/contrib/wireshark/busnoop-sab.lua"
+        );
+        let fields = ok(&tshark
+            .arg("-X")
+            .arg(format!("lua_script:{lua}"))
+            .arg("-r")
+            .arg(&export)
+            .args(["-T", "fields", "-E", "occurrence=a"])
+            .args(["-e", "sab.address", "-e", "sab.type", "-e", "sab.command"])
+            .args(["-e", "sab.crc_status", "-e", "_ws.expert.message"])
+            .output()
+            .unwrap());
+        let packets: Vec<Vec<&str>> = fields.lines().map(|l| l.split('\t').collect()).collect();
+        assert_eq!(packets.len(), rows.len(), "{session}: {fields}");
+        let (mut frames, mut bad) = (0, 0);
+        for (row, pkt) in rows.iter().zip(&packets) {
+            let what = format!("{session}: {row:?} against {pkt:?}");
+            match row["Type"].as_str() {
+                "Request" | "ACK" | "NACK" => {
+                    frames += 1;
+                    assert_eq!(row["ID"], pkt[0], "{what}");
+                    assert_eq!(row["Type"], pkt[1], "{what}");
+                    assert_eq!(row["Sensor #"], pkt[2], "{what}");
+                    assert_eq!(pkt[3], "good", "{what}");
+                }
+                "BadCRC" => {
+                    bad += 1;
+                    assert_eq!(pkt[3], "bad", "{what}");
+                    assert!(pkt[4].split(',').any(|m| m == "Bad CRC"), "{what}");
+                }
+                // Garbage, runts: bytes that are no frame.
+                _ => assert_eq!(pkt[3], "", "{what}"),
+            }
+        }
+        assert!(
+            frames >= 19 && bad == 1,
+            "{session}: {frames} frames, {bad} bad"
+        );
+    }
+}

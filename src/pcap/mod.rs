@@ -140,15 +140,19 @@ pub fn pcapng_link_type(prefix: &[u8]) -> Option<u32> {
     pcapng_first_interface(prefix).ok().flatten()
 }
 
-/// Like [`pcapng_link_type`], telling apart "more bytes needed" (`Err(())`) from "not
+/// More bytes are needed to tell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NeedMore;
+
+/// Like [`pcapng_link_type`], telling apart "more bytes needed" (`Err(NeedMore)`) from "not
 /// determinable from the start" (`Ok(None)`: not pcapng, or another block first).
-pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, ()> {
-    let u32_at = |at: usize, le: bool| -> Result<u32, ()> {
+pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, NeedMore> {
+    let u32_at = |at: usize, le: bool| -> Result<u32, NeedMore> {
         let b: [u8; 4] = prefix
             .get(at..at + 4)
-            .ok_or(())?
+            .ok_or(NeedMore)?
             .try_into()
-            .map_err(|_| ())?;
+            .map_err(|_| NeedMore)?;
         Ok(if le {
             u32::from_le_bytes(b)
         } else {
@@ -156,17 +160,17 @@ pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, ()> {
         })
     };
     match prefix.get(..4) {
-        None => return Err(()),
+        None => return Err(NeedMore),
         Some(m) if m != [0x0A, 0x0D, 0x0D, 0x0A] => return Ok(None),
         Some(_) => {}
     }
-    let le = match prefix.get(8..12).ok_or(())? {
+    let le = match prefix.get(8..12).ok_or(NeedMore)? {
         [0x4D, 0x3C, 0x2B, 0x1A] => true,
         [0x1A, 0x2B, 0x3C, 0x4D] => false,
         _ => return Ok(None),
     };
     let shb_len = u32_at(4, le)? as usize;
-    if shb_len < 28 || shb_len % 4 != 0 {
+    if shb_len < 28 || !shb_len.is_multiple_of(4) {
         return Ok(None);
     }
     if u32_at(shb_len, le)? != 1 {
@@ -174,9 +178,9 @@ pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, ()> {
     }
     let b: [u8; 2] = prefix
         .get(shb_len + 8..shb_len + 10)
-        .ok_or(())?
+        .ok_or(NeedMore)?
         .try_into()
-        .map_err(|_| ())?;
+        .map_err(|_| NeedMore)?;
     Ok(Some(if le {
         u16::from_le_bytes(b)
     } else {

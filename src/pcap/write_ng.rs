@@ -21,7 +21,7 @@ const IF_TSRESOL: u16 = 9;
 pub const SNAPLEN: u32 = 65_535;
 
 fn pad(out: &mut Vec<u8>) {
-    while out.len() % 4 != 0 {
+    while !out.len().is_multiple_of(4) {
         out.push(0);
     }
 }

@@ -161,8 +161,10 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
             return match crate::pcap::pcapng_first_interface(prefix) {
                 Ok(Some(RTAC_SERIAL | USER0)) => Some(Kind::Recording),
                 Ok(_) => Some(Kind::Pcapng),
-                Err(()) if complete || prefix.len() >= DETECT_LEN => Some(Kind::Pcapng),
-                Err(()) => None,
+                Err(crate::pcap::NeedMore) if complete || prefix.len() >= DETECT_LEN => {
+                    Some(Kind::Pcapng)
+                }
+                Err(crate::pcap::NeedMore) => None,
             };
         }
     }
