@@ -59,6 +59,9 @@ pub enum Command {
     Detect(crate::detect::DetectArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
+    /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
+    /// docs/wireshark.md). Wireshark runs it; by hand, `busnoop extcap --extcap-interfaces`.
+    Extcap(crate::extcap::ExtcapArgs),
     /// Print the shell completion script for SHELL on standard output (see README, "Install").
     Completions {
         /// The shell to complete in.
@@ -75,21 +78,21 @@ pub enum Command {
 }
 
 /// The subcommands that are not a protocol.
-pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "completions", "man"];
+pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "extcap", "completions", "man"];
 
 /// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
 const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap \
-     recording) or `-` for standard input. File kinds are recognised by content.";
+     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap or \
+     .pcapng recording) or `-` for standard input. File kinds are recognised by content.";
 /// `SOURCE` in `busnoop sbus --help`.
 const SBUS_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap recording, a pcap/pcapng capture of \
+     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng capture of \
      Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w -` pipe). File kinds \
      are recognised by content; `--baud` also sets the byte times of raw files.";
 /// `SOURCE` in `busnoop sab2 --help`.
 const SAB_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap recording) or `-` for standard input. File \
-     kinds are recognised by content; `--baud` also sets the byte times of raw files.";
+     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for standard \
+     input. File kinds are recognised by content; `--baud` also sets the byte times of raw files.";
 
 #[derive(Args, Debug)]
 pub struct SbusArgs {
@@ -393,7 +396,17 @@ impl OutputArgs {
 
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    // Wireshark runs an extcap with its own options first (`busnoop --extcap-interfaces`):
+    // a symlink to busnoop in the extcap folder is `busnoop extcap …`.
+    let mut argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if argv
+        .get(1)
+        .and_then(|a| a.to_str())
+        .is_some_and(|a| a.starts_with("--extcap-") || a == "--capture")
+    {
+        argv.insert(1, "extcap".into());
+    }
+    let cli = match Cli::try_parse_from(argv) {
         Ok(c) => c,
         Err(e) => {
             let _ = e.print();
@@ -444,6 +457,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sbus(a) => (&crate::sbus::PROTOCOL, &a.capture),
         Command::Sab2(a) => (&crate::sab::PROTOCOL, &a.capture),
         Command::Ports => return list_ports(),
+        Command::Extcap(a) => return crate::extcap::run(a),
         Command::Detect(a) => return crate::detect::run(a),
         Command::Completions { shell } => return crate::manual::completions(*shell),
         Command::Man { dir } => return crate::manual::man(dir.as_deref()),
@@ -504,7 +518,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 crate::sab::decoder(o)
             })
         }
-        Command::Ports | Command::Detect(_) | Command::Completions { .. } | Command::Man { .. } => {
+        Command::Ports
+        | Command::Extcap(_)
+        | Command::Detect(_)
+        | Command::Completions { .. }
+        | Command::Man { .. } => {
             unreachable!("handled above")
         }
     }

@@ -152,7 +152,10 @@ impl Exporter {
 /// an export. Returns the link type and the dissector.
 pub fn check(path: &Path, command: &str) -> Result<(u32, &'static str), Failure> {
     let ext = path.extension().and_then(|e| e.to_str());
-    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("pcapng")) {
+    // A FIFO (Wireshark's extcap pipe, `wireshark -k -i FIFO`) takes the export whatever its name.
+    use std::os::unix::fs::FileTypeExt;
+    let fifo = std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo());
+    if !fifo && !ext.is_some_and(|e| e.eq_ignore_ascii_case("pcapng")) {
         return Err(Failure::Usage(format!(
             "--export {}: the export is pcapng; name it FILE.pcapng",
             path.display()

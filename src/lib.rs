@@ -11,6 +11,7 @@ pub mod cli;
 pub mod detect;
 pub mod exit;
 pub mod export;
+pub mod extcap;
 pub mod filter;
 pub mod fmt;
 pub mod manual;

@@ -311,3 +311,124 @@ fn tshark_decodes_the_sab_export_like_the_table() {
         );
     }
 }
+
+/// The packets (link type, bytes) of a pcapng file.
+fn packets_of(bytes: &[u8]) -> Vec<(u32, Vec<u8>)> {
+    let mut got = Vec::new();
+    let mut s = busnoop::pcap::PcapStream::default();
+    s.push(bytes, &mut |p| got.push((p.link_type, p.data.to_vec())))
+        .unwrap();
+    got
+}
+
+#[test]
+fn extcap_lists_its_interfaces_as_wireshark_asks() {
+    // Wireshark runs the extcap (a symlink to busnoop) with its own options first.
+    let list = ok(&busnoop()
+        .args(["--extcap-interfaces", "--extcap-version=4.0"])
+        .output()
+        .unwrap());
+    assert!(list.starts_with("extcap {version="), "{list}");
+    assert!(list.contains("interface {value=busnoop-sport}{display=FrSky S.Port (busnoop)}"));
+    assert!(list.contains("interface {value=busnoop-sab2}"));
+    let dlts = ok(&busnoop()
+        .args(["--extcap-dlts", "--extcap-interface", "busnoop-sport"])
+        .output()
+        .unwrap());
+    assert_eq!(
+        dlts,
+        "dlt {number=147}{name=USER0}{display=FrSky S.Port (busnoop) frames}\n"
+    );
+    let config = ok(&busnoop()
+        .args([
+            "extcap",
+            "--extcap-config",
+            "--extcap-interface",
+            "busnoop-sab2",
+        ])
+        .output()
+        .unwrap());
+    assert!(
+        config.contains("{call=--port}") && config.contains("{type=selector}"),
+        "{config}"
+    );
+    assert!(config.contains("{default=115200}"), "{config}");
+    let out = busnoop()
+        .args(["--extcap-dlts", "--extcap-interface", "eth0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("unknown interface eth0"));
+}
+
+#[test]
+fn extcap_captures_a_serial_bus_into_wiresharks_fifo() {
+    use common::pty::{bus, lock, wait_exit};
+    use std::io::{Read, Write};
+    use std::time::Duration;
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("wireshark-fifo");
+    nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::S_IRWXU).unwrap();
+    let mut b = bus();
+    let mut child = busnoop()
+        .args(["--capture", "--extcap-interface", "busnoop-sport", "--fifo"])
+        .arg(&fifo)
+        .arg("--port")
+        .arg(&b.path)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wireshark's side: read the FIFO as it comes.
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader_path = fifo.clone();
+    std::thread::spawn(move || {
+        let mut f = std::fs::File::open(reader_path).unwrap();
+        let mut s = busnoop::pcap::PcapStream::default();
+        let mut buf = [0u8; 4096];
+        loop {
+            let n = f.read(&mut buf).unwrap_or(0);
+            if n == 0 {
+                break;
+            }
+            let _ = s.push(&buf[..n], &mut |p| {
+                let _ = tx.send((p.link_type, p.data.to_vec()));
+            });
+        }
+    });
+    let traffic = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    b.master.write_all(&traffic).unwrap();
+    b.master.flush().unwrap();
+    // Wireshark sees frames while the capture runs.
+    let want = packets_of(&{
+        let dir2 = tempfile::tempdir().unwrap();
+        let e = dir2.path().join("e.pcapng");
+        ok(&busnoop()
+            .arg("sport")
+            .arg(fixture("sport-sample.bin"))
+            .arg("--export")
+            .arg(&e)
+            .args(["-o", "/dev/null"])
+            .output()
+            .unwrap());
+        std::fs::read(&e).unwrap()
+    });
+    let mut live = Vec::new();
+    while live.len() < 20 {
+        let p = rx
+            .recv_timeout(Duration::from_secs(10))
+            .expect("no frame reached the FIFO for 10 s");
+        live.push(p);
+    }
+    // Wireshark stops an extcap with SIGTERM.
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGTERM,
+    )
+    .unwrap();
+    wait_exit(&mut child);
+    drop(b);
+    assert!(live.iter().all(|p| p.0 == busnoop::pcap::linktype::USER0));
+    assert_eq!(live[..], want[..20]);
+}
