@@ -10,6 +10,7 @@
 pub mod cli;
 pub mod detect;
 pub mod exit;
+pub mod export;
 pub mod filter;
 pub mod fmt;
 pub mod numbers;

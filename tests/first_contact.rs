@@ -313,8 +313,11 @@ fn help_names_only_the_sources_each_protocol_reads() {
     let help = |cmd: &str| text(&busnoop().args([cmd, "--help"]).output().unwrap().stdout);
     let sport = help("sport");
     assert!(sport.contains("EdgeTX/OpenTX S.Port debug log"), "{sport}");
+    // Recordings may be pcapng (--record FILE.pcapng); network captures are not for S.Port.
     assert!(
-        !sport.contains("pcapng") && !sport.contains("network"),
+        sport.contains("a busnoop .pcap or .pcapng recording")
+            && !sport.contains("pcap/pcapng capture")
+            && !sport.contains("network"),
         "{sport}"
     );
     let sbus = help("sbus");
@@ -325,7 +328,7 @@ fn help_names_only_the_sources_each_protocol_reads() {
     let sab = help("sab2");
     assert!(!sab.contains("EdgeTX") && !sab.contains("network"), "{sab}");
     assert!(
-        sab.contains("raw wire bytes, a busnoop .pcap recording"),
+        sab.contains("raw wire bytes, a busnoop .pcap or .pcapng recording"),
         "{sab}"
     );
     let top = text(&busnoop().arg("--help").output().unwrap().stdout);

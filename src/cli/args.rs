@@ -49,6 +49,9 @@ pub enum Command {
     Detect(DetectArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
+    /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
+    /// docs/wireshark.md). Wireshark runs it; by hand, `busnoop extcap --extcap-interfaces`.
+    Extcap(super::extcap::ExtcapArgs),
     /// Print the shell completion script for SHELL on standard output (see README, "Install").
     Completions {
         /// The shell to complete in.
@@ -65,21 +68,21 @@ pub enum Command {
 }
 
 /// The subcommands that are not a protocol.
-pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "completions", "man"];
+pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "extcap", "completions", "man"];
 
 /// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
 const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap \
-     recording) or `-` for standard input. File kinds are recognised by content.";
+     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap or \
+     .pcapng recording) or `-` for standard input. File kinds are recognised by content.";
 /// `SOURCE` in `busnoop sbus --help`.
 const SBUS_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap recording, a pcap/pcapng capture of \
+     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng capture of \
      Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w -` pipe). File kinds \
      are recognised by content; `--baud` also sets the byte times of raw files.";
 /// `SOURCE` in `busnoop sab2 --help`.
 const SAB_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap recording) or `-` for standard input. File \
-     kinds are recognised by content; `--baud` also sets the byte times of raw files.";
+     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for standard \
+     input. File kinds are recognised by content; `--baud` also sets the byte times of raw files.";
 
 #[derive(Args, Debug)]
 pub struct SbusArgs {
@@ -247,11 +250,18 @@ pub struct LiveArgs {
     #[arg(long)]
     pub reconnect: bool,
 
-    /// Keep what came off the wire while decoding: FILE.pcap with arrival times (busnoop replays
-    /// it with the original Millis; Wireshark opens it), any other name: the raw bytes; `-`: the
-    /// raw bytes on standard output (with -o FILE only).
+    /// Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng with arrival times
+    /// (busnoop replays both with the original Millis; Wireshark opens them; pcapng also names
+    /// the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: the raw bytes;
+    /// `-`: the raw bytes on standard output (with -o FILE only). Other names are refused.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+
+    /// Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with its
+    /// capture time, for Wireshark (sport: link type USER0, sab2: USER1; dissectors in
+    /// contrib/wireshark/, see docs/wireshark.md). Filters apply, as to the table.
+    #[arg(long, value_name = "FILE.pcapng")]
+    pub export: Option<PathBuf>,
 
     /// The device's DTR and RTS outputs: low drops them right after opening (an RS-485 adapter
     /// whose driver follows RTS stays off the bus); keep leaves them as the driver sets them

@@ -20,6 +20,7 @@ use crate::top::Top;
 use crate::top::view::Info;
 
 mod args;
+mod extcap;
 mod manual;
 mod paths;
 pub mod project;
@@ -29,7 +30,17 @@ use paths::check_distinct;
 
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    // Wireshark runs an extcap with its own options first (`busnoop --extcap-interfaces`):
+    // a symlink to busnoop in the extcap folder is `busnoop extcap …`.
+    let mut argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if argv
+        .get(1)
+        .and_then(|a| a.to_str())
+        .is_some_and(|a| a.starts_with("--extcap-") || a == "--capture")
+    {
+        argv.insert(1, "extcap".into());
+    }
+    let cli = match Cli::try_parse_from(argv) {
         Ok(c) => c,
         Err(e) => {
             let _ = e.print();
@@ -80,6 +91,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sbus(a) => (&crate::sbus::PROTOCOL, &a.capture),
         Command::Sab2(a) => (&crate::sab::PROTOCOL, &a.capture),
         Command::Ports => return list_ports(),
+        Command::Extcap(a) => return extcap::run(a),
         Command::Detect(a) => return crate::detect::run(&a.options()),
         Command::Completions { shell } => return manual::completions(*shell),
         Command::Man { dir } => return manual::man(dir.as_deref()),
@@ -140,7 +152,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 crate::sab::decoder(o)
             })
         }
-        Command::Ports | Command::Detect(_) | Command::Completions { .. } | Command::Man { .. } => {
+        Command::Ports
+        | Command::Extcap(_)
+        | Command::Detect(_)
+        | Command::Completions { .. }
+        | Command::Man { .. } => {
             unreachable!("handled above")
         }
     }
@@ -207,6 +223,20 @@ pub fn run_capture(
         args.output.output_file(),
         args.live.record.as_deref(),
     )?;
+    if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
+        crate::record::RecordFormat::for_path(p)?;
+    }
+    if let Some(p) = args.live.export.as_deref() {
+        crate::export::check(p, protocol.command)?;
+        // The export is neither the input nor the table (nor the recording).
+        check_distinct(&input, args.output.output_file(), Some(p))?;
+        if args.live.record.as_deref() == Some(p) {
+            return Err(Failure::Usage(format!(
+                "--record and --export name the same file {}",
+                p.display()
+            )));
+        }
+    }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
             ["pcap", "pcapng", "bin"]
@@ -253,7 +283,23 @@ pub fn run_capture(
     let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
     let mut recorder = match &args.live.record {
         Some(_) if record_to_stdout => Some(Recorder::stdout(timed)),
-        Some(p) => Some(Recorder::create(p, timed)?),
+        Some(p) => {
+            let mut r = Recorder::create(p, timed)?;
+            r.describe(
+                &args.source.to_string_lossy(),
+                &crate::record::line_description(protocol.name, &line),
+            );
+            Some(r)
+        }
+        None => None,
+    };
+    let mut export = match &args.live.export {
+        Some(p) => Some(crate::export::Exporter::create(
+            p,
+            protocol.command,
+            &args.source.to_string_lossy(),
+            &crate::record::line_description(protocol.name, &line),
+        )?),
         None => None,
     };
     let out = &args.output;
@@ -304,7 +350,18 @@ pub fn run_capture(
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)
             .map_err(|e| Failure::Output(format!("cannot set up the terminal for --top: {e}")))?;
-        let result = drive(decoder.as_mut(), &rx, &mut view, ctx);
+        let result = match export.as_mut() {
+            Some(export) => drive(
+                decoder.as_mut(),
+                &rx,
+                &mut crate::export::Exporting {
+                    inner: &mut view,
+                    export,
+                },
+                ctx,
+            ),
+            None => drive(decoder.as_mut(), &rx, &mut view, ctx),
+        };
         if result.is_ok() {
             view.hold();
         }
@@ -314,17 +371,25 @@ pub fn run_capture(
         (result, rows)
     } else {
         let table = table.as_mut().expect("a table without --top");
+        let mut exporting;
+        let sink: &mut dyn crate::sink::Sink = match export.as_mut() {
+            Some(export) => {
+                exporting = crate::export::Exporting {
+                    inner: &mut *table,
+                    export,
+                };
+                &mut exporting
+            }
+            None => &mut *table,
+        };
         let result = match pacer {
             Some(pacer) => drive(
                 decoder.as_mut(),
                 &rx,
-                &mut Paced {
-                    inner: table,
-                    pacer,
-                },
+                &mut Paced { inner: sink, pacer },
                 ctx,
             ),
-            None => drive(decoder.as_mut(), &rx, table, ctx),
+            None => drive(decoder.as_mut(), &rx, sink, ctx),
         };
         (result, table.rows())
     };

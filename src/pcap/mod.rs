@@ -8,6 +8,7 @@
 //!   packet blocks; other blocks are skipped). Memory stays bounded: a record or block longer
 //!   than its limit ([`MAX_RECORD`]) is an error, never an allocation.
 //! * [`write`]: classic pcap records (the recorder, tests, benchmarks and tools).
+//! * [`write_ng`]: pcapng blocks (recordings named `.pcapng`, the frame export).
 //! * [`rtac`]: the RTAC serial encapsulation busnoop records serial lines in.
 //! * [`linktype`]: every link type busnoop names, and [`Packets`], packets with their bytes in one
 //!   buffer, as the capture source hands them on.
@@ -17,6 +18,7 @@
 pub mod read;
 pub mod rtac;
 pub mod write;
+pub mod write_ng;
 
 pub use read::PcapStream;
 
@@ -130,6 +132,62 @@ pub fn link_type(header: &[u8]) -> Option<u32> {
     }
 }
 
+/// The link type of the first interface of a pcapng file, from its first bytes: the section
+/// header block and the interface description block after it (either byte order). `None` when
+/// `prefix` is not pcapng, ends before that field, or the block after the section header is not
+/// an interface description.
+pub fn pcapng_link_type(prefix: &[u8]) -> Option<u32> {
+    pcapng_first_interface(prefix).ok().flatten()
+}
+
+/// More bytes are needed to tell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NeedMore;
+
+/// Like [`pcapng_link_type`], telling apart "more bytes needed" (`Err(NeedMore)`) from "not
+/// determinable from the start" (`Ok(None)`: not pcapng, or another block first).
+pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, NeedMore> {
+    let u32_at = |at: usize, le: bool| -> Result<u32, NeedMore> {
+        let b: [u8; 4] = prefix
+            .get(at..at + 4)
+            .ok_or(NeedMore)?
+            .try_into()
+            .map_err(|_| NeedMore)?;
+        Ok(if le {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    };
+    match prefix.get(..4) {
+        None => return Err(NeedMore),
+        Some(m) if m != [0x0A, 0x0D, 0x0D, 0x0A] => return Ok(None),
+        Some(_) => {}
+    }
+    let le = match prefix.get(8..12).ok_or(NeedMore)? {
+        [0x4D, 0x3C, 0x2B, 0x1A] => true,
+        [0x1A, 0x2B, 0x3C, 0x4D] => false,
+        _ => return Ok(None),
+    };
+    let shb_len = u32_at(4, le)? as usize;
+    if shb_len < 28 || !shb_len.is_multiple_of(4) {
+        return Ok(None);
+    }
+    if u32_at(shb_len, le)? != 1 {
+        return Ok(None);
+    }
+    let b: [u8; 2] = prefix
+        .get(shb_len + 8..shb_len + 10)
+        .ok_or(NeedMore)?
+        .try_into()
+        .map_err(|_| NeedMore)?;
+    Ok(Some(if le {
+        u16::from_le_bytes(b)
+    } else {
+        u16::from_be_bytes(b)
+    } as u32))
+}
+
 /// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),
 /// when it is one.
 pub fn anchor(ts_micros: i64) -> Option<Anchor> {
@@ -224,6 +282,20 @@ mod tests {
         be.extend_from_slice(&1u32.to_be_bytes());
         assert_eq!(link_type(&be), Some(1));
         assert_eq!(link_type(b"hello"), None);
+    }
+
+    #[test]
+    fn pcapng_link_type_from_first_interface() {
+        let mut out = Vec::new();
+        write_ng::section_header(&mut out);
+        assert_eq!(pcapng_link_type(&out), None);
+        write_ng::interface(&mut out, 250, Some("/dev/ttyUSB0"), None);
+        assert_eq!(pcapng_link_type(&out), Some(250));
+        assert_eq!(pcapng_link_type(&out[..out.len() - 30]), Some(250));
+        assert_eq!(pcapng_link_type(b"\x0A\x0D\x0D\x0A"), None);
+        let mut classic = Vec::new();
+        write::header(&mut classic, 250);
+        assert_eq!(pcapng_link_type(&classic), None);
     }
 
     #[test]

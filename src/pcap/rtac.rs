@@ -25,6 +25,12 @@ pub const LINK_UP: &[u8] = b"busnoop link up";
 /// `event` (control lines unknown) and then `data`.
 pub fn record(out: &mut Vec<u8>, ts_micros: i64, event: u8, data: &[u8]) {
     super::write::record_header(out, ts_micros, HEADER_LEN + data.len());
+    payload(out, ts_micros, event, data);
+}
+
+/// The packet bytes of one record: the RTAC serial header and then `data` (the body of a pcap
+/// record or of a pcapng enhanced packet block).
+pub fn payload(out: &mut Vec<u8>, ts_micros: i64, event: u8, data: &[u8]) {
     let (secs, us) = super::write::stamp(ts_micros);
     out.extend_from_slice(&secs.to_be_bytes());
     out.extend_from_slice(&us.to_be_bytes());

@@ -169,7 +169,17 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
             });
         }
         if prefix[..4] == [0x0A, 0x0D, 0x0D, 0x0A] {
-            return Some(Kind::Pcapng);
+            // A pcapng whose first interface is a serial line is a busnoop recording
+            // (`--record FILE.pcapng`), not network traffic.
+            use crate::pcap::linktype::{RTAC_SERIAL, USER0};
+            return match crate::pcap::pcapng_first_interface(prefix) {
+                Ok(Some(RTAC_SERIAL | USER0)) => Some(Kind::Recording),
+                Ok(_) => Some(Kind::Pcapng),
+                Err(crate::pcap::NeedMore) if complete || prefix.len() >= DETECT_LEN => {
+                    Some(Kind::Pcapng)
+                }
+                Err(crate::pcap::NeedMore) => None,
+            };
         }
     }
     match edgetx::looks_like_log(prefix) {
@@ -504,7 +514,20 @@ mod tests {
         assert_eq!(detect(&pcap, false), Some(Kind::Pcap));
         pcap[20] = 250;
         assert_eq!(detect(&pcap, false), Some(Kind::Recording));
-        assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], false), Some(Kind::Pcapng));
+        // pcapng: the first interface's link type tells a recording from network traffic.
+        assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], false), None);
+        assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], true), Some(Kind::Pcapng));
+        let mut ng = Vec::new();
+        crate::pcap::write_ng::section_header(&mut ng);
+        assert_eq!(detect(&ng, false), None);
+        let mut other = ng.clone();
+        crate::pcap::write_ng::packet(&mut other, 0, 0, b"x", None);
+        assert_eq!(detect(&other, false), Some(Kind::Pcapng));
+        let mut eth = ng.clone();
+        crate::pcap::write_ng::interface(&mut eth, 1, None, None);
+        assert_eq!(detect(&eth, false), Some(Kind::Pcapng));
+        crate::pcap::write_ng::interface(&mut ng, 250, Some("/dev/ttyUSB0"), None);
+        assert_eq!(detect(&ng, false), Some(Kind::Recording));
         assert_eq!(detect(b"2014-07", false), None);
         assert_eq!(detect(b"2014-07", true), Some(Kind::Raw));
         assert_eq!(detect(b"", true), Some(Kind::Raw));

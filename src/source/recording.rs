@@ -1,4 +1,4 @@
-//! Replays a busnoop recording (classic pcap, link type RTAC serial or USER0; see
+//! Replays a busnoop recording (classic pcap or pcapng, link type RTAC serial or USER0; see
 //! [`crate::record`]) as timed byte batches, read with the shared [`PcapStream`]. Records of
 //! other tools' RTAC serial captures that are not line data (line events, lost data, status
 //! changes) become rows ([`Message::Note`]) at their place among the bytes.
@@ -165,7 +165,10 @@ impl RecordingReader {
         if self.head.len() < 24 {
             return Err(self.bad("truncated pcap header"));
         }
-        let link_type = pcap::link_type(&self.head).ok_or_else(|| self.bad("not a pcap file"))?;
+        // Classic pcap, or pcapng (`--record FILE.pcapng`) whose first interface is the line.
+        let link_type = pcap::link_type(&self.head)
+            .or_else(|| pcap::pcapng_link_type(&self.head))
+            .ok_or_else(|| self.bad("not a pcap or pcapng file"))?;
         self.link_type = Some(link_type);
         let head = std::mem::take(&mut self.head);
         self.parse(&head);
@@ -245,13 +248,9 @@ impl RecordingReader {
     /// Adds records to `batch` until it is worth sending (every record read so far is in it,
     /// or it is large), a status event must go out first, or the input ends.
     fn fill(&mut self, tx: &SyncSender<Message>, batch: &mut Batch) -> Result<(), Failure> {
-        let link_type = match self.link_type {
-            Some(l) => l,
-            None => {
-                self.header()?;
-                self.link_type.unwrap_or_default()
-            }
-        };
+        if self.link_type.is_none() {
+            self.header()?;
+        }
         loop {
             if self.next >= self.records.len() {
                 if !batch.bytes.is_empty() {
@@ -285,7 +284,8 @@ impl RecordingReader {
                     let _ = tx.send(Message::Anchor(a));
                 }
             }
-            let (event, lines, payload) = match link_type {
+            // pcapng names the link type per interface: each packet carries its own.
+            let (event, lines, payload) = match p.link_type {
                 linktype::RTAC_SERIAL => rtac::parse(p.data).unwrap_or((SHORT_RECORD, 0, &[])),
                 _ => (EVENT_RX_DATA, 0, p.data),
             };

@@ -1,0 +1,276 @@
+//! `busnoop extcap`: busnoop as a Wireshark extcap, so that Wireshark captures an S.Port or
+//! SAB bus live (docs/wireshark.md, "Live in Wireshark").
+//!
+//! Wireshark runs the extcap with `--extcap-interfaces`, `--extcap-dlts`, `--extcap-config` to
+//! list what it offers, and with `--capture --fifo PATH` to capture: busnoop then decodes the
+//! chosen serial port as `busnoop PROTOCOL PORT --export PATH` would, writing one pcapng packet
+//! per frame into Wireshark's FIFO (the link types of [`crate::export`]), until Wireshark stops
+//! it (SIGTERM).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::exit::Failure;
+
+/// The interfaces: (value, display, command, link type name, link type, default baud).
+const INTERFACES: [(&str, &str, &str, &str, u32, u32); 2] = [
+    (
+        "busnoop-sport",
+        "FrSky S.Port (busnoop)",
+        "sport",
+        "USER0",
+        crate::pcap::linktype::USER0,
+        57_600,
+    ),
+    (
+        "busnoop-sab2",
+        "modm SAB / SAB2 (busnoop)",
+        "sab2",
+        "USER1",
+        crate::export::USER1,
+        115_200,
+    ),
+];
+
+/// The options Wireshark passes (see the extcap documentation of Wireshark).
+#[derive(Args, Debug, Default)]
+pub struct ExtcapArgs {
+    /// List the interfaces.
+    #[arg(long)]
+    pub extcap_interfaces: bool,
+    /// Wireshark's version (ignored).
+    #[arg(long, value_name = "VERSION")]
+    pub extcap_version: Option<String>,
+    /// The interface the other options are about.
+    #[arg(long, value_name = "NAME")]
+    pub extcap_interface: Option<String>,
+    /// List the interface's link types.
+    #[arg(long)]
+    pub extcap_dlts: bool,
+    /// List the interface's options.
+    #[arg(long)]
+    pub extcap_config: bool,
+    /// Capture.
+    #[arg(long)]
+    pub capture: bool,
+    /// The FIFO to write the pcapng into.
+    #[arg(long, value_name = "PATH")]
+    pub fifo: Option<PathBuf>,
+    /// Capture filter (not supported; an error when given).
+    #[arg(long, value_name = "FILTER")]
+    pub extcap_capture_filter: Option<String>,
+    /// The serial port to capture.
+    #[arg(long, value_name = "DEVICE")]
+    pub port: Option<PathBuf>,
+    /// Line speed.
+    #[arg(long, value_name = "BAUD")]
+    pub baud: Option<u32>,
+    /// Wait for an unplugged adapter.
+    #[arg(long)]
+    pub reconnect: bool,
+}
+
+fn interface(
+    name: Option<&str>,
+) -> Result<
+    &'static (
+        &'static str,
+        &'static str,
+        &'static str,
+        &'static str,
+        u32,
+        u32,
+    ),
+    Failure,
+> {
+    let name = name.ok_or_else(|| {
+        Failure::Usage("busnoop extcap: --extcap-interface NAME is needed".into())
+    })?;
+    INTERFACES.iter().find(|i| i.0 == name).ok_or_else(|| {
+        Failure::Usage(format!(
+            "busnoop extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2"
+        ))
+    })
+}
+
+/// The answer to `--extcap-interfaces`, `--extcap-dlts` or `--extcap-config` (no capture).
+pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> {
+    let mut s = String::new();
+    if args.extcap_interfaces {
+        s.push_str(&format!(
+            "extcap {{version={}}}{{help=https://github.com/busnoop/busnoop/blob/main/docs/wireshark.md}}\n",
+            env!("CARGO_PKG_VERSION")
+        ));
+        for i in &INTERFACES {
+            s.push_str(&format!("interface {{value={}}}{{display={}}}\n", i.0, i.1));
+        }
+        return Ok(s);
+    }
+    let i = interface(args.extcap_interface.as_deref())?;
+    if args.extcap_dlts {
+        s.push_str(&format!(
+            "dlt {{number={}}}{{name={}}}{{display={} frames}}\n",
+            i.4, i.3, i.1
+        ));
+        return Ok(s);
+    }
+    if args.extcap_config {
+        s.push_str(
+            "arg {number=0}{call=--port}{display=Serial port}{type=selector}{required=true}\
+             {tooltip=The serial port on the bus (read-only, passive)}\n",
+        );
+        for (n, p) in ports.iter().enumerate() {
+            let default = if n == 0 { "{default=true}" } else { "" };
+            s.push_str(&format!(
+                "value {{arg=0}}{{value={p}}}{{display={p}}}{default}\n"
+            ));
+        }
+        s.push_str(&format!(
+            "arg {{number=1}}{{call=--baud}}{{display=Baud rate}}{{type=integer}}\
+             {{range=300,4000000}}{{default={}}}{{tooltip=Line speed of the bus}}\n",
+            i.5
+        ));
+        s.push_str(
+            "arg {number=2}{call=--reconnect}{display=Wait for the adapter when it is unplugged}\
+             {type=boolflag}{default=false}\n",
+        );
+        return Ok(s);
+    }
+    Err(Failure::Usage(
+        "busnoop extcap: give --extcap-interfaces, --extcap-dlts, --extcap-config or --capture \
+         (Wireshark does; see docs/wireshark.md)"
+            .into(),
+    ))
+}
+
+/// The busnoop command line a capture runs.
+pub fn capture_command(args: &ExtcapArgs) -> Result<Vec<std::ffi::OsString>, Failure> {
+    let i = interface(args.extcap_interface.as_deref())?;
+    if args
+        .extcap_capture_filter
+        .as_deref()
+        .is_some_and(|f| !f.trim().is_empty())
+    {
+        return Err(Failure::Usage(
+            "busnoop extcap: capture filters are not supported; use a display filter".into(),
+        ));
+    }
+    let fifo = args
+        .fifo
+        .as_ref()
+        .ok_or_else(|| Failure::Usage("busnoop extcap: --capture needs --fifo PATH".into()))?;
+    let port = args.port.as_ref().ok_or_else(|| {
+        Failure::Usage("busnoop extcap: --capture needs --port DEVICE (a serial port)".into())
+    })?;
+    let mut cmd: Vec<std::ffi::OsString> = vec![
+        i.2.into(),
+        port.into(),
+        "--export".into(),
+        fifo.into(),
+        "-o".into(),
+        "/dev/null".into(),
+        "--baud".into(),
+        args.baud.unwrap_or(i.5).to_string().into(),
+    ];
+    if args.reconnect {
+        cmd.push("--reconnect".into());
+    }
+    Ok(cmd)
+}
+
+/// `busnoop extcap …`.
+pub fn run(args: &ExtcapArgs) -> Result<(), Failure> {
+    if args.capture {
+        let cmd = capture_command(args)?;
+        let mut argv = vec![std::ffi::OsString::from("busnoop")];
+        argv.extend(cmd);
+        let cli = <crate::cli::Cli as clap::Parser>::try_parse_from(argv)
+            .map_err(|e| Failure::Usage(format!("busnoop extcap: {e}")))?;
+        return crate::cli::run(cli);
+    }
+    let ports: Vec<String> = crate::source::serial::list_ports()
+        .into_iter()
+        .map(|p| p.name)
+        .collect();
+    let text = describe(args, &ports)?;
+    std::io::stdout()
+        .write_all(text.as_bytes())
+        .map_err(|e| Failure::Output(format!("cannot write to standard output: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lists_interfaces_dlts_and_config() {
+        let list = ExtcapArgs {
+            extcap_interfaces: true,
+            ..Default::default()
+        };
+        let s = describe(&list, &[]).unwrap();
+        assert!(s.starts_with("extcap {version="), "{s}");
+        assert!(s.contains("interface {value=busnoop-sport}"), "{s}");
+        let dlts = ExtcapArgs {
+            extcap_dlts: true,
+            extcap_interface: Some("busnoop-sab2".into()),
+            ..Default::default()
+        };
+        assert!(
+            describe(&dlts, &[])
+                .unwrap()
+                .contains("{number=148}{name=USER1}")
+        );
+        let config = ExtcapArgs {
+            extcap_config: true,
+            extcap_interface: Some("busnoop-sport".into()),
+            ..Default::default()
+        };
+        let s = describe(&config, &["/dev/ttyUSB0".into(), "/dev/ttyS0".into()]).unwrap();
+        assert!(
+            s.contains("value {arg=0}{value=/dev/ttyUSB0}{display=/dev/ttyUSB0}{default=true}")
+        );
+        assert!(
+            s.contains("{call=--baud}") && s.contains("{default=57600}"),
+            "{s}"
+        );
+        let bad = ExtcapArgs {
+            extcap_dlts: true,
+            extcap_interface: Some("eth0".into()),
+            ..Default::default()
+        };
+        assert!(matches!(describe(&bad, &[]), Err(Failure::Usage(_))));
+    }
+
+    #[test]
+    fn a_capture_is_the_export_into_the_fifo() {
+        let args = ExtcapArgs {
+            capture: true,
+            extcap_interface: Some("busnoop-sport".into()),
+            fifo: Some("/tmp/fifo".into()),
+            port: Some("/dev/ttyUSB0".into()),
+            reconnect: true,
+            ..Default::default()
+        };
+        let cmd = capture_command(&args).unwrap();
+        let cmd: Vec<_> = cmd.iter().map(|s| s.to_str().unwrap()).collect();
+        assert_eq!(
+            cmd,
+            [
+                "sport",
+                "/dev/ttyUSB0",
+                "--export",
+                "/tmp/fifo",
+                "-o",
+                "/dev/null",
+                "--baud",
+                "57600",
+                "--reconnect"
+            ]
+        );
+        let no_fifo = ExtcapArgs { fifo: None, ..args };
+        assert!(capture_command(&no_fifo).is_err());
+    }
+}

@@ -1,0 +1,268 @@
+//! The frame export (`--export FILE.pcapng`): one pcapng packet per reassembled frame, valid
+//! or not, stamped with the capture time of the frame, for Wireshark.
+//!
+//! * FrSky S.Port: link type `USER0` (147), the frame's bytes as on the wire (0x7E, physical
+//!   ID, and for a sensor's answer the 8 bytes and the CRC, byte-stuffed as sent), decoded by
+//!   `contrib/wireshark/busnoop-sport.lua`.
+//! * modm SAB / SAB2: link type `USER1` (148), the frame's bytes as on the wire (either
+//!   framing), decoded by `contrib/wireshark/busnoop-sab.lua`.
+//!
+//! The packets are the rows' `raw` bytes, so the export holds exactly the frames the table
+//! shows (filters apply); rows without bytes (notes, gaps) are not packets. A frame the table
+//! marks as an error carries a packet comment (`opt_comment`) with busnoop's verdict.
+//!
+//! [`Exporting`] wraps the driver's [`Sink`]: every row goes on to the table unchanged.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use chrono::{DateTime, Utc};
+
+use crate::exit::Failure;
+use crate::pcap::{linktype, write_ng};
+use crate::row::{Class, OutputError, Row, RowOut, RowResult};
+use crate::sink::Sink;
+use crate::time::Anchor;
+
+/// LINKTYPE_USER1: SAB frames.
+pub const USER1: u32 = 148;
+
+/// Protocols the export knows, by command: (link type, dissector script).
+pub fn link_for(command: &str) -> Option<(u32, &'static str)> {
+    match command {
+        "sport" => Some((linktype::USER0, "busnoop-sport.lua")),
+        "sab2" => Some((USER1, "busnoop-sab.lua")),
+        _ => None,
+    }
+}
+
+/// Writes the export.
+pub struct Exporter {
+    path: PathBuf,
+    out: BufWriter<File>,
+    link_type: u32,
+    interface: (String, String),
+    anchor: Option<DateTime<Utc>>,
+    started: bool,
+    /// The last packet's time and bytes: rows of one frame (several values) are one packet.
+    last: Option<(Option<u64>, Vec<u8>)>,
+    scratch: Vec<u8>,
+    packets: u64,
+}
+
+impl Exporter {
+    /// Checks `path` and `command` and creates the file; `name` and `description` name the
+    /// pcapng interface (the source, the protocol and line).
+    pub fn create(
+        path: &Path,
+        command: &str,
+        name: &str,
+        description: &str,
+    ) -> Result<Exporter, Failure> {
+        let (link_type, _) = check(path, command)?;
+        let file = File::create(path).map_err(|e| {
+            Failure::Output(format!("cannot create export {}: {e}", path.display()))
+        })?;
+        Ok(Exporter {
+            path: path.to_owned(),
+            out: BufWriter::with_capacity(64 * 1024, file),
+            link_type,
+            interface: (name.to_string(), description.to_string()),
+            anchor: None,
+            started: false,
+            last: None,
+            scratch: Vec::new(),
+            packets: 0,
+        })
+    }
+
+    /// Packets written so far.
+    pub fn packets(&self) -> u64 {
+        self.packets
+    }
+
+    fn error(&self, error: io::Error) -> OutputError {
+        OutputError {
+            path: Some(self.path.clone()),
+            error,
+        }
+    }
+
+    fn start(&mut self) -> io::Result<()> {
+        if self.started {
+            return Ok(());
+        }
+        self.started = true;
+        let mut head = Vec::with_capacity(256);
+        write_ng::section_header(&mut head);
+        write_ng::interface(
+            &mut head,
+            self.link_type as u16,
+            Some(&self.interface.0),
+            Some(&self.interface.1),
+        );
+        self.out.write_all(&head)
+    }
+
+    /// The packet for `row`, when it carries bytes of a new frame.
+    fn frame(&mut self, row: &Row<'_>) -> io::Result<()> {
+        if row.raw.is_empty() {
+            return Ok(());
+        }
+        if let Some((t, bytes)) = &self.last
+            && *t == row.micros
+            && bytes[..] == *row.raw
+        {
+            return Ok(());
+        }
+        self.start()?;
+        let anchor = *self.anchor.get_or_insert_with(Utc::now);
+        let ts = anchor.timestamp_micros() + row.micros.unwrap_or(0) as i64;
+        let comment = (row.class == Class::Error).then(|| {
+            let mut c = format!("busnoop: {}", row.kind);
+            for part in [row.data, row.extra.last().copied().unwrap_or("")] {
+                if !part.is_empty() {
+                    c.push_str(": ");
+                    c.push_str(part);
+                }
+            }
+            c
+        });
+        self.scratch.clear();
+        write_ng::packet(&mut self.scratch, 0, ts, row.raw, comment.as_deref());
+        self.out.write_all(&self.scratch)?;
+        self.packets += 1;
+        let last = self.last.get_or_insert_with(|| (None, Vec::new()));
+        last.0 = row.micros;
+        last.1.clear();
+        last.1.extend_from_slice(row.raw);
+        Ok(())
+    }
+
+    /// Writes the headers (an export of no frames is still a valid pcapng) and everything
+    /// buffered.
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        let r = self.start().and_then(|()| self.out.flush());
+        r.map_err(|e| self.error(e))
+    }
+}
+
+/// Checks an `--export` target before the run: the name ends in `.pcapng` and the protocol has
+/// an export. Returns the link type and the dissector.
+pub fn check(path: &Path, command: &str) -> Result<(u32, &'static str), Failure> {
+    let ext = path.extension().and_then(|e| e.to_str());
+    // A FIFO (Wireshark's extcap pipe, `wireshark -k -i FIFO`) takes the export whatever its name.
+    use std::os::unix::fs::FileTypeExt;
+    let fifo = std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo());
+    if !fifo && !ext.is_some_and(|e| e.eq_ignore_ascii_case("pcapng")) {
+        return Err(Failure::Usage(format!(
+            "--export {}: the export is pcapng; name it FILE.pcapng",
+            path.display()
+        )));
+    }
+    link_for(command).ok_or_else(|| {
+        Failure::Usage(format!(
+            "--export is available for sport and sab2; for {command}, record the wire with \
+             --record FILE.pcapng (Ether-S-Bus captures open in Wireshark as they are)"
+        ))
+    })
+}
+
+/// A [`Sink`] that also exports every row's frame.
+pub struct Exporting<'a, S: Sink + ?Sized> {
+    pub inner: &'a mut S,
+    pub export: &'a mut Exporter,
+}
+
+impl<S: Sink + ?Sized> RowOut for Exporting<'_, S> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        if let Err(e) = self.export.frame(row) {
+            return Err(self.export.error(e));
+        }
+        self.inner.row(row)
+    }
+}
+
+impl<S: Sink + ?Sized> Sink for Exporting<'_, S> {
+    fn flush(&mut self) -> Result<(), OutputError> {
+        self.export.flush()?;
+        self.inner.flush()
+    }
+    fn close(&mut self) -> Result<(), OutputError> {
+        self.export.flush()?;
+        self.inner.close()
+    }
+    fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        if self.export.anchor.is_none() {
+            self.export.anchor = match anchor {
+                Some(Anchor::Instant(t)) => Some(t),
+                Some(Anchor::Naive(n)) => Some(n.and_utc()),
+                None => None,
+            };
+        }
+        self.inner.set_anchor(anchor)
+    }
+    fn quit(&self) -> bool {
+        self.inner.quit()
+    }
+    fn skip(&mut self) {
+        self.inner.skip()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pcap::PcapStream;
+
+    #[test]
+    fn one_packet_per_frame_with_times_and_comments() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("e.pcapng");
+        let mut ex = Exporter::create(&path, "sport", "x.bin", "S.Port").unwrap();
+        ex.anchor = Some(DateTime::from_timestamp_micros(1_000_000).unwrap());
+        let raw = [0x7E, 0x22, 0x10, 0x10, 0x02, 0, 0, 0, 0, 0xDD];
+        let mut row = Row::empty(Some(96_000));
+        row.raw = &raw;
+        ex.frame(&row).unwrap();
+        ex.frame(&row).unwrap(); // a second value of the same frame
+        ex.frame(&Row::empty(Some(97_000))).unwrap(); // a note: no bytes
+        let mut bad = Row::empty(Some(98_000));
+        bad.raw = &raw[..4];
+        bad.class = Class::Error;
+        bad.kind = "BadCRC";
+        ex.frame(&bad).unwrap();
+        ex.flush().unwrap();
+        assert_eq!(ex.packets(), 2);
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(String::from_utf8_lossy(&bytes).contains("busnoop: BadCRC"));
+        let mut got = Vec::new();
+        let mut s = PcapStream::default();
+        s.push(&bytes, &mut |p| {
+            got.push((p.ts_micros, p.link_type, p.data.to_vec()))
+        })
+        .unwrap();
+        assert_eq!(
+            got,
+            [
+                (1_096_000, linktype::USER0, raw.to_vec()),
+                (1_098_000, linktype::USER0, raw[..4].to_vec()),
+            ]
+        );
+    }
+
+    #[test]
+    fn names_and_protocols_checked() {
+        assert!(check(Path::new("a.pcapng"), "sport").is_ok());
+        assert_eq!(check(Path::new("a.PCAPNG"), "sab2").unwrap().0, USER1);
+        assert!(matches!(
+            check(Path::new("a.pcap"), "sport"),
+            Err(Failure::Usage(_))
+        ));
+        assert!(matches!(
+            check(Path::new("a.pcapng"), "sbus"),
+            Err(Failure::Usage(_))
+        ));
+    }
+}
