@@ -344,6 +344,17 @@ pub struct OutputArgs {
     /// possible [default: 1 with --top, 0 otherwise]. No effect on a live port.
     #[arg(long, value_name = "N", value_parser = parse_speed)]
     pub speed: Option<f64>,
+
+    /// Wide table (CSV or TSV) as a radio's SD-card log: one line per poll cycle, one column per
+    /// sensor number seen (`Cell1(V)`, `RxBt(V)`, `R100`), the last value held; Date and Time
+    /// when the source has wall-clock time, else Millis. See docs/wide.md.
+    #[arg(long)]
+    pub wide: bool,
+
+    /// With --wide: one line per MS milliseconds of capture time instead of per poll cycle.
+    #[arg(long, value_name = "MS", requires = "wide",
+          value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
+    pub every: Option<u64>,
 }
 
 /// `--speed`: a number from 0 to 1000.
@@ -638,6 +649,19 @@ pub fn run_capture(
                 decoder.columns(),
             );
             table.set_pretty_widths(protocol.pretty_widths);
+            if out.wide {
+                let format = out.table_options(to_terminal, no_color_env).format;
+                if !matches!(format, Format::Csv | Format::Tsv) {
+                    return Err(Failure::Usage(
+                        "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
+                    ));
+                }
+                let step = match out.every {
+                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
+                    None => crate::sink::wide::Step::PollCycle,
+                };
+                table.set_wide(step, kind == Kind::Serial);
+            }
             Some(table)
         }
     };

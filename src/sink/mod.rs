@@ -1,6 +1,7 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
 pub mod output;
+pub mod wide;
 
 use std::io::{self, Write as _};
 use std::path::Path;
@@ -77,6 +78,8 @@ pub struct Table {
     scratch: String,
     hex: Vec<u8>,
     error: Option<OutputError>,
+    /// `--wide`: rows go to the wide table instead.
+    wide: Option<wide::Wide>,
 }
 
 /// A byte buffer shared between the csv writer and the table.
@@ -138,6 +141,7 @@ impl Table {
             frames: 0,
             skipped: 0,
             anchor: None,
+            wide: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
                 .terminator(csv::Terminator::CRLF)
@@ -185,12 +189,22 @@ impl Table {
         self.anchor = anchor;
     }
 
+    /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
+    /// checks); `live`: write lines as they come rather than at the end.
+    pub fn set_wide(&mut self, step: wide::Step, live: bool) {
+        self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
             return Ok(());
         }
         self.header_written = true;
+        if self.wide.is_some() {
+            // The wide table writes its own header.
+            return Ok(());
+        }
         let cols = self.columns.clone();
         match self.opts.format {
             Format::Tsv => {
@@ -230,6 +244,10 @@ impl Table {
         if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
             self.frames += 1;
         }
+        if let Some(w) = &mut self.wide {
+            w.row(row, self.anchor, self.out.buf());
+            return self.out.row_done();
+        }
         match self.opts.format {
             Format::Tsv => self.tsv(row),
             Format::Csv => self.csv_row(row),
@@ -251,6 +269,14 @@ impl Table {
     pub fn close(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
+        }
+        if let Some(mut w) = self.wide.take() {
+            w.finish(self.anchor, self.out.buf());
+            if !w.has_columns() {
+                eprintln!(
+                    "busnoop: note: --wide: no row carried a number, so the table has no columns"
+                );
+            }
         }
         self.out.close()
     }
