@@ -660,6 +660,12 @@ pub fn run_capture(
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
                     None => crate::sink::wide::Step::PollCycle,
                 };
+                if out.raw || out.time == TimeMode::Abs {
+                    eprintln!(
+                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
+                         Date and Time columns come with any source that has wall-clock time"
+                    );
+                }
                 table.set_wide(step, kind == Kind::Serial);
             }
             Some(table)

@@ -176,7 +176,7 @@ fn every_cuts_fixed_steps_and_millis_without_wall_clock() {
         "csv",
     ]));
     assert_eq!(headers[0], "Millis");
-    let _ = rows;
+    assert!(rows.is_empty());
     let path = fixture("edgetx-MODELE24-2014-07-11-sport.log");
     let (headers, rows) = table(&run(&[
         "sport",
@@ -214,4 +214,43 @@ fn wide_needs_csv_or_tsv() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn raw_and_time_abs_are_noted_and_change_nothing() {
+    let path = fixture("edgetx-MODELE24-2014-07-11-sport.log");
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .args([
+            "sport",
+            path.to_str().unwrap(),
+            "--wide",
+            "-f",
+            "csv",
+            "--raw",
+            "--time",
+            "abs",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--wide has no Raw or Time column"), "{err}");
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), wide_edgetx("csv"));
+}
+
+/// A capture without numbers (S-Bus and SAB rows carry none yet) gives the time column only,
+/// and says why.
+#[test]
+fn a_capture_without_numbers_says_so() {
+    let path = fixture("sab2-session.bin");
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .args(["sab2", path.to_str().unwrap(), "--wide", "-f", "tsv"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), "Millis\n");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no row carried a number"), "{err}");
 }
