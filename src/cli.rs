@@ -57,6 +57,9 @@ pub enum Command {
     /// file's first megabytes, or on a serial port at the usual baud rates, and prints the
     /// verdict, the evidence and the command to run.
     Detect(crate::detect::DetectArgs),
+    /// Plot a capture's numbers as time series: one panel per unit, broken frames marked, as
+    /// SVG or PNG (`busnoop plot flight.log --sensor Alt,VFAS -o flight.svg`).
+    Plot(crate::cli::PlotArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
     /// Print the shell completion script for SHELL on standard output (see README, "Install").
@@ -75,7 +78,24 @@ pub enum Command {
 }
 
 /// The subcommands that are not a protocol.
-pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "completions", "man"];
+pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "completions", "man"];
+
+/// `busnoop plot`.
+#[derive(Args, Debug, Clone)]
+pub struct PlotArgs {
+    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-`.
+    pub source: PathBuf,
+    /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
+    /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub sensor: Vec<String>,
+    /// The image to write: FILE.svg or FILE.png.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// The protocol [default: detected as by `busnoop detect`].
+    #[arg(long, value_name = "NAME", value_parser = ["sport", "sbus", "sab2"])]
+    pub protocol: Option<String>,
+}
 
 /// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
 const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
@@ -352,6 +372,10 @@ pub struct OutputArgs {
     pub wide: bool,
 
     /// With --wide: one line per MS milliseconds of capture time instead of per poll cycle.
+    /// `busnoop plot`: rows go to a plot instead.
+    #[arg(skip)]
+    pub plot: Option<crate::plot::PlotSpec>,
+
     #[arg(long, value_name = "MS", requires = "wide",
           value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub every: Option<u64>,
@@ -440,6 +464,39 @@ fn init_tracing(verbose: u8) {
         .try_init();
 }
 
+/// `busnoop plot`: the protocol's command with its rows going to a plot.
+fn plot(a: &PlotArgs) -> Result<(), Failure> {
+    let (command, extra): (&str, &[&str]) = match &a.protocol {
+        Some(p) => (p.as_str(), &[]),
+        None => {
+            let (p, args) = crate::detect::protocol_of(&a.source)?;
+            (p.command, args)
+        }
+    };
+    let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
+    argv.extend(extra.iter().map(Into::into));
+    argv.push(a.source.clone().into());
+    let mut cli = Cli::try_parse_from(argv).map_err(|e| Failure::Usage(e.to_string()))?;
+    let capture = match &mut cli.command {
+        Command::Sport(x) => &mut x.capture,
+        Command::Sbus(x) => &mut x.capture,
+        Command::Sab2(x) => &mut x.capture,
+        _ => return Err(Failure::Internal("plot: not a protocol command".into())),
+    };
+    capture.output.plot = Some(crate::plot::PlotSpec {
+        sensors: a.sensor.clone(),
+        path: a.output.clone(),
+        title: format!(
+            "{} ({command})",
+            a.source.file_name().map_or_else(
+                || a.source.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            )
+        ),
+    });
+    run(cli)
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<(), Failure> {
     use crate::project::{self, File};
@@ -449,6 +506,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Sab2(a) => (&crate::sab::PROTOCOL, &a.capture),
         Command::Ports => return list_ports(),
         Command::Detect(a) => return crate::detect::run(a),
+        Command::Plot(a) => return plot(a),
         Command::Completions { shell } => return crate::manual::completions(*shell),
         Command::Man { dir } => return crate::manual::man(dir.as_deref()),
     };
@@ -508,7 +566,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 crate::sab::decoder(o)
             })
         }
-        Command::Ports | Command::Detect(_) | Command::Completions { .. } | Command::Man { .. } => {
+        Command::Ports
+        | Command::Detect(_)
+        | Command::Plot(_)
+        | Command::Completions { .. }
+        | Command::Man { .. } => {
             unreachable!("handled above")
         }
     }
@@ -649,6 +711,9 @@ pub fn run_capture(
                 decoder.columns(),
             );
             table.set_pretty_widths(protocol.pretty_widths);
+            if let Some(p) = &out.plot {
+                table.set_plot(p.clone());
+            }
             if out.wide {
                 let format = out.table_options(to_terminal, no_color_env).format;
                 if !matches!(format, Format::Csv | Format::Tsv) {

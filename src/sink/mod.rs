@@ -80,6 +80,8 @@ pub struct Table {
     error: Option<OutputError>,
     /// `--wide`: rows go to the wide table instead.
     wide: Option<wide::Wide>,
+    /// `busnoop plot`: rows go to the plot, drawn at the end.
+    plot: Option<crate::plot::Plot>,
 }
 
 /// A byte buffer shared between the csv writer and the table.
@@ -142,6 +144,7 @@ impl Table {
             skipped: 0,
             anchor: None,
             wide: None,
+            plot: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
                 .terminator(csv::Terminator::CRLF)
@@ -195,13 +198,18 @@ impl Table {
         self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
     }
 
+    /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
+    pub fn set_plot(&mut self, spec: crate::plot::PlotSpec) {
+        self.plot = Some(crate::plot::Plot::new(spec));
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
             return Ok(());
         }
         self.header_written = true;
-        if self.wide.is_some() {
+        if self.wide.is_some() || self.plot.is_some() {
             // The wide table writes its own header.
             return Ok(());
         }
@@ -244,6 +252,10 @@ impl Table {
         if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
             self.frames += 1;
         }
+        if let Some(p) = &mut self.plot {
+            p.row(row);
+            return Ok(());
+        }
         if let Some(w) = &mut self.wide {
             w.row(row, self.anchor, self.out.buf());
             return self.out.row_done();
@@ -269,6 +281,12 @@ impl Table {
     pub fn close(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
+        }
+        if let Some(p) = self.plot.take() {
+            p.draw().map_err(|e| OutputError {
+                path: Some(p.path().to_owned()),
+                error: io::Error::other(e),
+            })?;
         }
         if let Some(mut w) = self.wide.take() {
             w.finish(self.anchor, self.out.buf());
