@@ -254,3 +254,32 @@ fn a_capture_without_numbers_says_so() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("no row carried a number"), "{err}");
 }
+
+/// S-Bus registers, flags, timers and counters are columns too (the digimat capture: R2 travels
+/// as 0xB5C5B5C5, a signed register; R1 is written with 181 after it was read as 100).
+#[test]
+fn sbus_media_are_columns() {
+    let path = fixture("sbus-digimat.pcap");
+    let (headers, rows) = table(&run(&[
+        "sbus",
+        path.to_str().unwrap(),
+        "--wide",
+        "-f",
+        "csv",
+    ]));
+    assert_eq!(&headers[..6], ["Date", "Time", "R0", "R1", "R2", "R3"]);
+    for m in ["F0", "I1", "O2", "T0", "C5"] {
+        assert!(headers.iter().any(|h| h == m), "{m}: {headers:?}");
+    }
+    let first = &rows[0];
+    assert_eq!(
+        (&*first["R0"], &*first["R1"], &*first["R2"], &*first["R3"]),
+        ("305419896", "100", "-1245334075", "42")
+    );
+    let r1: Vec<&str> = rows.iter().map(|r| r["R1"].as_str()).collect();
+    let at = r1
+        .iter()
+        .position(|v| *v == "181")
+        .expect("R1 written with 181");
+    assert!(r1[..at].iter().all(|v| *v == "100"), "{r1:?}");
+}
