@@ -71,11 +71,14 @@ pub(super) fn put_row(
     raw: &[u8],
 ) -> RowResult {
     let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
-    let mut buf = [Part::EMPTY; MAX_PARTS];
-    let n = if class == Class::Error {
-        0
+    // Only rows that list values pay for the parts' buffer.
+    let mut buf;
+    let parts: &[Part<'_>] = if class != Class::Error && sc.data.contains('=') {
+        buf = [Part::EMPTY; MAX_PARTS];
+        let n = media_parts(&sc.data, &mut buf);
+        &buf[..n]
     } else {
-        media_parts(&sc.data, &mut buf)
+        &[]
     };
     out.row(&Row {
         micros: Some(micros),
@@ -87,7 +90,7 @@ pub(super) fn put_row(
         sensor,
         data: &sc.data,
         extra: &extra,
-        parts: &buf[..n],
+        parts,
         raw,
     })
 }
