@@ -17,6 +17,7 @@ pub mod numbers;
 pub mod pace;
 pub mod pairing;
 pub mod pcap;
+pub mod plot;
 pub mod protocol;
 pub mod protocols;
 pub mod record;

@@ -296,7 +296,8 @@ fn ether_seed_telegrams() {
             "R0",
             "Read register(s)",
             "R0=305419896",
-            "",
+            // Value: the register as a number (issue 13).
+            "305419896",
             "0.0",
             "182"
         ]

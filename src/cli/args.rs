@@ -47,6 +47,9 @@ pub enum Command {
     /// file's first megabytes, or on a serial port at the usual baud rates, and prints the
     /// verdict, the evidence and the command to run.
     Detect(DetectArgs),
+    /// Plot a capture's numbers as time series: one panel per unit, broken frames marked, as
+    /// SVG or PNG (`busnoop plot flight.log --sensor Alt,VFAS -o flight.svg`).
+    Plot(PlotArgs),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
     /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
@@ -68,7 +71,24 @@ pub enum Command {
 }
 
 /// The subcommands that are not a protocol.
-pub const OTHER_COMMANDS: &[&str] = &["detect", "ports", "extcap", "completions", "man"];
+pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "extcap", "completions", "man"];
+
+/// `busnoop plot`.
+#[derive(Args, Debug, Clone)]
+pub struct PlotArgs {
+    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-`.
+    pub source: PathBuf,
+    /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
+    /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub sensor: Vec<String>,
+    /// The image to write: FILE.svg or FILE.png.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// The protocol [default: detected as by `busnoop detect`].
+    #[arg(long, value_name = "NAME", value_parser = ["sport", "sbus", "sab2"])]
+    pub protocol: Option<String>,
+}
 
 /// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
 const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
@@ -344,6 +364,21 @@ pub struct OutputArgs {
     /// possible [default: 1 with --top, 0 otherwise]. No effect on a live port.
     #[arg(long, value_name = "N", value_parser = parse_speed)]
     pub speed: Option<f64>,
+
+    /// Wide table (CSV or TSV) as a radio's SD-card log: one line per poll cycle, one column per
+    /// sensor number seen (`Cell1(V)`, `RxBt(V)`, `R100`), the last value held; Date and Time
+    /// when the source has wall-clock time, else Millis. See docs/wide.md.
+    #[arg(long)]
+    pub wide: bool,
+
+    /// With --wide: one line per MS milliseconds of capture time instead of per poll cycle.
+    #[arg(long, value_name = "MS", requires = "wide",
+          value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
+    pub every: Option<u64>,
+
+    /// `busnoop plot`: rows go to a plot instead.
+    #[arg(skip)]
+    pub plot: Option<crate::plot::PlotSpec>,
 }
 
 /// `--speed`: a number from 0 to 1000.

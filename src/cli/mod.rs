@@ -83,6 +83,39 @@ fn init_tracing(verbose: u8) {
         .try_init();
 }
 
+/// `busnoop plot`: the protocol's command with its rows going to a plot.
+fn plot(a: &PlotArgs) -> Result<(), Failure> {
+    let (command, extra): (&str, &[&str]) = match &a.protocol {
+        Some(p) => (p.as_str(), &[]),
+        None => {
+            let (p, args) = crate::detect::protocol_of(&a.source)?;
+            (p.command, args)
+        }
+    };
+    let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
+    argv.extend(extra.iter().map(Into::into));
+    argv.push(a.source.clone().into());
+    let mut cli = Cli::try_parse_from(argv).map_err(|e| Failure::Usage(e.to_string()))?;
+    let capture = match &mut cli.command {
+        Command::Sport(x) => &mut x.capture,
+        Command::Sbus(x) => &mut x.capture,
+        Command::Sab2(x) => &mut x.capture,
+        _ => return Err(Failure::Internal("plot: not a protocol command".into())),
+    };
+    capture.output.plot = Some(crate::plot::PlotSpec {
+        sensors: a.sensor.clone(),
+        path: a.output.clone(),
+        title: format!(
+            "{} ({command})",
+            a.source.file_name().map_or_else(
+                || a.source.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            )
+        ),
+    });
+    run(cli)
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<(), Failure> {
     use project::{self, File};
@@ -93,6 +126,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Ports => return list_ports(),
         Command::Extcap(a) => return extcap::run(a),
         Command::Detect(a) => return crate::detect::run(&a.options()),
+        Command::Plot(a) => return plot(a),
         Command::Completions { shell } => return manual::completions(*shell),
         Command::Man { dir } => return manual::man(dir.as_deref()),
     };
@@ -155,6 +189,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Ports
         | Command::Extcap(_)
         | Command::Detect(_)
+        | Command::Plot(_)
         | Command::Completions { .. }
         | Command::Man { .. } => {
             unreachable!("handled above")
@@ -320,6 +355,28 @@ pub fn run_capture(
                 decoder.columns(),
             );
             table.set_pretty_widths(protocol.pretty_widths);
+            if let Some(p) = &out.plot {
+                table.set_plot(p.clone());
+            }
+            if out.wide {
+                let format = out.table_options(to_terminal, no_color_env).format;
+                if !matches!(format, Format::Csv | Format::Tsv) {
+                    return Err(Failure::Usage(
+                        "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
+                    ));
+                }
+                let step = match out.every {
+                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
+                    None => crate::sink::wide::Step::PollCycle,
+                };
+                if out.raw || out.time == TimeMode::Abs {
+                    eprintln!(
+                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
+                         Date and Time columns come with any source that has wall-clock time"
+                    );
+                }
+                table.set_wide(step, kind == Kind::Serial);
+            }
             Some(table)
         }
     };

@@ -462,6 +462,22 @@ fn kind_text(kind: Kind) -> &'static str {
 }
 
 /// Runs `busnoop detect`.
+/// The protocol of a file or pipe (`busnoop plot` without `--protocol`): the detect verdict on
+/// its first megabytes, with the options of the variant found.
+pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'static str]), Failure> {
+    let input = Input::parse(source);
+    let (kind, batches) = read_prefix(&input)?;
+    let ranked = rank(candidates(kind, None), &batches, kind);
+    let name = source.display();
+    match verdict(&ranked) {
+        Verdict::Found(i, _) => Ok((ranked[i].protocol, ranked[i].args)),
+        _ => Err(Failure::NoProtocol(format!(
+            "no known protocol in {name}; name it with --protocol sport|sbus|sab2 \
+             (busnoop detect {name} shows the evidence)"
+        ))),
+    }
+}
+
 pub fn run(args: &Options) -> Result<(), Failure> {
     let input = Input::parse(&args.source);
     if let Input::Device(path) = &input {

@@ -13,7 +13,7 @@ use super::pairing::{
 use super::stats::{StationStats, Totals, nak_slot};
 use super::telegram::{self, BROADCAST, ReqInfo};
 use crate::fmt::{push_fixed, push_hex, push_u64};
-use crate::row::{Class, Row, RowOut, RowResult};
+use crate::row::{Class, Part, Row, RowOut, RowResult};
 
 /// Scratch buffers reused for every row.
 #[derive(Default)]
@@ -71,6 +71,15 @@ pub(super) fn put_row(
     raw: &[u8],
 ) -> RowResult {
     let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
+    // Only rows that list values pay for the parts' buffer.
+    let mut buf;
+    let parts: &[Part<'_>] = if class != Class::Error && sc.data.contains('=') {
+        buf = [Part::EMPTY; MAX_PARTS];
+        let n = media_parts(&sc.data, &mut buf);
+        &buf[..n]
+    } else {
+        &[]
+    };
     out.row(&Row {
         micros: Some(micros),
         id,
@@ -81,9 +90,80 @@ pub(super) fn put_row(
         sensor,
         data: &sc.data,
         extra: &extra,
-        parts: &[],
+        parts,
         raw,
     })
+}
+
+/// The most numbers an S-Bus telegram carries (a read or write of 128 flags).
+const MAX_PARTS: usize = 128;
+
+/// The numbers of a Data cell that lists media values, `R0=305419896 R1=100` or `F3=0`: each
+/// `R`/`F`/`I`/`O`/`T`/`C` with its address and an integer is a number named like the medium
+/// (`R0`, `F3`). Any other Data (a range `R0..R3`, a status, a NAK, a clock) carries none: every
+/// token must be such a pair.
+fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>; MAX_PARTS]) -> usize {
+    let mut n = 0;
+    for tok in data.split(' ') {
+        let Some((name, text)) = tok.split_once('=') else {
+            return 0;
+        };
+        let mut chars = name.chars();
+        let medium = chars.next().is_some_and(|c| "RFIOTC".contains(c));
+        let addr = name.len() > 1 && name[1..].bytes().all(|b| b.is_ascii_digit());
+        let Ok(value) = text.parse::<i64>() else {
+            return 0;
+        };
+        if !medium || !addr || n == MAX_PARTS {
+            return 0;
+        }
+        buf[n] = Part {
+            name,
+            unit: "",
+            text,
+            value: value as f64,
+        };
+        n += 1;
+    }
+    n
+}
+
+#[cfg(test)]
+mod media_tests {
+    use super::*;
+
+    fn parts(data: &str) -> Vec<(String, f64)> {
+        let mut buf = [Part::EMPTY; MAX_PARTS];
+        let n = media_parts(data, &mut buf);
+        buf[..n]
+            .iter()
+            .map(|p| (format!("{}={}", p.name, p.text), p.value))
+            .collect()
+    }
+
+    #[test]
+    fn media_values_are_numbers() {
+        assert_eq!(
+            parts("R0=305419896 R2=-1245334075"),
+            [
+                ("R0=305419896".to_owned(), 305419896.0),
+                ("R2=-1245334075".to_owned(), -1245334075.0)
+            ]
+        );
+        assert_eq!(parts("F3=0"), [("F3=0".to_owned(), 0.0)]);
+        for none in [
+            "R0..R3",
+            "",
+            "R (run)",
+            "ACK (0x0000)",
+            "display=12",
+            "R1=1 n=3",
+            "Z=1 N=0 E=0",
+            "R=5",
+        ] {
+            assert!(parts(none).is_empty(), "{none}");
+        }
+    }
 }
 
 /// Notes for a request: layout problems, broadcast, security-relevant commands.

@@ -1,6 +1,7 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
 pub mod output;
+pub mod wide;
 
 use std::io::{self, Write as _};
 use std::path::Path;
@@ -77,6 +78,10 @@ pub struct Table {
     scratch: String,
     hex: Vec<u8>,
     error: Option<OutputError>,
+    /// `--wide`: rows go to the wide table instead.
+    wide: Option<wide::Wide>,
+    /// `busnoop plot`: rows go to the plot, drawn at the end.
+    plot: Option<crate::plot::Plot>,
 }
 
 /// A byte buffer shared between the csv writer and the table.
@@ -138,6 +143,8 @@ impl Table {
             frames: 0,
             skipped: 0,
             anchor: None,
+            wide: None,
+            plot: None,
             header_written: false,
             csv: csv::WriterBuilder::new()
                 .terminator(csv::Terminator::CRLF)
@@ -185,12 +192,27 @@ impl Table {
         self.anchor = anchor;
     }
 
+    /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
+    /// checks); `live`: write lines as they come rather than at the end.
+    pub fn set_wide(&mut self, step: wide::Step, live: bool) {
+        self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
+    }
+
+    /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
+    pub fn set_plot(&mut self, spec: crate::plot::PlotSpec) {
+        self.plot = Some(crate::plot::Plot::new(spec));
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
             return Ok(());
         }
         self.header_written = true;
+        if self.wide.is_some() || self.plot.is_some() {
+            // The wide table writes its own header.
+            return Ok(());
+        }
         let cols = self.columns.clone();
         match self.opts.format {
             Format::Tsv => {
@@ -230,6 +252,14 @@ impl Table {
         if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
             self.frames += 1;
         }
+        if let Some(p) = &mut self.plot {
+            p.row(row);
+            return Ok(());
+        }
+        if let Some(w) = &mut self.wide {
+            w.row(row, self.anchor, self.out.buf());
+            return self.out.row_done();
+        }
         match self.opts.format {
             Format::Tsv => self.tsv(row),
             Format::Csv => self.csv_row(row),
@@ -251,6 +281,20 @@ impl Table {
     pub fn close(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
+        }
+        if let Some(p) = self.plot.take() {
+            p.draw().map_err(|e| OutputError {
+                path: Some(p.path().to_owned()),
+                error: io::Error::other(e),
+            })?;
+        }
+        if let Some(mut w) = self.wide.take() {
+            w.finish(self.anchor, self.out.buf());
+            if !w.has_columns() {
+                eprintln!(
+                    "busnoop: note: --wide: no row carried a number, so the table has no columns"
+                );
+            }
         }
         self.out.close()
     }

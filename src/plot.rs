@@ -1,0 +1,340 @@
+//! `busnoop plot`: the numbers of a capture as time series, one panel per unit, with the moments
+//! of broken frames (bad CRC, truncated, garbage) marked, as SVG or PNG (plotters, pure Rust).
+//!
+//! The series are the rows' [`Part`](crate::row::Part)s, the same numbers as the wide table's
+//! columns (`Cell1@8` when two IDs send the same name). A frame whose check failed carries no
+//! number; its moment is a red vertical line in every panel.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use plotters::prelude::*;
+
+use crate::row::{Class, Row};
+
+/// The DejaVu Sans font (Bitstream Vera licence, assets/DejaVuSans-LICENSE.txt) for the PNG's
+/// text: the bitmap backend draws with it, without any font of the system.
+const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// What to plot and where.
+#[derive(Clone, Debug, Default)]
+pub struct PlotSpec {
+    /// Names of the numbers to plot (`Alt`, `Cell1`, `Cell1@8`); empty: every number.
+    pub sensors: Vec<String>,
+    pub path: PathBuf,
+    pub title: String,
+}
+
+/// One series: its label, unit and points (seconds, value).
+#[derive(Debug, Default)]
+struct Series {
+    id: Option<u32>,
+    name: String,
+    unit: String,
+    points: Vec<(f64, f64)>,
+}
+
+/// Collects the rows of a capture, then draws them.
+pub struct Plot {
+    spec: PlotSpec,
+    series: Vec<Series>,
+    errors: Vec<f64>,
+}
+
+impl Plot {
+    pub fn new(spec: PlotSpec) -> Self {
+        Plot {
+            spec,
+            series: Vec::new(),
+            errors: Vec::new(),
+        }
+    }
+
+    /// The file the plot goes to.
+    pub fn path(&self) -> &std::path::Path {
+        &self.spec.path
+    }
+
+    pub fn row(&mut self, row: &Row<'_>) {
+        let Some(us) = row.micros else { return };
+        let t = us as f64 / 1e6;
+        if row.class == Class::Error {
+            self.errors.push(t);
+        }
+        for p in row.parts {
+            if !p.value.is_finite() {
+                continue;
+            }
+            let i = match self
+                .series
+                .iter()
+                .position(|s| s.id == row.id && s.name == p.name && s.unit == p.unit)
+            {
+                Some(i) => i,
+                None => {
+                    self.series.push(Series {
+                        id: row.id,
+                        name: p.name.to_owned(),
+                        unit: p.unit.to_owned(),
+                        points: Vec::new(),
+                    });
+                    self.series.len() - 1
+                }
+            };
+            self.series[i].points.push((t, p.value));
+        }
+    }
+
+    /// `Name`, or `Name@ID` when another ID has a series of that name and unit.
+    fn label(&self, s: &Series) -> String {
+        let shared = self
+            .series
+            .iter()
+            .any(|o| o.name == s.name && o.unit == s.unit && o.id != s.id);
+        match (shared, s.id) {
+            (true, Some(id)) => format!("{}@{id}", s.name),
+            _ => s.name.clone(),
+        }
+    }
+
+    /// Draws the plot into the spec's file (`.svg` or `.png`). Errors are one-line messages.
+    pub fn draw(&self) -> Result<(), String> {
+        let chosen: Vec<(String, &Series)> = self
+            .series
+            .iter()
+            .map(|s| (self.label(s), s))
+            .filter(|(l, s)| {
+                self.spec.sensors.is_empty()
+                    || self.spec.sensors.iter().any(|w| w == l || *w == s.name)
+            })
+            .collect();
+        if chosen.is_empty() {
+            let mut seen: Vec<String> = self.series.iter().map(|s| self.label(s)).collect();
+            seen.dedup();
+            return Err(if seen.is_empty() {
+                "no row of this capture carries a number to plot".into()
+            } else {
+                format!(
+                    "no number named {} in this capture; it has: {}",
+                    self.spec.sensors.join(","),
+                    seen.join(",")
+                )
+            });
+        }
+        let ext = self
+            .spec
+            .path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        // Both backends measure text with this font (the SVG names it, a viewer draws it).
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .map_err(|_| "cannot load the embedded font".to_string())?;
+        let size = (1000, 300 * panels(&chosen).len() as u32 + 60);
+        let r = match ext.as_deref() {
+            Some("svg") => {
+                let root = SVGBackend::new(&self.spec.path, size).into_drawing_area();
+                self.render(root, &chosen)
+            }
+            Some("png") => {
+                let root = BitMapBackend::new(&self.spec.path, size).into_drawing_area();
+                self.render(root, &chosen)
+            }
+            _ => {
+                return Err(
+                    "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png".into(),
+                );
+            }
+        };
+        r.map_err(|e| format!("cannot draw {}: {e}", self.spec.path.display()))
+    }
+
+    fn render<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+        chosen: &[(String, &Series)],
+    ) -> Result<(), Box<dyn std::error::Error + 'static>>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE)?;
+        let root = root.titled(&self.spec.title, ("sans-serif", 22))?;
+        let groups = panels(chosen);
+        let areas = root.split_evenly((groups.len(), 1));
+        let t_end = chosen
+            .iter()
+            .flat_map(|(_, s)| s.points.iter().map(|p| p.0))
+            .chain(self.errors.iter().copied())
+            .fold(0.0f64, f64::max)
+            .max(1e-3);
+        for ((unit, members), area) in groups.iter().zip(areas.iter()) {
+            let (lo, hi) = members
+                .iter()
+                .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
+            let pad = ((hi - lo) * 0.05).max(hi.abs().max(1.0) * 1e-3);
+            let (lo, hi) = (lo - pad, hi + pad);
+            let mut chart = ChartBuilder::on(area)
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(0.0..t_end, lo..hi)?;
+            let y_desc = if unit.is_empty() {
+                members
+                    .iter()
+                    .map(|(l, _)| l.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            } else {
+                format!("({unit})")
+            };
+            chart
+                .configure_mesh()
+                .x_desc("time since the capture's start (s)")
+                .y_desc(y_desc)
+                .label_style(("sans-serif", 14))
+                .draw()?;
+            for (k, (label, s)) in members.iter().enumerate() {
+                let color = Palette99::pick(k).to_rgba();
+                let name = if unit.is_empty() {
+                    label.clone()
+                } else {
+                    format!("{label} ({unit})")
+                };
+                chart
+                    .draw_series(LineSeries::new(
+                        s.points.iter().copied(),
+                        color.stroke_width(2),
+                    ))?
+                    .label(name)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+            }
+            if !self.errors.is_empty() {
+                chart
+                    .draw_series(self.errors.iter().map(|&t| {
+                        PathElement::new(vec![(t, lo), (t, hi)], RED.mix(0.6).stroke_width(1))
+                    }))?
+                    .label("broken frame (bad CRC, truncated)")
+                    .legend(|(x, y)| PathElement::new(vec![(x, y - 6), (x, y + 6)], RED));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .draw()?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
+/// The chosen series grouped by unit, in order of first appearance.
+fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<(String, Vec<&'a (String, &'a Series)>)> {
+    let mut order: Vec<String> = Vec::new();
+    let mut by: BTreeMap<String, Vec<&(String, &Series)>> = BTreeMap::new();
+    for c in chosen {
+        if !by.contains_key(&c.1.unit) {
+            order.push(c.1.unit.clone());
+        }
+        by.entry(c.1.unit.clone()).or_default().push(c);
+    }
+    order
+        .into_iter()
+        .map(|u| {
+            let v = by.remove(&u).unwrap_or_default();
+            (u, v)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::row::Part;
+
+    fn row(us: u64, class: Class, parts: &'static [Part<'static>]) -> Row<'static> {
+        Row {
+            micros: Some(us),
+            id: Some(0),
+            device: "",
+            kind: "",
+            class,
+            sensor_no: "",
+            sensor: "",
+            data: "",
+            extra: &[],
+            parts,
+            raw: &[],
+        }
+    }
+
+    const ALT1: &[Part<'static>] = &[Part {
+        name: "Alt",
+        unit: "m",
+        text: "10",
+        value: 10.0,
+    }];
+    const ALT2: &[Part<'static>] = &[Part {
+        name: "Alt",
+        unit: "m",
+        text: "20",
+        value: 20.0,
+    }];
+
+    /// A broken frame's moment is a red vertical line across the panel.
+    #[test]
+    fn broken_frames_are_marked() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.svg");
+        let mut p = Plot::new(PlotSpec {
+            sensors: vec!["Alt".into()],
+            path: path.clone(),
+            title: "t".into(),
+        });
+        p.row(&row(0, Class::Plain, ALT1));
+        p.row(&row(1_000_000, Class::Error, &[]));
+        p.row(&row(2_000_000, Class::Plain, ALT2));
+        p.draw().unwrap();
+        let svg = std::fs::read_to_string(path).unwrap();
+        let series: Vec<&str> = svg
+            .split("<polyline")
+            .filter(|l| l.contains("stroke-width=\"2\""))
+            .collect();
+        assert_eq!(series.len(), 1);
+        let xs: Vec<f64> = series[0]
+            .split("points=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .map(|xy| xy.split(',').next().unwrap().parse().unwrap())
+            .collect();
+        let mid = (xs[0] + xs[1]) / 2.0;
+        let red: Vec<&str> = svg
+            .split("<polyline")
+            .filter(|l| l.contains("stroke=\"#FF0000\""))
+            .collect();
+        assert!(
+            red.iter().any(|l| {
+                let pts = l
+                    .split("points=\"")
+                    .nth(1)
+                    .unwrap()
+                    .split('"')
+                    .next()
+                    .unwrap();
+                let x: Vec<f64> = pts
+                    .split_whitespace()
+                    .map(|xy| xy.split(',').next().unwrap().parse().unwrap())
+                    .collect();
+                x.len() == 2 && x[0] == x[1] && (x[0] - mid).abs() <= 1.0
+            }),
+            "a red vertical line at t = 1 s: {red:?}"
+        );
+    }
+}
