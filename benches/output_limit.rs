@@ -17,6 +17,8 @@
 //! (3) runs after a warm-up. The ratio is
 //! busnoop's throughput over the reference's (1.0 = as fast as the machine allows).
 //! `BUSNOOP_BENCH_BIN=path` measures another busnoop binary (an earlier build).
+// The other benchmarks' generators are loaded as modules, and each of them loads `common`.
+#![allow(clippy::duplicate_mod)]
 
 mod common;
 
