@@ -69,7 +69,12 @@ fn assert_aligned(name: &str, args: &[&str], source: &Path, pretty_text: &str) {
     let mut lines = pretty_text.lines();
     let header = lines.next().unwrap();
     // Pretty output has no Value column (its Data says the same): leave it out of the TSV.
-    let value_at = tsv.lines().next().unwrap().split('\t').position(|n| n == "Value");
+    let value_at = tsv
+        .lines()
+        .next()
+        .unwrap()
+        .split('\t')
+        .position(|n| n == "Value");
     let without_value = |row: &str| -> Vec<String> {
         row.split('\t')
             .enumerate()
