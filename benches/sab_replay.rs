@@ -24,7 +24,7 @@ use common::{Rng, best_of, busnoop, children_peak_kb, decode_file, pin_to_core0}
 /// Writes about `target` bytes of SAB traffic: a master polls five slaves with their commands;
 /// a slave answers with an ACK carrying 0 to 8 bytes (90 %), a NACK (6 %) or not at all (3 %),
 /// and 1 % of the time a corrupted ACK; a quarter of the payloads contain 0x7E/0x7D/0x54.
-fn generate(path: &Path, framing: Framing, target: u64) -> u64 {
+pub fn generate(path: &Path, framing: Framing, target: u64) -> u64 {
     let mut out = BufWriter::new(File::create(path).unwrap());
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     // (address, commands)

@@ -25,7 +25,7 @@ use busnoop::sbus::telegram::encode_ether;
 use common::{Rng, decode_file, pin_to_core0, time_command};
 
 /// Writes the capture; returns the number of packets.
-fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
+pub fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
     let mut out = BufWriter::with_capacity(1 << 20, File::create(path)?);
     let mut buf = Vec::with_capacity(1 << 16);
     pw::header(&mut buf, 1);

@@ -77,7 +77,7 @@ fn exchange(rng: &mut Rng, mode: Mode, out: &mut Vec<u8>) {
     }
 }
 
-fn generate(path: &Path, mode: Mode, target: u64) -> u64 {
+pub fn generate(path: &Path, mode: Mode, target: u64) -> u64 {
     let mut out = BufWriter::new(File::create(path).unwrap());
     let mut rng = Rng(0x2545_F491_4F6C_DD1D);
     let mut written = 0u64;

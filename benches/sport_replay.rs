@@ -21,7 +21,7 @@ use common::{Rng, best_of, busnoop, children_peak_kb, decode_file, pin_to_core0,
 /// Writes about `target` bytes of S.Port traffic: the receiver polls the present devices in turn
 /// and one absent ID after each round (as the S-Port_Snoop sample describes); present devices
 /// answer with Null keep-alives or data frames of their sensors, with values that need stuffing.
-fn generate(path: &Path, target: u64) -> u64 {
+pub fn generate(path: &Path, target: u64) -> u64 {
     let mut out = BufWriter::new(File::create(path).unwrap());
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     // (physical ID, app IDs it sends)

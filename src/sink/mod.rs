@@ -3,11 +3,10 @@
 pub mod output;
 pub mod wide;
 
-use std::io::{self, Write as _};
+use std::io::Write as _;
 use std::path::Path;
 
 use chrono::{DateTime, Local};
-use owo_colors::{OwoColorize, Style};
 
 use crate::fmt::push_hex_bytes;
 use crate::row::RowOut;
@@ -67,14 +66,17 @@ pub struct Table {
     /// Number of the decoder's extra columns.
     n_extra: usize,
     counter: u64,
+    /// The Counter's decimal digits, incremented in place with `counter`.
+    digits: Digits,
+    /// JSON Lines: the key of each extra column (`,"resp_ms":`), built once, and whether
+    /// its cells are numbers.
+    json_keys: Vec<(Vec<u8>, bool)>,
     /// Rows of whole frames (with wire bytes, not an error or a note).
     frames: u64,
     /// Rows counted but not written (filtered out).
     skipped: u64,
     anchor: Option<Anchor>,
     header_written: bool,
-    csv: csv::Writer<SharedBuf>,
-    csv_buf: SharedBuf,
     scratch: String,
     hex: Vec<u8>,
     error: Option<OutputError>,
@@ -84,18 +86,41 @@ pub struct Table {
     plot: Option<crate::plot::Plot>,
 }
 
-/// A byte buffer shared between the csv writer and the table.
-#[derive(Clone, Default)]
-struct SharedBuf(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+/// A row counter as decimal digits, incremented in place (no division per row).
+#[derive(Clone, Debug)]
+struct Digits {
+    buf: [u8; 20],
+    start: usize,
+}
 
-impl io::Write for SharedBuf {
-    fn write(&mut self, data: &[u8]) -> io::Result<usize> {
-        self.0.borrow_mut().extend_from_slice(data);
-        Ok(data.len())
+impl Digits {
+    fn zero() -> Self {
+        let mut buf = [b'0'; 20];
+        buf[19] = b'0';
+        Digits { buf, start: 19 }
     }
 
-    fn flush(&mut self) -> io::Result<()> {
-        Ok(())
+    fn increment(&mut self) {
+        let mut i = self.buf.len();
+        while i > 0 {
+            i -= 1;
+            if self.buf[i] == b'9' {
+                self.buf[i] = b'0';
+            } else {
+                self.buf[i] += 1;
+                self.start = self.start.min(i);
+                return;
+            }
+        }
+    }
+
+    fn as_bytes(&self) -> &[u8] {
+        &self.buf[self.start..]
+    }
+
+    fn as_str(&self) -> &str {
+        // Only ASCII digits are ever stored.
+        std::str::from_utf8(self.as_bytes()).unwrap_or("")
     }
 }
 
@@ -127,7 +152,10 @@ impl Table {
         if opts.time_abs {
             columns.push("Time");
         }
-        let csv_buf = SharedBuf::default();
+        let json_keys = extra
+            .iter()
+            .map(|name| (json_key(name), NUMERIC_EXTRA.contains(name)))
+            .collect();
         let widths = columns
             .iter()
             .enumerate()
@@ -140,16 +168,14 @@ impl Table {
             widths,
             n_extra: extra.len(),
             counter: 0,
+            digits: Digits::zero(),
+            json_keys,
             frames: 0,
             skipped: 0,
             anchor: None,
             wide: None,
             plot: None,
             header_written: false,
-            csv: csv::WriterBuilder::new()
-                .terminator(csv::Terminator::CRLF)
-                .from_writer(csv_buf.clone()),
-            csv_buf,
             scratch: String::new(),
             hex: Vec::new(),
             error: None,
@@ -180,6 +206,7 @@ impl Table {
     /// number in the unfiltered table.
     pub fn skip(&mut self) {
         self.counter += 1;
+        self.digits.increment();
         self.skipped += 1;
     }
 
@@ -226,17 +253,23 @@ impl Table {
                 buf.push(b'\n');
             }
             Format::Csv => {
-                let _ = self.csv.write_record(&cols);
-                self.move_csv();
+                let buf = self.out.buf();
+                for (i, c) in cols.iter().enumerate() {
+                    if i > 0 {
+                        buf.push(b',');
+                    }
+                    push_csv_field(buf, c.as_bytes());
+                }
+                buf.extend_from_slice(b"\r\n");
             }
             Format::Pretty => {
-                let line = self.pretty_line(cols.iter().copied(), &[true; 3], false);
+                let color = self.opts.color;
                 let buf = self.out.buf();
-                if self.opts.color {
-                    let _ = writeln!(buf, "{}", line.bold());
-                } else {
-                    let _ = writeln!(buf, "{line}");
+                let mut line = PrettyLine::start(buf, color.then_some(BOLD));
+                for (i, c) in cols.iter().enumerate() {
+                    line.cell(&mut self.widths, i, c, false, i + 1 == cols.len());
                 }
+                line.finish();
             }
             Format::Jsonl => {}
         }
@@ -249,6 +282,7 @@ impl Table {
             self.header()?;
         }
         self.counter += 1;
+        self.digits.increment();
         if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
             self.frames += 1;
         }
@@ -285,7 +319,7 @@ impl Table {
         if let Some(p) = self.plot.take() {
             p.draw().map_err(|e| OutputError {
                 path: Some(p.path().to_owned()),
-                error: io::Error::other(e),
+                error: std::io::Error::other(e),
             })?;
         }
         if let Some(mut w) = self.wide.take() {
@@ -333,17 +367,15 @@ impl Table {
     }
 
     fn tsv(&mut self, row: &Row<'_>) {
-        let counter = self.counter;
-        let time = if self.opts.time_abs {
-            Some(self.wall_time(row.micros).to_owned())
-        } else {
-            None
-        };
+        if self.opts.time_abs {
+            self.wall_time(row.micros);
+        }
+        let time = self.opts.time_abs.then_some(self.scratch.as_str());
         let raw = self.opts.raw;
         let n_extra = self.n_extra;
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
-        buf.extend_from_slice(ib.format(counter).as_bytes());
+        buf.extend_from_slice(self.digits.as_bytes());
         buf.push(b'\t');
         if let Some(us) = row.micros {
             buf.extend_from_slice(ib.format(us / 1000).as_bytes());
@@ -374,66 +406,52 @@ impl Table {
     }
 
     fn csv_row(&mut self, row: &Row<'_>) {
+        if self.opts.time_abs {
+            self.wall_time(row.micros);
+        }
+        let time = self.opts.time_abs.then_some(self.scratch.as_str());
+        let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
-        let _ = self.csv.write_field(ib.format(self.counter));
-        match row.micros {
-            Some(us) => self.csv.write_field(ib.format(us / 1000)),
-            None => self.csv.write_field(""),
+        buf.extend_from_slice(self.digits.as_bytes());
+        buf.push(b',');
+        if let Some(us) = row.micros {
+            buf.extend_from_slice(ib.format(us / 1000).as_bytes());
         }
-        .ok();
-        match row.id {
-            Some(id) => self.csv.write_field(ib.format(id)),
-            None => self.csv.write_field(""),
+        buf.push(b',');
+        if let Some(id) = row.id {
+            buf.extend_from_slice(ib.format(id).as_bytes());
         }
-        .ok();
         for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-            let _ = self.csv.write_field(field);
+            buf.push(b',');
+            push_csv_field(buf, field.as_bytes());
         }
-        let _ = self.csv.write_field(row.value());
+        buf.push(b',');
+        push_csv_field(buf, row.value().as_bytes());
         for i in 0..self.n_extra {
-            let _ = self
-                .csv
-                .write_field(row.extra.get(i).copied().unwrap_or(""));
+            buf.push(b',');
+            push_csv_field(buf, row.extra.get(i).copied().unwrap_or("").as_bytes());
         }
         if self.opts.raw {
-            self.hex.clear();
-            push_hex_bytes(&mut self.hex, row.raw);
-            let _ = self.csv.write_field(&self.hex);
+            // Hex digits and spaces: never quoted.
+            buf.push(b',');
+            push_hex_bytes(buf, row.raw);
         }
-        if self.opts.time_abs {
-            let t = self.wall_time(row.micros).to_owned();
-            let _ = self.csv.write_field(&t);
+        if let Some(t) = time {
+            buf.push(b',');
+            push_csv_field(buf, t.as_bytes());
         }
-        let _ = self.csv.write_record(None::<&[u8]>);
-        self.move_csv();
-    }
-
-    fn move_csv(&mut self) {
-        if let Err(e) = self.csv.flush() {
-            // Flushing into a Vec cannot fail; keep the error if it ever does.
-            self.error.get_or_insert(OutputError {
-                path: None,
-                error: e,
-            });
-        }
-        let mut inner = self.csv_buf.0.borrow_mut();
-        self.out.buf().extend_from_slice(&inner);
-        inner.clear();
+        buf.extend_from_slice(b"\r\n");
     }
 
     fn jsonl(&mut self, row: &Row<'_>) {
-        let time = if self.opts.time_abs {
-            Some(self.wall_time(row.micros).to_owned())
-        } else {
-            None
-        };
-        let counter = self.counter;
-        let n_extra = self.n_extra;
-        let columns = &self.columns;
+        if self.opts.time_abs {
+            self.wall_time(row.micros);
+        }
+        let time = self.opts.time_abs.then_some(self.scratch.as_str());
         let buf = self.out.buf();
         let mut ib = itoa::Buffer::new();
         buf.extend_from_slice(b"{\"counter\":");
-        buf.extend_from_slice(ib.format(counter).as_bytes());
+        buf.extend_from_slice(self.digits.as_bytes());
         buf.extend_from_slice(b",\"millis\":");
         match row.micros {
             Some(us) => buf.extend_from_slice(ib.format(us / 1000).as_bytes()),
@@ -445,27 +463,25 @@ impl Table {
             None => buf.extend_from_slice(b"null"),
         }
         let base = [
-            ("device", row.device),
-            ("type", row.kind),
-            ("sensor_no", row.sensor_no),
-            ("sensor", row.sensor),
-            ("data", row.data),
+            (&b",\"device\":"[..], row.device),
+            (b",\"type\":", row.kind),
+            (b",\"sensor_no\":", row.sensor_no),
+            (b",\"sensor\":", row.sensor),
+            (b",\"data\":", row.data),
         ];
         for (k, v) in base {
-            push_json_pair(buf, k, v);
+            buf.extend_from_slice(k);
+            push_json_str(buf, v);
         }
         buf.extend_from_slice(b",\"value\":");
         match row.parts.first() {
             Some(p) => buf.extend_from_slice(p.text.as_bytes()),
             None => buf.extend_from_slice(b"null"),
         }
-        for (i, name) in columns[BASE_COLUMNS.len() + 1..][..n_extra]
-            .iter()
-            .enumerate()
-        {
-            push_json_key(buf, name);
+        for (i, (key, numeric)) in self.json_keys.iter().enumerate() {
+            buf.extend_from_slice(key);
             let v = row.extra.get(i).copied().unwrap_or("");
-            if NUMERIC_EXTRA.contains(name) && is_json_number(v) {
+            if *numeric && is_json_number(v) {
                 buf.extend_from_slice(v.as_bytes());
             } else {
                 push_json_str(buf, v);
@@ -489,108 +505,147 @@ impl Table {
             buf.push(b'"');
         }
         if let Some(t) = time {
-            push_json_pair(buf, "time", &t);
+            buf.extend_from_slice(b",\"time\":");
+            push_json_str(buf, t);
         }
         buf.extend_from_slice(b"}\n");
     }
 
     fn pretty(&mut self, row: &Row<'_>) {
+        if self.opts.time_abs {
+            self.wall_time(row.micros);
+        }
+        if self.opts.raw {
+            self.hex.clear();
+            push_hex_bytes(&mut self.hex, row.raw);
+        }
+        let style = match row.class {
+            Class::Plain => None,
+            Class::Quiet => Some(DIMMED),
+            Class::Warning => Some(YELLOW),
+            Class::Error => Some(RED),
+            Class::Info => Some(CYAN),
+        };
         let mut ib = itoa::Buffer::new();
-        let counter = ib.format(self.counter).to_owned();
-        let millis = row
-            .micros
-            .map_or(String::new(), |us| (us / 1000).to_string());
-        let id = row.id.map_or(String::new(), |i| i.to_string());
-        let raw = if self.opts.raw {
-            let mut v = Vec::new();
-            push_hex_bytes(&mut v, row.raw);
-            Some(String::from_utf8(v).unwrap_or_default())
-        } else {
-            None
-        };
-        let time = if self.opts.time_abs {
-            Some(self.wall_time(row.micros).to_owned())
-        } else {
-            None
-        };
-        let mut cells: Vec<&str> = vec![
-            &counter,
-            &millis,
-            &id,
+        let mut ib2 = itoa::Buffer::new();
+        let millis = row.micros.map_or("", |us| ib.format(us / 1000));
+        let id = row.id.map_or("", |i| ib2.format(i));
+        // Hex digits and spaces only.
+        let raw = std::str::from_utf8(&self.hex).unwrap_or("");
+        let n = 8 + self.n_extra + usize::from(self.opts.raw) + usize::from(self.opts.time_abs);
+        let widths = &mut self.widths;
+        let mut line = PrettyLine::start(self.out.buf(), style.filter(|_| self.opts.color));
+        let base = [
+            self.digits.as_str(),
+            millis,
+            id,
             row.device,
             row.kind,
             row.sensor_no,
             row.sensor,
             row.data,
         ];
-        for i in 0..self.n_extra {
-            cells.push(row.extra.get(i).copied().unwrap_or(""));
-        }
-        if let Some(r) = &raw {
-            cells.push(r);
-        }
-        if let Some(t) = &time {
-            cells.push(t);
-        }
-        let line = self.pretty_line(cells.into_iter(), &[true, true, true], true);
-        let style = match row.class {
-            Class::Plain => None,
-            Class::Quiet => Some(Style::new().dimmed()),
-            Class::Warning => Some(Style::new().yellow()),
-            Class::Error => Some(Style::new().red()),
-            Class::Info => Some(Style::new().cyan()),
+        let mut i = 0;
+        let mut cell = |line: &mut PrettyLine<'_>, text: &str| {
+            line.cell(widths, i, text, true, i + 1 == n);
+            i += 1;
         };
-        let color = self.opts.color;
-        let buf = self.out.buf();
-        match style {
-            Some(s) if color => {
-                let _ = writeln!(buf, "{}", line.style(s));
+        for text in base {
+            cell(&mut line, text);
+        }
+        for e in 0..self.n_extra {
+            cell(&mut line, row.extra.get(e).copied().unwrap_or(""));
+        }
+        if self.opts.raw {
+            cell(&mut line, raw);
+        }
+        if self.opts.time_abs {
+            cell(&mut line, &self.scratch);
+        }
+        line.finish();
+    }
+}
+
+/// SGR codes of the row classes and the header, as owo-colors writes them.
+const BOLD: &[u8] = b"\x1b[1m";
+const DIMMED: &[u8] = b"\x1b[2m";
+const YELLOW: &[u8] = b"\x1b[33m";
+const RED: &[u8] = b"\x1b[31m";
+const CYAN: &[u8] = b"\x1b[36m";
+const RESET: &[u8] = b"\x1b[0m";
+
+/// One pretty line written straight into the output buffer: cells padded to the column widths
+/// (the first three right-aligned), trailing blanks trimmed, optionally wrapped in a colour.
+struct PrettyLine<'b> {
+    buf: &'b mut Vec<u8>,
+    style: Option<&'static [u8]>,
+    /// Where the line's text starts (after the colour code).
+    start: usize,
+}
+
+impl<'b> PrettyLine<'b> {
+    fn start(buf: &'b mut Vec<u8>, style: Option<&'static [u8]>) -> Self {
+        if let Some(s) = style {
+            buf.extend_from_slice(s);
+        }
+        let start = buf.len();
+        PrettyLine { buf, style, start }
+    }
+
+    /// Cell `i`; with `grow`, a column whose value is longer than its width (up to
+    /// [`PRETTY_GROW_MAX`]) widens for this row and every later one.
+    fn cell(&mut self, widths: &mut Vec<usize>, i: usize, cell: &str, grow: bool, last: bool) {
+        let buf = &mut *self.buf;
+        if i > 0 {
+            buf.extend_from_slice(b"  ");
+        }
+        if i >= widths.len() {
+            widths.push(4);
+        }
+        // Printable ASCII: one column per byte, copied whole. Otherwise control characters
+        // become spaces and every char is one column.
+        let bytes = cell.as_bytes();
+        let ascii = bytes.iter().all(|&b| (0x20..0x7F).contains(&b));
+        let len = if ascii {
+            bytes.len()
+        } else {
+            cell.chars().count()
+        };
+        if grow && !last && len > widths[i] && len <= PRETTY_GROW_MAX {
+            widths[i] = len;
+        }
+        let pad = widths[i].saturating_sub(len);
+        let right = i < 3;
+        if right {
+            buf.resize(buf.len() + pad, b' ');
+        }
+        if ascii {
+            buf.extend_from_slice(bytes);
+        } else {
+            for c in cell.chars() {
+                let c = if c.is_control() { ' ' } else { c };
+                let mut tmp = [0u8; 4];
+                buf.extend_from_slice(c.encode_utf8(&mut tmp).as_bytes());
             }
-            _ => {
-                let _ = writeln!(buf, "{line}");
-            }
+        }
+        if !right && !last {
+            buf.resize(buf.len() + pad, b' ');
         }
     }
 
-    /// Pads cells to the pretty widths; the first `right.len()` columns are right-aligned. With
-    /// `grow`, a column whose value is longer than its width (up to [`PRETTY_GROW_MAX`]) widens
-    /// for this row and every later one.
-    fn pretty_line<'a>(
-        &mut self,
-        cells: impl Iterator<Item = &'a str>,
-        right: &[bool],
-        grow: bool,
-    ) -> String {
-        let mut line = String::new();
-        let cells: Vec<&str> = cells.collect();
-        let n = cells.len();
-        for (i, cell) in cells.into_iter().enumerate() {
-            let cell = sanitize(cell);
-            if i > 0 {
-                line.push_str("  ");
-            }
-            let last = i + 1 == n;
-            let len = cell.chars().count();
-            if i >= self.widths.len() {
-                self.widths.push(4);
-            }
-            if grow && !last && len > self.widths[i] && len <= PRETTY_GROW_MAX {
-                self.widths[i] = len;
-            }
-            let width = self.widths[i];
-            if i < right.len() && right[i] {
-                line.extend(std::iter::repeat_n(' ', width.saturating_sub(len)));
-                line.push_str(&cell);
-            } else {
-                line.push_str(&cell);
-                if !last {
-                    line.extend(std::iter::repeat_n(' ', width.saturating_sub(len)));
-                }
-            }
+    /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
+    /// the line.
+    fn finish(self) {
+        let text = &self.buf[self.start..];
+        let keep = match std::str::from_utf8(text) {
+            Ok(t) => t.trim_end().len(),
+            Err(_) => text.len(),
+        };
+        self.buf.truncate(self.start + keep);
+        if self.style.is_some() {
+            self.buf.extend_from_slice(RESET);
         }
-        let trimmed = line.trim_end().len();
-        line.truncate(trimmed);
-        line
+        self.buf.push(b'\n');
     }
 }
 
@@ -632,49 +687,56 @@ impl Sink for Table {
     }
 }
 
-/// Replaces control characters (tabs, newlines) that would break a TSV row with spaces.
+/// Copies a TSV field, control characters (tabs, newlines) that would break the row replaced
+/// with spaces in the same pass over the copy.
 fn push_tsv_field(buf: &mut Vec<u8>, field: &str) {
-    let bytes = field.as_bytes();
-    if bytes.iter().all(|&b| b >= 0x20) {
-        buf.extend_from_slice(bytes);
-    } else {
-        buf.extend(bytes.iter().map(|&b| if b < 0x20 { b' ' } else { b }));
+    let at = buf.len();
+    buf.extend_from_slice(field.as_bytes());
+    for b in &mut buf[at..] {
+        if *b < 0x20 {
+            *b = b' ';
+        }
     }
 }
 
-fn sanitize(cell: &str) -> std::borrow::Cow<'_, str> {
-    if cell.chars().any(char::is_control) {
-        cell.chars()
-            .map(|c| if c.is_control() { ' ' } else { c })
-            .collect::<String>()
-            .into()
-    } else {
-        cell.into()
+/// A CSV field (RFC 4180): as it is, or in double quotes with inner quotes doubled when it
+/// holds a comma, a quote, CR or LF (what the csv crate's `QuoteStyle::Necessary` does).
+fn push_csv_field(buf: &mut Vec<u8>, field: &[u8]) {
+    if !field
+        .iter()
+        .any(|&b| matches!(b, b',' | b'"' | b'\r' | b'\n'))
+    {
+        buf.extend_from_slice(field);
+        return;
     }
+    buf.push(b'"');
+    let mut rest = field;
+    while let Some(q) = rest.iter().position(|&b| b == b'"') {
+        buf.extend_from_slice(&rest[..=q]);
+        buf.push(b'"');
+        rest = &rest[q + 1..];
+    }
+    buf.extend_from_slice(rest);
+    buf.push(b'"');
 }
 
-fn push_json_key(buf: &mut Vec<u8>, name: &str) {
-    buf.extend_from_slice(b",\"");
+/// The JSON key of a column, with its comma and colon: `,"sensor_no":` for `Sensor #`.
+fn json_key(name: &str) -> Vec<u8> {
+    let mut key = b",\"".to_vec();
     for c in name.chars() {
         match c {
-            ' ' => buf.push(b'_'),
-            '#' => buf.extend_from_slice(b"no"),
+            ' ' => key.push(b'_'),
+            '#' => key.extend_from_slice(b"no"),
             c => {
                 for l in c.to_lowercase() {
                     let mut tmp = [0u8; 4];
-                    buf.extend_from_slice(l.encode_utf8(&mut tmp).as_bytes());
+                    key.extend_from_slice(l.encode_utf8(&mut tmp).as_bytes());
                 }
             }
         }
     }
-    buf.extend_from_slice(b"\":");
-}
-
-fn push_json_pair(buf: &mut Vec<u8>, key: &str, value: &str) {
-    buf.extend_from_slice(b",\"");
-    buf.extend_from_slice(key.as_bytes());
-    buf.extend_from_slice(b"\":");
-    push_json_str(buf, value);
+    key.extend_from_slice(b"\":");
+    key
 }
 
 /// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
@@ -695,7 +757,12 @@ fn push_json_str(buf: &mut Vec<u8>, s: &str) {
         return;
     }
     buf.push(b'"');
-    for &b in s.as_bytes() {
+    let bytes = s.as_bytes();
+    let needs = |b: u8| b < 0x20 || b == b'"' || b == b'\\';
+    // Copied whole up to the first byte that needs escaping (usually the whole string).
+    let clean = bytes.iter().position(|&b| needs(b)).unwrap_or(bytes.len());
+    buf.extend_from_slice(&bytes[..clean]);
+    for &b in &bytes[clean..] {
         match b {
             b'"' => buf.extend_from_slice(b"\\\""),
             b'\\' => buf.extend_from_slice(b"\\\\"),
@@ -870,6 +937,114 @@ mod tests {
             left(lines[6]),
             data_grown,
             "an overflow does not widen the column"
+        );
+    }
+
+    #[test]
+    fn csv_fields_are_quoted_as_the_csv_crate_quotes_them() {
+        let fields = [
+            "",
+            "plain",
+            "a,b",
+            "say \"hi\"",
+            "\"",
+            "\"\"",
+            "line\nbreak",
+            "cr\r",
+            "tab\there",
+            " spaced ",
+            "#hash",
+            "é ü ✓",
+            ",",
+            "a\"b,c\"\r\nd",
+        ];
+        for f in fields {
+            let mut ours = Vec::new();
+            push_csv_field(&mut ours, b"x");
+            ours.push(b',');
+            push_csv_field(&mut ours, f.as_bytes());
+            ours.extend_from_slice(b"\r\n");
+            let mut w = csv::WriterBuilder::new()
+                .terminator(csv::Terminator::CRLF)
+                .from_writer(Vec::new());
+            w.write_record(["x", f]).unwrap();
+            assert_eq!(
+                String::from_utf8(ours).unwrap(),
+                String::from_utf8(w.into_inner().unwrap()).unwrap(),
+                "{f:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn counter_digits_count_like_itoa() {
+        let mut d = Digits::zero();
+        let mut ib = itoa::Buffer::new();
+        for n in 1..=100_100u64 {
+            d.increment();
+            assert_eq!(d.as_str(), ib.format(n), "{n}");
+        }
+        let mut d = Digits {
+            buf: *b"00018446744073709549",
+            start: 3,
+        };
+        for _ in 0..10 {
+            d.increment();
+        }
+        assert_eq!(d.as_str(), "18446744073709559");
+    }
+
+    #[test]
+    fn colour_codes_are_what_owo_colors_writes() {
+        use owo_colors::{OwoColorize, Style};
+        let s = |b: &[u8]| String::from_utf8(b.to_vec()).unwrap();
+        let reset = s(RESET);
+        assert_eq!(format!("{}", "x".bold()), format!("{}x{reset}", s(BOLD)));
+        for (style, code) in [
+            (Style::new().dimmed(), DIMMED),
+            (Style::new().yellow(), YELLOW),
+            (Style::new().red(), RED),
+            (Style::new().cyan(), CYAN),
+        ] {
+            assert_eq!(
+                format!("{}", "x".style(style)),
+                format!("{}x{reset}", s(code))
+            );
+        }
+    }
+
+    #[test]
+    fn pretty_cells_replace_control_characters_and_count_chars() {
+        let opts = TableOptions {
+            format: Format::Pretty,
+            color: true,
+            raw: false,
+            time_abs: false,
+            utc: false,
+        };
+        let mut t = Table::new(Output::memory(), opts, &["Note"]);
+        t.set_pretty_widths(&[7, 8, 3, 6, 4, 8, 6, 4, 4]);
+        let row = Row {
+            micros: None,
+            id: None,
+            device: "é\tü",
+            kind: "Data",
+            class: Class::Error,
+            sensor_no: "",
+            sensor: "a\u{85}b",
+            data: "",
+            extra: &[""],
+            parts: &[],
+            raw: &[],
+        };
+        t.write(&row).unwrap();
+        t.flush().unwrap();
+        let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+        let line = text.lines().nth(1).unwrap();
+        // Trailing blanks trimmed inside the colour; a control character is one blank.
+        assert_eq!(
+            line,
+            "\x1b[31m      1                 é ü     Data            a b\x1b[0m"
         );
     }
 
