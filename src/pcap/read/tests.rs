@@ -1,0 +1,254 @@
+use super::super::write;
+use super::*;
+
+type Got = Vec<(i64, u32, Vec<u8>, u32)>;
+
+fn collect(chunks: &[&[u8]]) -> (Got, Result<(), PcapError>) {
+    let mut s = PcapStream::new();
+    let mut out = Vec::new();
+    for c in chunks {
+        if let Err(e) = s.push(c, &mut |p| {
+            out.push((p.ts_micros, p.link_type, p.data.to_vec(), p.interface))
+        }) {
+            return (out, Err(e));
+        }
+    }
+    let r = s.finish();
+    (out, r)
+}
+
+fn le_block(kind: u32, body: &[u8]) -> Vec<u8> {
+    let padded = body.len().div_ceil(4) * 4;
+    let len = (12 + padded) as u32;
+    let mut v = Vec::new();
+    v.extend_from_slice(&kind.to_le_bytes());
+    v.extend_from_slice(&len.to_le_bytes());
+    v.extend_from_slice(body);
+    v.resize(8 + padded, 0);
+    v.extend_from_slice(&len.to_le_bytes());
+    v
+}
+
+fn be_block(kind: u32, body: &[u8]) -> Vec<u8> {
+    let padded = body.len().div_ceil(4) * 4;
+    let len = (12 + padded) as u32;
+    let mut v = Vec::new();
+    v.extend_from_slice(&kind.to_be_bytes());
+    v.extend_from_slice(&len.to_be_bytes());
+    v.extend_from_slice(body);
+    v.resize(8 + padded, 0);
+    v.extend_from_slice(&len.to_be_bytes());
+    v
+}
+
+fn shb_le() -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend_from_slice(&0x1A2B_3C4Du32.to_le_bytes());
+    body.extend_from_slice(&1u16.to_le_bytes());
+    body.extend_from_slice(&0u16.to_le_bytes());
+    body.extend_from_slice(&(-1i64).to_le_bytes());
+    le_block(0x0A0D_0D0A, &body)
+}
+
+fn shb_be() -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend_from_slice(&0x1A2B_3C4Du32.to_be_bytes());
+    body.extend_from_slice(&1u16.to_be_bytes());
+    body.extend_from_slice(&0u16.to_be_bytes());
+    body.extend_from_slice(&(-1i64).to_be_bytes());
+    be_block(0x0A0D_0D0A, &body)
+}
+
+fn idb_le(link: u16, tsresol: Option<u8>) -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend_from_slice(&link.to_le_bytes());
+    body.extend_from_slice(&0u16.to_le_bytes());
+    body.extend_from_slice(&0u32.to_le_bytes());
+    if let Some(r) = tsresol {
+        body.extend_from_slice(&9u16.to_le_bytes());
+        body.extend_from_slice(&1u16.to_le_bytes());
+        body.extend_from_slice(&[r, 0, 0, 0]);
+        body.extend_from_slice(&[0, 0, 0, 0]);
+    }
+    le_block(1, &body)
+}
+
+fn epb_le(iface: u32, ts: u64, data: &[u8]) -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend_from_slice(&iface.to_le_bytes());
+    body.extend_from_slice(&((ts >> 32) as u32).to_le_bytes());
+    body.extend_from_slice(&(ts as u32).to_le_bytes());
+    body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+    body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+    body.extend_from_slice(data);
+    le_block(6, &body)
+}
+
+#[test]
+fn classic_pcap_both_orders_and_nanos() {
+    let mut f = Vec::new();
+    write::header(&mut f, 1);
+    write::record(&mut f, 1_500_000_123_456, b"abc");
+    write::record(&mut f, 1_500_000_123_457, b"");
+    let (p, r) = collect(&[&f]);
+    r.unwrap();
+    assert_eq!(p.len(), 2);
+    assert_eq!(p[0], (1_500_000_123_456, 1, b"abc".to_vec(), 0));
+    // big endian, nanoseconds
+    let mut g = Vec::new();
+    g.extend_from_slice(&0xA1B2_3C4Du32.to_be_bytes());
+    g.extend_from_slice(&[0, 2, 0, 4]);
+    g.extend_from_slice(&[0; 8]);
+    g.extend_from_slice(&65535u32.to_be_bytes());
+    g.extend_from_slice(&101u32.to_be_bytes());
+    g.extend_from_slice(&10u32.to_be_bytes());
+    g.extend_from_slice(&999_999_999u32.to_be_bytes());
+    g.extend_from_slice(&2u32.to_be_bytes());
+    g.extend_from_slice(&2u32.to_be_bytes());
+    g.extend_from_slice(&[7, 8]);
+    let (p, r) = collect(&[&g]);
+    r.unwrap();
+    assert_eq!(p, vec![(10_999_999, 101, vec![7, 8], 0)]);
+}
+
+#[test]
+fn pcapng_sections_resolutions_and_blocks() {
+    let mut f = shb_le();
+    f.extend(idb_le(1, None));
+    f.extend(idb_le(113, Some(9)));
+    f.extend(le_block(0x0000_0BAD, &[1, 2, 3, 4])); // unknown block: skipped
+    f.extend(epb_le(0, 5_000_001, b"one"));
+    f.extend(epb_le(1, 7_000_000_123, b"two"));
+    // simple packet block: interface 0, time of the last packet
+    let mut spb = Vec::new();
+    spb.extend_from_slice(&5u32.to_le_bytes());
+    spb.extend_from_slice(b"three");
+    f.extend(le_block(3, &spb));
+    // obsolete packet block
+    let mut pb = Vec::new();
+    pb.extend_from_slice(&0u16.to_le_bytes());
+    pb.extend_from_slice(&0u16.to_le_bytes());
+    pb.extend_from_slice(&0u32.to_le_bytes());
+    pb.extend_from_slice(&9u32.to_le_bytes());
+    pb.extend_from_slice(&1u32.to_le_bytes());
+    pb.extend_from_slice(&1u32.to_le_bytes());
+    pb.push(b'4');
+    f.extend(le_block(2, &pb));
+    // a second, big-endian section with 2^-10 resolution
+    f.extend(shb_be());
+    let mut idb = Vec::new();
+    idb.extend_from_slice(&101u16.to_be_bytes());
+    idb.extend_from_slice(&[0, 0, 0, 0, 0, 0]);
+    idb.extend_from_slice(&9u16.to_be_bytes());
+    idb.extend_from_slice(&1u16.to_be_bytes());
+    idb.extend_from_slice(&[0x8A, 0, 0, 0]);
+    f.extend(be_block(1, &idb));
+    let mut epb = Vec::new();
+    epb.extend_from_slice(&0u32.to_be_bytes());
+    epb.extend_from_slice(&0u32.to_be_bytes());
+    epb.extend_from_slice(&2048u32.to_be_bytes());
+    epb.extend_from_slice(&1u32.to_be_bytes());
+    epb.extend_from_slice(&1u32.to_be_bytes());
+    epb.push(b'5');
+    f.extend(be_block(6, &epb));
+    let want = vec![
+        (5_000_001, 1, b"one".to_vec(), 0),
+        (7_000_000, 113, b"two".to_vec(), 1),
+        (7_000_000, 1, b"three".to_vec(), 0),
+        (9, 1, b"4".to_vec(), 0),
+        (2_000_000, 101, b"5".to_vec(), 0),
+    ];
+    let (p, r) = collect(&[&f]);
+    r.unwrap();
+    assert_eq!(p, want);
+    // any chunking gives the same packets
+    for size in [1, 2, 3, 5, 7, 13, 64] {
+        let chunks: Vec<&[u8]> = f.chunks(size).collect();
+        let (p, r) = collect(&chunks);
+        r.unwrap();
+        assert_eq!(p, want, "chunk size {size}");
+    }
+}
+
+#[test]
+fn errors_are_reported_not_allocated() {
+    let (_, r) = collect(&[b"hello world"]);
+    assert!(matches!(r, Err(PcapError::BadMagic(_))));
+    let mut f = Vec::new();
+    write::header(&mut f, 1);
+    f.extend_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0]);
+    f.extend_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+    f.extend_from_slice(&[0, 0, 0, 0]);
+    let (_, r) = collect(&[&f]);
+    assert!(matches!(r, Err(PcapError::BadLength { .. })));
+    let mut f = Vec::new();
+    write::header(&mut f, 1);
+    write::record(&mut f, 0, b"abcdef");
+    f.truncate(f.len() - 2);
+    let (p, r) = collect(&[&f]);
+    assert!(p.is_empty());
+    assert_eq!(
+        r,
+        Err(PcapError::Truncated {
+            offset: 24,
+            missing: 2
+        })
+    );
+    let mut f = shb_le();
+    f.extend(epb_le(3, 0, b"x"));
+    let (_, r) = collect(&[&f]);
+    assert!(matches!(
+        r,
+        Err(PcapError::UnknownInterface { interface: 3, .. })
+    ));
+    let mut f = shb_le();
+    let n = f.len();
+    f[n - 4] ^= 0x10;
+    let (_, r) = collect(&[&f]);
+    assert!(matches!(r, Err(PcapError::LengthMismatch { .. })));
+}
+
+#[test]
+fn interface_blocks_are_kept_up_to_a_cap() {
+    let n = MAX_INTERFACES as u32 + 4_464;
+    let mut f = shb_le();
+    for i in 0..n {
+        f.extend(idb_le(if i % 2 == 0 { 1 } else { 101 }, None));
+    }
+    f.extend(epb_le(5, 7, b"ok"));
+    f.extend(epb_le(n - 1, 8, b"lost"));
+    let mut s = PcapStream::new();
+    let mut got = Vec::new();
+    let mut r = Ok(());
+    let mut most = 0;
+    for c in f.chunks(65_536) {
+        r = s.push(c, &mut |p| got.push((p.interface, p.link_type)));
+        most = most.max(s.interfaces_kept());
+        if r.is_err() {
+            break;
+        }
+    }
+    assert_eq!(got, [(5, 101)]);
+    assert_eq!(most, MAX_INTERFACES);
+    assert_eq!(
+        r,
+        Err(PcapError::TooManyInterfaces {
+            offset: f.len() as u64 - 36,
+            interface: n - 1
+        })
+    );
+    let msg = r.unwrap_err().to_string();
+    assert!(msg.contains("keeps the first 65536 interfaces"), "{msg}");
+}
+
+proptest::proptest! {
+    #[test]
+    fn garbage_never_panics(data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..600), cut in 1usize..50) {
+        for prefix in [&[0xD4u8, 0xC3, 0xB2, 0xA1][..], &[0x0A, 0x0D, 0x0D, 0x0A], &[]] {
+            let mut input = prefix.to_vec();
+            input.extend_from_slice(&data);
+            let chunks: Vec<&[u8]> = input.chunks(cut).collect();
+            let _ = collect(&chunks);
+        }
+    }
+}

@@ -1,0 +1,284 @@
+use super::*;
+use crate::row::Part;
+
+fn sample_row() -> Row<'static> {
+    Row {
+        micros: Some(4_280_999),
+        id: Some(0),
+        device: "Vario",
+        kind: "Data",
+        class: Class::Plain,
+        sensor_no: "100",
+        sensor: "Alt",
+        data: "65.43",
+        extra: &["m", "a \"quoted\", note"],
+        parts: &[Part {
+            name: "Alt",
+            unit: "m",
+            text: "65.43",
+            value: 65.43,
+        }],
+        raw: &[0x7E, 0x00],
+    }
+}
+
+fn render(format: Format, raw: bool) -> String {
+    let opts = TableOptions {
+        format,
+        color: false,
+        raw,
+        time_abs: false,
+        utc: false,
+    };
+    let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
+    t.write(&sample_row()).unwrap();
+    t.flush().unwrap();
+    String::from_utf8(t.output().memory_contents().to_vec()).unwrap()
+}
+
+#[test]
+fn tsv_has_header_and_fields() {
+    let s = render(Format::Tsv, true);
+    let lines: Vec<&str> = s.lines().collect();
+    assert_eq!(
+        lines[0],
+        "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote\tRaw"
+    );
+    assert_eq!(
+        lines[1],
+        "1\t4280\t0\tVario\tData\t100\tAlt\t65.43\t65.43\tm\ta \"quoted\", note\t7E 00"
+    );
+}
+
+#[test]
+fn csv_quotes() {
+    let s = render(Format::Csv, false);
+    let mut r = csv::Reader::from_reader(s.as_bytes());
+    let headers = r.headers().unwrap().clone();
+    assert_eq!(&headers[5], "Sensor #");
+    let rec = r.records().next().unwrap().unwrap();
+    assert_eq!(&headers[8], "Value");
+    assert_eq!(&rec[10], "a \"quoted\", note");
+    assert_eq!(&rec[7], "65.43");
+    assert_eq!(&rec[8], "65.43");
+}
+
+#[test]
+fn jsonl_escapes() {
+    let s = render(Format::Jsonl, true);
+    assert_eq!(
+        s.trim_end(),
+        r#"{"counter":1,"millis":4280,"id":0,"device":"Vario","type":"Data","sensor_no":"100","sensor":"Alt","data":"65.43","value":65.43,"unit":"m","note":"a \"quoted\", note","parts":{"Alt":65.43},"raw":"7E 00"}"#
+    );
+}
+
+#[test]
+fn pretty_aligns() {
+    let s = render(Format::Pretty, false);
+    let lines: Vec<&str> = s.lines().collect();
+    assert!(lines[0].starts_with("Counter    Millis   ID  Device"));
+    assert!(lines[1].starts_with("      1      4280    0  Vario"));
+}
+
+/// Where each column of a pretty line starts (after a run of two spaces).
+fn starts(line: &str) -> Vec<usize> {
+    let b = line.as_bytes();
+    (1..b.len())
+        .filter(|&i| b[i] != b' ' && i >= 2 && b[i - 1] == b' ' && b[i - 2] == b' ')
+        .collect()
+}
+
+#[test]
+fn pretty_columns_come_from_the_protocol_and_grow_for_long_values() {
+    let opts = TableOptions {
+        format: Format::Pretty,
+        color: false,
+        raw: false,
+        time_abs: false,
+        utc: false,
+    };
+    let mut t = Table::new(Output::memory(), opts, &["Resp ms", "Note"]);
+    t.set_pretty_widths(&[7, 8, 3, 15, 9, 9, 12, 10, 3, 0]);
+    t.header().unwrap();
+    let row = |device: &'static str, data: &'static str| Row {
+        micros: Some(1000),
+        id: Some(10),
+        device,
+        kind: "Request",
+        class: Class::Plain,
+        sensor_no: "R0",
+        sensor: "Read",
+        data,
+        extra: &["1.5", "note"],
+        parts: &[],
+        raw: &[],
+    };
+    t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+    // Longer than its column: the column grows, here and for every later row.
+    t.write(&row("192.168.100.200:5050", "R0=1")).unwrap();
+    t.write(&row("10.0.0.1:5050", "R0=12345678 R1=2")).unwrap();
+    t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+    // Beyond the limit: this row overflows, the column keeps its width.
+    let huge: &'static str = Box::leak("x".repeat(PRETTY_GROW_MAX + 1).into_boxed_str());
+    t.write(&row("10.0.0.1:5050", huge)).unwrap();
+    t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
+    t.flush().unwrap();
+    let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // The protocol's widths ("Resp ms" is wider than its 3).
+    assert_eq!(
+        lines[0],
+        "Counter    Millis   ID  Device           Type       Sensor #   Sensor        Data        Resp ms  Note"
+    );
+    // The starts of the seven left-aligned columns (Device to Note).
+    let left = |l: &str| {
+        let s = starts(l);
+        s[s.len() - 7..].to_vec()
+    };
+    assert_eq!(left(lines[1]), left(lines[0]), "the header's widths");
+    let grown = left(lines[2]);
+    assert_eq!(grown[0], left(lines[1])[0], "Device starts where it did");
+    assert_eq!(
+        grown[1],
+        left(lines[1])[1] + "192.168.100.200:5050".len() - 15,
+        "Type moves by what Device grew"
+    );
+    let data_grown = left(lines[3]);
+    assert_eq!(data_grown[..5], grown[..5]);
+    assert_eq!(data_grown[5], grown[5] + "R0=12345678 R1=2".len() - 10);
+    assert_eq!(
+        left(lines[4]),
+        data_grown,
+        "later rows keep the grown widths"
+    );
+    assert_eq!(
+        left(lines[6]),
+        data_grown,
+        "an overflow does not widen the column"
+    );
+}
+
+#[test]
+fn csv_fields_are_quoted_as_the_csv_crate_quotes_them() {
+    let fields = [
+        "",
+        "plain",
+        "a,b",
+        "say \"hi\"",
+        "\"",
+        "\"\"",
+        "line\nbreak",
+        "cr\r",
+        "tab\there",
+        " spaced ",
+        "#hash",
+        "é ü ✓",
+        ",",
+        "a\"b,c\"\r\nd",
+    ];
+    for f in fields {
+        let mut ours = Vec::new();
+        push_csv_field(&mut ours, b"x");
+        ours.push(b',');
+        push_csv_field(&mut ours, f.as_bytes());
+        ours.extend_from_slice(b"\r\n");
+        let mut w = csv::WriterBuilder::new()
+            .terminator(csv::Terminator::CRLF)
+            .from_writer(Vec::new());
+        w.write_record(["x", f]).unwrap();
+        assert_eq!(
+            String::from_utf8(ours).unwrap(),
+            String::from_utf8(w.into_inner().unwrap()).unwrap(),
+            "{f:?}"
+        );
+    }
+}
+
+#[test]
+fn counter_digits_count_like_itoa() {
+    let mut d = Digits::zero();
+    let mut ib = itoa::Buffer::new();
+    for n in 1..=100_100u64 {
+        d.increment();
+        assert_eq!(d.as_str(), ib.format(n), "{n}");
+    }
+    let mut d = Digits {
+        buf: *b"00018446744073709549",
+        start: 3,
+    };
+    for _ in 0..10 {
+        d.increment();
+    }
+    assert_eq!(d.as_str(), "18446744073709559");
+}
+
+#[test]
+fn colour_codes_are_what_owo_colors_writes() {
+    use owo_colors::{OwoColorize, Style};
+    let s = |b: &[u8]| String::from_utf8(b.to_vec()).unwrap();
+    let reset = s(RESET);
+    assert_eq!(format!("{}", "x".bold()), format!("{}x{reset}", s(BOLD)));
+    for (style, code) in [
+        (Style::new().dimmed(), DIMMED),
+        (Style::new().yellow(), YELLOW),
+        (Style::new().red(), RED),
+        (Style::new().cyan(), CYAN),
+    ] {
+        assert_eq!(
+            format!("{}", "x".style(style)),
+            format!("{}x{reset}", s(code))
+        );
+    }
+}
+
+#[test]
+fn pretty_cells_replace_control_characters_and_count_chars() {
+    let opts = TableOptions {
+        format: Format::Pretty,
+        color: true,
+        raw: false,
+        time_abs: false,
+        utc: false,
+    };
+    let mut t = Table::new(Output::memory(), opts, &["Note"]);
+    t.set_pretty_widths(&[7, 8, 3, 6, 4, 8, 6, 4, 4]);
+    let row = Row {
+        micros: None,
+        id: None,
+        device: "é\tü",
+        kind: "Data",
+        class: Class::Error,
+        sensor_no: "",
+        sensor: "a\u{85}b",
+        data: "",
+        extra: &[""],
+        parts: &[],
+        raw: &[],
+    };
+    t.write(&row).unwrap();
+    t.flush().unwrap();
+    let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+    let line = text.lines().nth(1).unwrap();
+    // Trailing blanks trimmed inside the colour; a control character is one blank.
+    assert_eq!(
+        line,
+        "\x1b[31m      1                 é ü     Data            a b\x1b[0m"
+    );
+}
+
+#[test]
+fn json_numbers() {
+    for ok in ["0", "12", "-1.50", "0.005", "18446744073709551615"] {
+        assert!(is_json_number(ok), "{ok}");
+    }
+    for bad in ["", "-", "01", ".5", "1.", "1e3", "0x10", "1 2", "NaN"] {
+        assert!(!is_json_number(bad), "{bad}");
+    }
+}
+
+#[test]
+fn format_from_extension() {
+    assert_eq!(Format::from_path(Path::new("a.CSV")), Some(Format::Csv));
+    assert_eq!(Format::from_path(Path::new("a.jsonl")), Some(Format::Jsonl));
+    assert_eq!(Format::from_path(Path::new("a.bin")), None);
+}
