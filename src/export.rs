@@ -195,11 +195,7 @@ impl<S: Sink + ?Sized> Sink for Exporting<'_, S> {
     }
     fn set_anchor(&mut self, anchor: Option<Anchor>) {
         if self.export.anchor.is_none() {
-            self.export.anchor = match anchor {
-                Some(Anchor::Instant(t)) => Some(t),
-                Some(Anchor::Naive(n)) => Some(n.and_utc()),
-                None => None,
-            };
+            self.export.anchor = anchor.map(Anchor::as_utc);
         }
         self.inner.set_anchor(anchor)
     }

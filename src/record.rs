@@ -159,11 +159,7 @@ impl Recorder {
         if self.anchor.is_some() {
             return Ok(());
         }
-        let t = match anchor {
-            Some(Anchor::Instant(t)) => t,
-            Some(Anchor::Naive(n)) => n.and_utc(),
-            None => Utc::now(),
-        };
+        let t = anchor.map_or_else(Utc::now, Anchor::as_utc);
         self.anchor = Some(t);
         let start = if self.timed {
             rtac::START

@@ -10,3 +10,14 @@ pub enum Anchor {
     /// A local time without zone, as logged by a radio.
     Naive(NaiveDateTime),
 }
+
+impl Anchor {
+    /// The instant to stamp capture files with: a radio's naive local time is taken as UTC
+    /// (the log does not say its zone; busnoop replays it to the same rows either way).
+    pub fn as_utc(self) -> DateTime<Utc> {
+        match self {
+            Anchor::Instant(t) => t,
+            Anchor::Naive(n) => n.and_utc(),
+        }
+    }
+}
