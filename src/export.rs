@@ -78,6 +78,7 @@ impl Exporter {
     }
 
     /// Packets written so far.
+    #[cfg(test)]
     pub fn packets(&self) -> u64 {
         self.packets
     }

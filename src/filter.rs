@@ -89,10 +89,6 @@ impl Names {
             .filter_map(|(i, n)| Some((n.as_deref()?, i as u32)))
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.by_id.iter().all(Option::is_none)
-    }
-
     /// Names `id` (a later name for the same ID wins).
     pub fn set(&mut self, name: &str, id: u32) {
         let i = id as usize;
@@ -252,6 +248,7 @@ impl Filter {
     }
 
     /// Whether any rule is set.
+    #[cfg(test)]
     pub fn is_active(&self) -> bool {
         self.active
     }
@@ -343,13 +340,6 @@ fn is_poll(row: &Row<'_>) -> bool {
 pub struct Selection {
     pub filter: Filter,
     pub names: Names,
-}
-
-impl Selection {
-    /// Whether it changes nothing (no filter, no names).
-    pub fn is_noop(&self) -> bool {
-        !self.filter.is_active() && self.names.is_empty()
-    }
 }
 
 /// A [`RowOut`] that names devices and filters rows into a [`Sink`] (the table or the live

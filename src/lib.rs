@@ -1,39 +1,68 @@
 //! busnoop: a passive bus sniffer.
 //!
-//! Data flows one way: a [`source`] yields timestamped byte chunks, a protocol decoder (for
-//! example [`sport`]) reassembles frames from them with pure code and maps them onto the log
-//! table ([`row::Row`]), and a [`sink`] formats the rows as pretty text, TSV, CSV or JSON Lines.
-//! [`run`] wires the three together and deals with signals, statistics and exit codes.
+//! Data flows one way: a source (`source`, private) yields timestamped byte chunks or packets,
+//! a protocol decoder (for example [`sport::SportDecoder`]) reassembles frames from them with
+//! pure code and maps them onto the log table ([`row::Row`]), and a sink (`sink`, private)
+//! formats the rows as pretty text, TSV, CSV or JSON Lines. The driver (`run`, private) wires
+//! the three together and deals with signals, statistics and exit codes.
+//!
+//! # The public API
+//!
+//! The binary is [`main`]. As a library, busnoop offers what another program (or a fuzzer,
+//! a benchmark, a test) needs to decode a bus without the command line:
+//!
+//! * the decoder contract: [`protocol::Decoder`] (push bytes or packets with their times,
+//!   `idle`, `finish`; output identical however the input is split), the [`row`] it emits
+//!   ([`row::Row`], [`row::RowOut`], the collectors [`row::Collected`] and [`row::Discard`])
+//!   and the capture clock [`time::Anchor`];
+//! * one module per protocol, each with its decoder, its options and its wire format:
+//!   [`sport`] (FrSky S.Port), [`sbus`] (Saia S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB
+//!   v1 and SAB2);
+//! * capture files: [`pcap`] (reading pcap/pcapng, writing pcap and per-frame exports),
+//!   [`Recorder`] (busnoop's recordings), [`edgetx`] (EdgeTX/OpenTX debug-log lines);
+//! * hex and number formatting shared by the table ([`fmt`]);
+//! * what a run reports: [`Report`] and [`Problems`] (statistics as values), [`Failure`]
+//!   (the one-line message and exit code of a failed run).
+//!
+//! Everything else (command line, sources, sinks, filters, live view, plots, detection) is
+//! private to the crate and may change at any time. `selfcheck` (an independent second
+//! decoder used by the tests and the fuzzers) exists only with the `selfcheck` feature.
 
 #![deny(clippy::undocumented_unsafe_blocks)]
 
-pub mod cli;
-pub mod detect;
-pub mod exit;
-pub mod export;
-pub mod filter;
+mod cli;
+mod detect;
+mod exit;
+mod export;
+mod filter;
 pub mod fmt;
-pub mod numbers;
-pub mod pace;
-pub mod pairing;
+mod numbers;
+mod pace;
+mod pairing;
 pub mod pcap;
-pub mod plot;
+mod plot;
 pub mod protocol;
-pub mod protocols;
-pub mod record;
+mod protocols;
+mod record;
 pub mod row;
-pub mod run;
+mod run;
 pub mod sab;
 pub mod sbus;
 #[cfg(feature = "selfcheck")]
 #[doc(hidden)]
 pub mod selfcheck;
-pub mod signal;
-pub mod sink;
-pub mod source;
+mod signal;
+mod sink;
+mod source;
 pub mod sport;
-pub mod stats;
-pub mod stats_json;
-pub mod summary;
+mod stats;
+mod stats_json;
+mod summary;
 pub mod time;
-pub mod top;
+mod top;
+
+pub use cli::main;
+pub use exit::Failure;
+pub use record::Recorder;
+pub use source::edgetx;
+pub use stats::{Problems, Report};

@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    busnoop::cli::main()
+    busnoop::main()
 }

@@ -36,7 +36,7 @@ pub enum Reason {
     End,
     /// Its conversation was dropped (the table of conversations was full).
     Dropped,
-    /// Given up: the table of open requests was full ([`Table`]'s cap).
+    /// Given up: the table of open requests was full (`Table`'s cap).
     Overflow,
 }
 
@@ -236,6 +236,7 @@ impl<K: Copy + Eq, R: Copy> LateWindow<K, R> {
         self.entries.len()
     }
 
+    #[cfg(test)]
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }
@@ -279,7 +280,7 @@ impl Hasher for FastHasher {
     }
 }
 
-/// `HashMap` with [`FastHasher`].
+/// `HashMap` with `FastHasher`.
 pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
 /// A deadline in the queue: `generation` tells whether the request it was made for is still

@@ -3,7 +3,7 @@
 //! A protocol lives in a folder of its own (`src/<protocol>/`): its wire format and pure
 //! reassembler, its name tables, the mapping of frames onto the log table ([`crate::row`]) and
 //! its [`Protocol`] descriptor. It implements [`Decoder`], the one interface the driver
-//! ([`crate::run`]) sees. A protocol never imports the command line, the sinks or the sources:
+//! (`crate::run`) sees. A protocol never imports the command line, the sinks or the sources:
 //! everything it learns comes in through its options, [`Line`] and the input [`Kind`].
 //!
 //! ## The reassembler contract
@@ -27,7 +27,7 @@
 //!
 //! ## Adding a protocol
 //!
-//! See `docs/architecture.md`: a folder, one entry in [`crate::protocols::PROTOCOLS`], a
+//! See `docs/architecture.md`: a folder, one entry in `crate::protocols::PROTOCOLS`, a
 //! subcommand in `cli.rs`.
 
 use crate::pcap::{Packet, PcapError, PcapStream};

@@ -51,6 +51,7 @@ fn bucket_low(i: usize) -> u64 {
 pub const EXACT_SAMPLES: usize = 4_096;
 
 /// Most bytes one summary holds on the heap (the histogram, or the exact samples).
+#[cfg(test)]
 pub const MAX_HEAP_BYTES: usize = if BUCKETS > EXACT_SAMPLES {
     BUCKETS * 4
 } else {
@@ -58,7 +59,7 @@ pub const MAX_HEAP_BYTES: usize = if BUCKETS > EXACT_SAMPLES {
 };
 
 /// Response times (µs) of one device: exact count, minimum and maximum; the median exactly for
-/// the first [`EXACT_SAMPLES`] samples, then from a histogram.
+/// the first `EXACT_SAMPLES` samples, then from a histogram.
 #[derive(Clone, Debug, Default)]
 pub struct Times {
     pub count: u64,

@@ -311,7 +311,7 @@ fn unusable_inputs_and_options_fail_clearly() {
 
 #[test]
 fn timed_recordings_use_the_real_times() {
-    use busnoop::record::Recorder;
+    use busnoop::Recorder;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("timed.pcap");
     let frame = |flags, cmd, data: &[u8]| {

@@ -5,8 +5,8 @@ mod common;
 
 use std::collections::BTreeSet;
 
+use busnoop::edgetx::parse_line;
 use busnoop::row::OwnedRow;
-use busnoop::source::edgetx::parse_line;
 use common::{decode, fixture};
 
 fn capture_rows() -> Vec<OwnedRow> {

@@ -71,6 +71,7 @@ pub enum Command {
 }
 
 /// The subcommands that are not a protocol.
+#[cfg(test)]
 pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "extcap", "completions", "man"];
 
 /// `busnoop plot`.

@@ -615,7 +615,7 @@ fn write_stdout(text: &str) -> Result<(), Failure> {
 mod advise;
 mod live;
 
-pub use advise::{Advice, Kept, Tee, advise};
+pub use advise::{Advice, Tee, advise};
 use live::live;
 
 #[cfg(test)]

@@ -1,3 +1,4 @@
+use super::advise::Kept;
 use super::live::{Listen, judge_live};
 use super::*;
 

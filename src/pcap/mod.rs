@@ -7,13 +7,13 @@
 //!   with their link type, `if_tsresol` and `if_tsoffset`, enhanced, simple and the obsolete
 //!   packet blocks; other blocks are skipped). Memory stays bounded: a record or block longer
 //!   than its limit ([`MAX_RECORD`]) is an error, never an allocation.
-//! * [`write`]: classic pcap records (the recorder, tests, benchmarks and tools).
+//! * `write`: classic pcap records (the recorder, tests, benchmarks and tools).
 //! * [`write_ng`]: pcapng blocks (recordings named `.pcapng`, the frame export).
 //! * [`rtac`]: the RTAC serial encapsulation busnoop records serial lines in.
 //! * [`linktype`]: every link type busnoop names, and [`Packets`], packets with their bytes in one
 //!   buffer, as the capture source hands them on.
 //!
-//! The sources ([`crate::source`]) open the containers; protocols see [`Packet`]s only.
+//! The sources (`crate::source`) open the containers; protocols see [`Packet`]s only.
 
 pub mod read;
 pub mod rtac;

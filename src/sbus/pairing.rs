@@ -1,5 +1,5 @@
 //! Pairing answers with requests, shared by the serial modes and Ether-S-Bus: the S-Bus
-//! matching rules on top of the core in [`crate::pairing`].
+//! matching rules on top of the core in `crate::pairing`.
 //!
 //! Responses and ACK/NAKs carry no command, so the decoder remembers each request. A serial
 //! line has one master, so the answer belongs to the last unanswered request (secure mode also

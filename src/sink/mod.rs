@@ -334,6 +334,7 @@ impl Table {
     }
 
     /// The output (tests read memory outputs back).
+    #[cfg(test)]
     pub fn output(&self) -> &Output {
         &self.out
     }

@@ -21,6 +21,7 @@ enum Dest {
         /// A regular file (synced at the end, cut back after a failed write).
         regular: bool,
     },
+    #[cfg(test)]
     Memory(Vec<u8>),
 }
 
@@ -52,6 +53,7 @@ impl Output {
     }
 
     /// Keeps everything in memory (tests).
+    #[cfg(test)]
     pub fn memory() -> Self {
         Self::new(Dest::Memory(Vec::new()))
     }
@@ -80,15 +82,6 @@ impl Output {
         }
     }
 
-    /// Whether the output is a terminal (for colour and format defaults).
-    pub fn is_terminal(&self) -> bool {
-        use std::io::IsTerminal;
-        match &self.dest {
-            Dest::Stdout(s) => s.is_terminal(),
-            _ => false,
-        }
-    }
-
     /// Writes every buffered row.
     pub fn flush(&mut self) -> Result<(), OutputError> {
         if self.failed {
@@ -104,6 +97,7 @@ impl Output {
                 lock.write_all(&self.buf).and_then(|_| lock.flush())
             }
             Dest::File { file, .. } => file.write_all(&self.buf),
+            #[cfg(test)]
             Dest::Memory(v) => {
                 v.extend_from_slice(&self.buf);
                 Ok(())
@@ -158,6 +152,7 @@ impl Output {
     }
 
     /// The bytes written so far (memory outputs only).
+    #[cfg(test)]
     pub fn memory_contents(&self) -> &[u8] {
         match &self.dest {
             Dest::Memory(v) => v,

@@ -2,7 +2,7 @@
 //! (`radio/src/telemetry/frsky_sport.cpp` sportSensors[], `frsky_defs.h`, `sensor_names.h`).
 //!
 //! [`decode`] writes the `Sensor` and `Data` columns of a data frame into reusable buffers and
-//! returns the unit; [`decode_numbers`] also keeps every number of the frame ([`Numbers`]) for
+//! returns the unit; [`decode_numbers`] also keeps every number of the frame (`Numbers`) for
 //! the `Value` column, JSON and the wide export. Nothing here allocates once the buffers have
 //! grown.
 //!

@@ -78,11 +78,6 @@ impl<'a> Top<'a> {
         self.model.rows
     }
 
-    /// The user quit (`q`).
-    pub fn quitted(&self) -> bool {
-        self.quit
-    }
-
     /// Capture time now: the newest row's time, run on by the wall clock at the replay speed
     /// (live: real time; paused, ended or as fast as possible: stopped).
     fn now(&mut self) -> u64 {

@@ -357,21 +357,6 @@ impl Model {
         });
     }
 
-    /// A message of busnoop itself (a hint, a warning) among the events.
-    pub fn notice(&mut self, text: &str, now: u64) {
-        if self.events.len() == EVENTS {
-            self.events.pop_front();
-        }
-        self.events.push_back(Event {
-            micros: Some(now),
-            class: Class::Info,
-            kind: "busnoop".into(),
-            id: None,
-            device: String::new(),
-            text: cut(text.trim_end()),
-        });
-    }
-
     /// Wire bytes per second over the last [`RATE_WINDOW`].
     pub fn bytes_per_second(&self, now: u64) -> Option<f64> {
         let first = self.first?;
