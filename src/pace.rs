@@ -7,8 +7,8 @@
 
 use std::time::{Duration, Instant};
 
-use crate::row::{OutputError, Row, RowOut, RowResult};
-use crate::sink::Sink;
+use crate::row::{Row, RowResult};
+use crate::sink::{Sink, Tap, Tapped};
 
 /// Longer silences of the capture are replayed as one second.
 pub const MAX_SILENCE: u64 = 10_000_000;
@@ -98,44 +98,23 @@ impl Pacer {
     }
 }
 
-/// The table, paced (`--speed N` without `--top`).
-pub struct Paced<'a, S: Sink + ?Sized> {
-    pub inner: &'a mut S,
-    pub pacer: Pacer,
-}
+/// The table, paced (`--speed N` without `--top`): the pacer holds each row until it is due.
+pub type Paced<'a, S> = Tapped<'a, S, Pacer>;
 
-impl<S: Sink + ?Sized> RowOut for Paced<'_, S> {
-    fn row(&mut self, row: &Row<'_>) -> RowResult {
+impl Tap for Pacer {
+    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult {
         if let Some(t) = row.micros {
-            while let Some(wait) = self.pacer.due_in(t, Instant::now()) {
+            while let Some(wait) = self.due_in(t, Instant::now()) {
                 if crate::signal::Stop::received().is_some() {
-                    self.pacer.turn_off();
+                    self.turn_off();
                     break;
                 }
                 // What is due is visible while the next row waits.
-                self.inner.flush()?;
+                inner.flush()?;
                 std::thread::sleep(wait.min(Duration::from_millis(50)));
             }
         }
-        self.inner.row(row)
-    }
-}
-
-impl<S: Sink + ?Sized> Sink for Paced<'_, S> {
-    fn flush(&mut self) -> Result<(), OutputError> {
-        self.inner.flush()
-    }
-    fn close(&mut self) -> Result<(), OutputError> {
-        self.inner.close()
-    }
-    fn set_anchor(&mut self, anchor: Option<crate::time::Anchor>) {
-        self.inner.set_anchor(anchor)
-    }
-    fn quit(&self) -> bool {
-        self.inner.quit()
-    }
-    fn skip(&mut self) {
-        self.inner.skip()
+        Ok(())
     }
 }
 

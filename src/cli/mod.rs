@@ -443,7 +443,10 @@ pub fn run_capture(
             Some(pacer) => drive(
                 decoder.as_mut(),
                 &rx,
-                &mut Paced { inner: sink, pacer },
+                &mut Paced {
+                    inner: sink,
+                    tap: pacer,
+                },
                 ctx,
             ),
             None => drive(decoder.as_mut(), &rx, sink, ctx),

@@ -688,6 +688,55 @@ impl Sink for Table {
     }
 }
 
+/// A stage a row passes on its way into the sink it wraps (pacing, exporting): it sees every row
+/// first and flushes its own output before the sink does. [`Tapped`] forwards the [`Sink`] calls,
+/// so a tap writes only what it adds.
+pub trait Tap {
+    /// Runs before `inner` takes the row: may wait (flushing `inner` meanwhile) or write the row
+    /// elsewhere. An error stops the run as a sink's would.
+    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult;
+    /// Flushes what the tap writes; runs before the sink flushes or closes.
+    fn flush(&mut self) -> Result<(), OutputError> {
+        Ok(())
+    }
+    /// The wall-clock time of the capture's start became known (before the sink hears it).
+    fn set_anchor(&mut self, _anchor: Option<Anchor>) {}
+}
+
+/// A sink with a [`Tap`] in front of it.
+pub struct Tapped<'a, S: Sink + ?Sized, T: Tap> {
+    pub inner: &'a mut S,
+    pub tap: T,
+}
+
+impl<S: Sink + ?Sized, T: Tap> RowOut for Tapped<'_, S, T> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        self.tap.before_row(row, self.inner)?;
+        self.inner.row(row)
+    }
+}
+
+impl<S: Sink + ?Sized, T: Tap> Sink for Tapped<'_, S, T> {
+    fn flush(&mut self) -> Result<(), OutputError> {
+        self.tap.flush()?;
+        self.inner.flush()
+    }
+    fn close(&mut self) -> Result<(), OutputError> {
+        self.tap.flush()?;
+        self.inner.close()
+    }
+    fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        self.tap.set_anchor(anchor);
+        self.inner.set_anchor(anchor)
+    }
+    fn quit(&self) -> bool {
+        self.inner.quit()
+    }
+    fn skip(&mut self) {
+        self.inner.skip()
+    }
+}
+
 /// Copies a TSV field, control characters (tabs, newlines) that would break the row replaced
 /// with spaces in the same pass over the copy.
 fn push_tsv_field(buf: &mut Vec<u8>, field: &str) {

@@ -282,3 +282,107 @@ fn format_from_extension() {
     assert_eq!(Format::from_path(Path::new("a.jsonl")), Some(Format::Jsonl));
     assert_eq!(Format::from_path(Path::new("a.bin")), None);
 }
+
+/// A sink and a tap that write down what reaches them, in order.
+#[derive(Default)]
+struct Log(Vec<String>);
+
+struct LogSink<'a>(&'a std::cell::RefCell<Log>);
+impl RowOut for LogSink<'_> {
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        self.0.borrow_mut().0.push(format!("sink row {}", row.data));
+        Ok(())
+    }
+}
+impl Sink for LogSink<'_> {
+    fn flush(&mut self) -> Result<(), OutputError> {
+        self.0.borrow_mut().0.push("sink flush".into());
+        Ok(())
+    }
+    fn close(&mut self) -> Result<(), OutputError> {
+        self.0.borrow_mut().0.push("sink close".into());
+        Ok(())
+    }
+    fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        self.0
+            .borrow_mut()
+            .0
+            .push(format!("sink anchor {}", anchor.is_some()));
+    }
+    fn quit(&self) -> bool {
+        true
+    }
+    fn skip(&mut self) {
+        self.0.borrow_mut().0.push("sink skip".into());
+    }
+}
+
+struct LogTap<'a> {
+    log: &'a std::cell::RefCell<Log>,
+    fail_on: Option<&'static str>,
+}
+impl Tap for LogTap<'_> {
+    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult {
+        self.log
+            .borrow_mut()
+            .0
+            .push(format!("tap row {}", row.data));
+        if self.fail_on == Some(row.data) {
+            return Err(OutputError {
+                path: None,
+                error: std::io::Error::from(std::io::ErrorKind::StorageFull),
+            });
+        }
+        inner.flush()
+    }
+    fn flush(&mut self) -> Result<(), OutputError> {
+        self.log.borrow_mut().0.push("tap flush".into());
+        Ok(())
+    }
+    fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        self.log
+            .borrow_mut()
+            .0
+            .push(format!("tap anchor {}", anchor.is_some()));
+    }
+}
+
+#[test]
+fn a_tap_sees_everything_first_and_the_sink_gets_the_rest() {
+    let log = std::cell::RefCell::new(Log::default());
+    let mut sink = LogSink(&log);
+    let mut t = Tapped {
+        inner: &mut sink,
+        tap: LogTap {
+            log: &log,
+            fail_on: Some("bad"),
+        },
+    };
+    t.set_anchor(Some(Anchor::Instant(chrono::DateTime::UNIX_EPOCH)));
+    t.row(&sample_row()).unwrap();
+    t.skip();
+    let bad = Row {
+        data: "bad",
+        ..sample_row()
+    };
+    assert!(t.row(&bad).is_err(), "the tap's error comes back");
+    assert!(t.quit(), "quit is the sink's");
+    t.flush().unwrap();
+    t.close().unwrap();
+    assert_eq!(
+        log.into_inner().0,
+        [
+            "tap anchor true",
+            "sink anchor true",
+            "tap row 65.43",
+            "sink flush",
+            "sink row 65.43",
+            "sink skip",
+            "tap row bad",
+            "tap flush",
+            "sink flush",
+            "tap flush",
+            "sink close",
+        ]
+    );
+}
