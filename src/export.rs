@@ -7,9 +7,14 @@
 //! * modm SAB / SAB2: link type `USER1` (148), the frame's bytes as on the wire (either
 //!   framing), decoded by `contrib/wireshark/busnoop-sab.lua`.
 //!
-//! The packets are the rows' `raw` bytes, so the export holds exactly the frames the table
-//! shows (filters apply); rows without bytes (notes, gaps) are not packets. A frame the table
-//! marks as an error carries a packet comment (`opt_comment`) with busnoop's verdict.
+//! * Serial Saia S-Bus: link type `RAW` (101, raw IP), each telegram re-wrapped as the
+//!   Ether-S-Bus datagram a PCD would have sent over UDP (see [`SbusWrap`]), decoded by
+//!   Wireshark's own `sbus` dissector.
+//!
+//! The packets are the rows' `raw` bytes (S-Bus: the telegram the row's decoder re-read,
+//! [`Unframed`]), so the export holds exactly the frames the table shows (filters apply); rows
+//! without bytes (notes, gaps) are not packets. A frame the table marks as an error carries a
+//! packet comment (`opt_comment`) with busnoop's verdict.
 //!
 //! [`Exporting`] wraps the driver's [`Sink`]: every row goes on to the table unchanged.
 
@@ -20,20 +25,101 @@ use std::path::{Path, PathBuf};
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
-use crate::pcap::{linktype, write_ng};
-use crate::row::{Class, OutputError, Row, RowOut, RowResult};
+use crate::pcap::{linktype, write, write_ng};
+use crate::row::{Class, OutputError, Row, RowOut, RowResult, Unframed};
+use crate::sbus::telegram::{self, AT_REQUEST};
 use crate::sink::Sink;
 use crate::time::Anchor;
 
 /// LINKTYPE_USER1: SAB frames.
 pub const USER1: u32 = 148;
 
-/// Protocols the export knows, by command: (link type, dissector script).
+/// Protocols the export knows, by command: (link type, dissector).
 pub fn link_for(command: &str) -> Option<(u32, &'static str)> {
     match command {
         "sport" => Some((linktype::USER0, "busnoop-sport.lua")),
         "sab2" => Some((USER1, "busnoop-sab.lua")),
+        "sbus" => Some((linktype::RAW, "sbus (Wireshark's own)")),
         _ => None,
+    }
+}
+
+/// Serial S-Bus telegrams as Ether-S-Bus datagrams (docs/wireshark.md, "Serial S-Bus as
+/// Ether-S-Bus"):
+///
+/// * addresses: station N is 10.0.0.N, UDP port 5050 (broadcast 255 is 10.0.0.255); the master
+///   is [`MASTER`] (10.0.1.254, outside 10.0.0.0/24 so that no station shares it), port 5050;
+///   a requests goes master → station, an answer station → master; an answer busnoop could not
+///   pair with a request (so its station is unknown) and bytes that are no telegram come from
+///   [`UNKNOWN`] (0.0.0.0);
+/// * the Ether-S-Bus header: length, version 0, protocol type 0, a sequence number that
+///   increases with every request (from [`FIRST_SEQ`]; a retry keeps its request's number, as
+///   an Ether-S-Bus client does, so Wireshark marks it) and is repeated in the answers;
+/// * the telegram as the decoder re-read it (DLE pairs undone, no secure header, no break) and
+///   a CRC-16 over the datagram, computed afresh; for a telegram whose serial CRC failed, the
+///   received CRC bytes instead, so that Wireshark shows the checksum as bad (inverted in the
+///   rare case that they happen to fit the datagram);
+/// * bytes that are no telegram (garbage, a cut telegram, an unknown attribute): a datagram of
+///   those bytes as they were on the wire, from [`UNKNOWN`], with busnoop's verdict as comment.
+#[derive(Clone, Debug, Default)]
+pub struct SbusWrap {
+    /// The sequence number of the last request, when there was one.
+    seq: Option<u16>,
+    payload: Vec<u8>,
+}
+
+/// The master's address in the S-Bus export.
+pub const MASTER: [u8; 4] = [10, 0, 1, 254];
+/// The address of unknown senders in the S-Bus export.
+pub const UNKNOWN: [u8; 4] = [0, 0, 0, 0];
+/// The Ether-S-Bus UDP port.
+pub const SBUS_PORT: u16 = 5050;
+/// The first sequence number: Wireshark's PANA heuristic takes Ether-S-Bus datagrams with
+/// sequence numbers 1-4 for PANA, so the numbers stay clear of them.
+pub const FIRST_SEQ: u16 = 0x0100;
+
+/// The address of station `n` in the S-Bus export.
+pub fn station_address(n: u8) -> [u8; 4] {
+    [10, 0, 0, n]
+}
+
+impl SbusWrap {
+    /// The IPv4/UDP packet of `row` into `out`.
+    fn packet(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>, out: &mut Vec<u8>) {
+        let Some((&at, tele)) = unframed.and_then(|u| u.bytes.split_first()) else {
+            // Bytes that are no telegram: as they were.
+            write::udp4_packet(out, (UNKNOWN, SBUS_PORT), (MASTER, SBUS_PORT), row.raw);
+            return;
+        };
+        let seq = if at == AT_REQUEST {
+            let seq = match self.seq {
+                Some(s) if row.kind == "Retry" => s,
+                Some(s) if s < u16::MAX => s + 1,
+                _ => FIRST_SEQ,
+            };
+            self.seq = Some(seq);
+            seq
+        } else {
+            self.seq.unwrap_or(FIRST_SEQ)
+        };
+        self.payload.clear();
+        telegram::encode_ether(&mut self.payload, seq, at, tele);
+        if let Some(got) = unframed.and_then(|u| u.bad_check) {
+            let n = self.payload.len();
+            let fresh = u16::from_be_bytes([self.payload[n - 2], self.payload[n - 1]]);
+            let crc = if got == fresh { got ^ 0x00FF } else { got };
+            self.payload[n - 2..].copy_from_slice(&crc.to_be_bytes());
+        }
+        let station = |id: Option<u32>| match id.and_then(|i| u8::try_from(i).ok()) {
+            Some(n) => station_address(n),
+            None => UNKNOWN,
+        };
+        let (src, dst) = if at == AT_REQUEST {
+            (MASTER, station(tele.first().map(|&s| s as u32)))
+        } else {
+            (station(row.id), MASTER)
+        };
+        write::udp4_packet(out, (src, SBUS_PORT), (dst, SBUS_PORT), &self.payload);
     }
 }
 
@@ -43,6 +129,10 @@ pub struct Exporter {
     out: BufWriter<File>,
     link_type: u32,
     interface: (String, String),
+    /// Serial S-Bus: re-wrapped as Ether-S-Bus (otherwise the rows' bytes as they are).
+    sbus: Option<SbusWrap>,
+    /// The packet being written.
+    packet: Vec<u8>,
     anchor: Option<DateTime<Utc>>,
     started: bool,
     /// The last packet's time and bytes: rows of one frame (several values) are one packet.
@@ -69,6 +159,8 @@ impl Exporter {
             out: BufWriter::with_capacity(64 * 1024, file),
             link_type,
             interface: (name.to_string(), description.to_string()),
+            sbus: (command == "sbus").then(SbusWrap::default),
+            packet: Vec::new(),
             anchor: None,
             started: false,
             last: None,
@@ -105,8 +197,9 @@ impl Exporter {
         self.out.write_all(&head)
     }
 
-    /// The packet for `row`, when it carries bytes of a new frame.
-    fn frame(&mut self, row: &Row<'_>) -> io::Result<()> {
+    /// The packet for `row`, when it carries bytes of a new frame; `unframed`: its content
+    /// re-read, when the decoder gives it.
+    fn frame(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>) -> io::Result<()> {
         if row.raw.is_empty() {
             return Ok(());
         }
@@ -129,8 +222,16 @@ impl Exporter {
             }
             c
         });
+        let data = match &mut self.sbus {
+            Some(wrap) => {
+                self.packet.clear();
+                wrap.packet(row, unframed, &mut self.packet);
+                &self.packet[..]
+            }
+            None => row.raw,
+        };
         self.scratch.clear();
-        write_ng::packet(&mut self.scratch, 0, ts, row.raw, comment.as_deref());
+        write_ng::packet(&mut self.scratch, 0, ts, data, comment.as_deref());
         self.out.write_all(&self.scratch)?;
         self.packets += 1;
         let last = self.last.get_or_insert_with(|| (None, Vec::new()));
@@ -163,8 +264,8 @@ pub fn check(path: &Path, command: &str) -> Result<(u32, &'static str), Failure>
     }
     link_for(command).ok_or_else(|| {
         Failure::Usage(format!(
-            "--export is available for sport and sab2; for {command}, record the wire with \
-             --record FILE.pcapng (Ether-S-Bus captures open in Wireshark as they are)"
+            "--export is available for sport, sab2 and sbus; for {command}, record the wire \
+             with --record FILE.pcapng"
         ))
     })
 }
@@ -177,7 +278,14 @@ pub struct Exporting<'a, S: Sink + ?Sized> {
 
 impl<S: Sink + ?Sized> RowOut for Exporting<'_, S> {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
-        if let Err(e) = self.export.frame(row) {
+        if let Err(e) = self.export.frame(row, None) {
+            return Err(self.export.error(e));
+        }
+        self.inner.row(row)
+    }
+
+    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
+        if let Err(e) = self.export.frame(row, Some(frame)) {
             return Err(self.export.error(e));
         }
         self.inner.row(row)
@@ -221,14 +329,14 @@ mod tests {
         let raw = [0x7E, 0x22, 0x10, 0x10, 0x02, 0, 0, 0, 0, 0xDD];
         let mut row = Row::empty(Some(96_000));
         row.raw = &raw;
-        ex.frame(&row).unwrap();
-        ex.frame(&row).unwrap(); // a second value of the same frame
-        ex.frame(&Row::empty(Some(97_000))).unwrap(); // a note: no bytes
+        ex.frame(&row, None).unwrap();
+        ex.frame(&row, None).unwrap(); // a second value of the same frame
+        ex.frame(&Row::empty(Some(97_000)), None).unwrap(); // a note: no bytes
         let mut bad = Row::empty(Some(98_000));
         bad.raw = &raw[..4];
         bad.class = Class::Error;
         bad.kind = "BadCRC";
-        ex.frame(&bad).unwrap();
+        ex.frame(&bad, None).unwrap();
         ex.flush().unwrap();
         assert_eq!(ex.packets(), 2);
         let bytes = std::fs::read(&path).unwrap();
@@ -256,8 +364,12 @@ mod tests {
             check(Path::new("a.pcap"), "sport"),
             Err(Failure::Usage(_))
         ));
+        assert_eq!(
+            check(Path::new("a.pcapng"), "sbus").unwrap().0,
+            linktype::RAW
+        );
         assert!(matches!(
-            check(Path::new("a.pcapng"), "sbus"),
+            check(Path::new("a.pcapng"), "detect"),
             Err(Failure::Usage(_))
         ));
     }

@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::row::{OutputError, Row, RowOut, RowResult};
+use crate::row::{OutputError, Row, RowOut, RowResult, Unframed};
 use crate::sink::Sink;
 
 /// Longer silences of the capture are replayed as one second.
@@ -106,6 +106,19 @@ pub struct Paced<'a, S: Sink + ?Sized> {
 
 impl<S: Sink + ?Sized> RowOut for Paced<'_, S> {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
+        self.wait(row)?;
+        self.inner.row(row)
+    }
+
+    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
+        self.wait(row)?;
+        self.inner.row_unframed(row, frame)
+    }
+}
+
+impl<S: Sink + ?Sized> Paced<'_, S> {
+    /// Waits until `row` is due.
+    fn wait(&mut self, row: &Row<'_>) -> RowResult {
         if let Some(t) = row.micros {
             while let Some(wait) = self.pacer.due_in(t, Instant::now()) {
                 if crate::signal::Stop::received().is_some() {
@@ -117,7 +130,7 @@ impl<S: Sink + ?Sized> RowOut for Paced<'_, S> {
                 std::thread::sleep(wait.min(Duration::from_millis(50)));
             }
         }
-        self.inner.row(row)
+        Ok(())
     }
 }
 

@@ -236,14 +236,20 @@ fn tshark_decodes_the_sport_export_like_the_table() {
 #[test]
 fn export_names_and_protocols_are_checked() {
     let dir = tempfile::tempdir().unwrap();
-    for (protocol, name, says) in [
-        ("sport", "e.pcap", "FILE.pcapng"),
-        ("sbus", "e.pcapng", "--export is available for"),
+    for (protocol, input, name, says) in [
+        ("sport", "sport-sample.bin", "e.pcap", "FILE.pcapng"),
+        // An Ether-S-Bus capture is Wireshark's already.
+        (
+            "sbus",
+            "sbus_seeds_ether.pcap",
+            "e.pcapng",
+            "is a network capture",
+        ),
     ] {
         let target = dir.path().join(name);
         let out = busnoop()
             .arg(protocol)
-            .arg(fixture("sport-sample.bin"))
+            .arg(fixture(input))
             .arg("--export")
             .arg(&target)
             .output()
