@@ -49,23 +49,37 @@ pub fn link_for(command: &str) -> Option<(u32, &'static str)> {
 ///
 /// * addresses: station N is 10.0.0.N, UDP port 5050 (broadcast 255 is 10.0.0.255); the master
 ///   is [`MASTER`] (10.0.1.254, outside 10.0.0.0/24 so that no station shares it), port 5050;
-///   a requests goes master → station, an answer station → master; an answer busnoop could not
+///   a request goes master → station, an answer station → master; an answer busnoop could not
 ///   pair with a request (so its station is unknown) and bytes that are no telegram come from
 ///   [`UNKNOWN`] (0.0.0.0);
 /// * the Ether-S-Bus header: length, version 0, protocol type 0, a sequence number that
-///   increases with every request (from [`FIRST_SEQ`]; a retry keeps its request's number, as
-///   an Ether-S-Bus client does, so Wireshark marks it) and is repeated in the answers;
+///   increases with every request to the station (from [`FIRST_SEQ`], one count per station,
+///   as each station is a conversation of its own; a retry keeps its request's number, as an
+///   Ether-S-Bus client does, so Wireshark marks it) and is repeated in the answers;
 /// * the telegram as the decoder re-read it (DLE pairs undone, no secure header, no break) and
 ///   a CRC-16 over the datagram, computed afresh; for a telegram whose serial CRC failed, the
 ///   received CRC bytes instead, so that Wireshark shows the checksum as bad (inverted in the
 ///   rare case that they happen to fit the datagram);
 /// * bytes that are no telegram (garbage, a cut telegram, an unknown attribute): a datagram of
 ///   those bytes as they were on the wire, from [`UNKNOWN`], with busnoop's verdict as comment.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct SbusWrap {
-    /// The sequence number of the last request, when there was one.
-    seq: Option<u16>,
+    /// The sequence number of each station's last request (its conversation), when there was
+    /// one.
+    seqs: Box<[Option<u16>; 256]>,
+    /// The last request's.
+    last: Option<u16>,
     payload: Vec<u8>,
+}
+
+impl Default for SbusWrap {
+    fn default() -> Self {
+        SbusWrap {
+            seqs: Box::new([None; 256]),
+            last: None,
+            payload: Vec::new(),
+        }
+    }
 }
 
 /// The master's address in the S-Bus export.
@@ -92,15 +106,20 @@ impl SbusWrap {
             return;
         };
         let seq = if at == AT_REQUEST {
-            let seq = match self.seq {
+            let station = tele.first().copied().unwrap_or(0) as usize;
+            let seq = match self.seqs[station] {
                 Some(s) if row.kind == "Retry" => s,
                 Some(s) if s < u16::MAX => s + 1,
                 _ => FIRST_SEQ,
             };
-            self.seq = Some(seq);
+            self.seqs[station] = Some(seq);
+            self.last = Some(seq);
             seq
         } else {
-            self.seq.unwrap_or(FIRST_SEQ)
+            let of_station = row
+                .id
+                .and_then(|i| self.seqs.get(i as usize).copied().flatten());
+            of_station.or(self.last).unwrap_or(FIRST_SEQ)
         };
         self.payload.clear();
         telegram::encode_ether(&mut self.payload, seq, at, tele);
