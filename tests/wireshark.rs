@@ -433,8 +433,12 @@ fn extcap_captures_a_serial_bus_into_wiresharks_fifo() {
         nix::sys::signal::Signal::SIGTERM,
     )
     .unwrap();
-    wait_exit(&mut child);
+    let status = wait_exit(&mut child);
     drop(b);
+    // SIGTERM is how every capture ends: exit code 0, and nothing on stderr, which Wireshark
+    // would show as an error.
+    let err = common::pty::stderr_of(&mut child);
+    assert_eq!((status.code(), err.as_str()), (Some(0), ""));
     assert!(live.iter().all(|p| p.0 == busnoop::pcap::linktype::USER0));
     assert_eq!(live[..], want[..20]);
 }

@@ -629,6 +629,12 @@ fn list_ports() -> Result<(), Failure> {
     }
 }
 
+/// Set for a capture Wireshark runs (`busnoop extcap --capture`): Wireshark shows whatever an
+/// extcap writes on stderr as an error when the capture stops, so the end-of-run summary
+/// ([`report`]) is left out. Failures are still reported.
+pub(crate) static QUIET_REPORT: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
 /// The end-of-run summary on stderr: the full statistics with --stats, otherwise one line when
 /// something went wrong.
 fn report(
@@ -639,7 +645,9 @@ fn report(
     hidden: u64,
     result: &Result<(), Failure>,
 ) {
-    if matches!(result, Err(Failure::BrokenPipe)) {
+    if matches!(result, Err(Failure::BrokenPipe))
+        || QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
+    {
         return;
     }
     if stats == Some(StatsFormat::Text) {
