@@ -376,6 +376,62 @@ mod tests {
     }
 
     #[test]
+    fn sbus_telegrams_become_ether_sbus_datagrams() {
+        let mut w = SbusWrap::default();
+        let mut row = Row::empty(Some(0));
+        let mut out = Vec::new();
+        let udp = |out: &[u8]| {
+            let Extract::Udp(u) = extract(linktype::RAW, out) else {
+                panic!("{out:?}")
+            };
+            (u.src.to_string(), u.dst.to_string(), u.payload.to_vec())
+        };
+        use crate::sbus::ether::{Extract, extract, parse};
+        // A request to station 7, its response, an unpaired response.
+        let req = [0u8, 7, 6, 0, 0, 1];
+        row.kind = "Request";
+        let frame = |bytes, bad_check| Unframed { bytes, bad_check };
+        w.packet(&row, Some(&frame(&req, None)), &mut out);
+        let (src, dst, payload) = udp(&out);
+        assert_eq!(
+            (src.as_str(), dst.as_str()),
+            ("10.0.1.254:5050", "10.0.0.7:5050")
+        );
+        let t = parse(&payload).unwrap();
+        assert!(t.crc_ok());
+        assert_eq!((t.seq, t.at, t.telegram), (FIRST_SEQ, 0, &req[1..]));
+        out.clear();
+        row.kind = "Response";
+        row.id = Some(7);
+        w.packet(&row, Some(&frame(&[1, 0, 0, 0, 9], None)), &mut out);
+        let (src, _, payload) = udp(&out);
+        assert_eq!(src, "10.0.0.7:5050");
+        assert_eq!(parse(&payload).unwrap().seq, FIRST_SEQ);
+        // A bad CRC stays bad, even when the bytes received happen to fit the datagram.
+        let fresh = parse(&payload).unwrap().crc_want;
+        for got in [0x1234, fresh] {
+            out.clear();
+            row.id = None;
+            w.packet(&row, Some(&frame(&[1, 0, 0, 0, 9], Some(got))), &mut out);
+            let (src, _, payload) = udp(&out);
+            assert_eq!(src, "0.0.0.0:5050");
+            assert!(!parse(&payload).unwrap().crc_ok());
+        }
+        // The next request to station 7 counts on; a retry keeps its number.
+        for kind in ["Request", "Retry"] {
+            out.clear();
+            row.kind = kind;
+            w.packet(&row, Some(&frame(&req, None)), &mut out);
+            assert_eq!(parse(&udp(&out).2).unwrap().seq, FIRST_SEQ + 1);
+        }
+        // Bytes that are no telegram: as they were.
+        out.clear();
+        row.raw = &[0x11, 0x22];
+        w.packet(&row, None, &mut out);
+        assert_eq!(udp(&out).2, [0x11, 0x22]);
+    }
+
+    #[test]
     fn names_and_protocols_checked() {
         assert!(check(Path::new("a.pcapng"), "sport").is_ok());
         assert_eq!(check(Path::new("a.PCAPNG"), "sab2").unwrap().0, USER1);

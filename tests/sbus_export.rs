@@ -289,11 +289,14 @@ fn export_matches(mode: Mode, name: &str, args: &[&str]) -> Option<[usize; 5]> {
     }
 
     let mut tshark = tshark()?;
-    let mut cmd = tshark
-        .args(["-2", "-r"])
-        .arg(&export)
-        .args(["--disable-heuristic", "pana_udp"])
-        .args(["-T", "fields", "-E", "occurrence=a", "-E", "aggregator=,"]);
+    let mut cmd = tshark.args(["-2", "-r"]).arg(&export).args([
+        "-T",
+        "fields",
+        "-E",
+        "occurrence=a",
+        "-E",
+        "aggregator=,",
+    ]);
     for f in FIELDS {
         cmd = cmd.args(["-e", f]);
     }
