@@ -491,3 +491,42 @@ fn export_of_the_fixture_vectors() {
     busnoop::sbus::telegram::encode_ether(&mut want, 0x100, 0, &[1, 6, 3, 0, 0]);
     assert_eq!(&first[28..], &want[..]);
 }
+
+#[test]
+fn filters_and_pacing_hand_the_telegrams_on() {
+    // `--id` (the filter) and `--speed` (the pacer) sit between the decoder and the export:
+    // the telegrams still arrive re-read, as Ether-S-Bus datagrams of the kept station only.
+    use busnoop::sbus::ether::{Extract, extract, parse};
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("data.bin");
+    std::fs::write(&input, wire(Mode::Data, &session(7, 40))).unwrap();
+    let export = dir.path().join("e.pcapng");
+    let tsv = ok(&busnoop()
+        .arg("sbus")
+        .arg(&input)
+        .args([
+            "--id", "4", "--speed", "1000", "-f", "tsv", "--raw", "--export",
+        ])
+        .arg(&export)
+        .output()
+        .unwrap());
+    let rows = table(&tsv);
+    let frames = frame_rows(&rows);
+    assert!(
+        frames.len() > 6 && frames.iter().all(|r| r["ID"] == "4"),
+        "{tsv}"
+    );
+    let mut s = busnoop::pcap::PcapStream::default();
+    let mut n = 0;
+    s.push(&std::fs::read(&export).unwrap(), &mut |p| {
+        let Extract::Udp(u) = extract(p.link_type, p.data) else {
+            panic!("not UDP: {:?}", p.data)
+        };
+        let t = parse(u.payload).expect("an Ether-S-Bus datagram");
+        let station = if t.at == 0 { u.dst } else { u.src };
+        assert_eq!(station.ip().to_string(), "10.0.0.4");
+        n += 1;
+    })
+    .unwrap();
+    assert_eq!(n, frames.len());
+}
