@@ -7,9 +7,14 @@
 //! * modm SAB / SAB2: link type `USER1` (148), the frame's bytes as on the wire (either
 //!   framing), decoded by `contrib/wireshark/busnoop-sab.lua`.
 //!
-//! The packets are the rows' `raw` bytes, so the export holds exactly the frames the table
-//! shows (filters apply); rows without bytes (notes, gaps) are not packets. A frame the table
-//! marks as an error carries a packet comment (`opt_comment`) with busnoop's verdict.
+//! * Serial Saia S-Bus: link type `RAW` (101, raw IP), each telegram re-wrapped as the
+//!   Ether-S-Bus datagram a PCD would have sent over UDP (see [`SbusWrap`]), decoded by
+//!   Wireshark's own `sbus` dissector.
+//!
+//! The packets are the rows' `raw` bytes (S-Bus: the telegram the row's decoder re-read,
+//! [`Unframed`]), so the export holds exactly the frames the table shows (filters apply); rows
+//! without bytes (notes, gaps) are not packets. A frame the table marks as an error carries a
+//! packet comment (`opt_comment`) with busnoop's verdict.
 //!
 //! [`Exporting`] wraps the driver's [`Sink`]: every row goes on to the table unchanged.
 
@@ -20,20 +25,120 @@ use std::path::{Path, PathBuf};
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
-use crate::pcap::{linktype, write_ng};
-use crate::row::{Class, OutputError, Row, RowOut, RowResult};
-use crate::sink::Sink;
+use crate::pcap::{linktype, write, write_ng};
+use crate::row::{Class, OutputError, Row, RowResult, Unframed};
+use crate::sbus::telegram::{self, AT_REQUEST};
+use crate::sink::{Sink, Tap, Tapped};
 use crate::time::Anchor;
 
 /// LINKTYPE_USER1: SAB frames.
 pub const USER1: u32 = 148;
 
-/// Protocols the export knows, by command: (link type, dissector script).
+/// Protocols the export knows, by command: (link type, dissector).
 pub fn link_for(command: &str) -> Option<(u32, &'static str)> {
     match command {
         "sport" => Some((linktype::USER0, "busnoop-sport.lua")),
         "sab2" => Some((USER1, "busnoop-sab.lua")),
+        "sbus" => Some((linktype::RAW, "sbus (Wireshark's own)")),
         _ => None,
+    }
+}
+
+/// Serial S-Bus telegrams as Ether-S-Bus datagrams (docs/wireshark.md, "Serial S-Bus as
+/// Ether-S-Bus"):
+///
+/// * addresses: station N is 10.0.0.N, UDP port 5050 (broadcast 255 is 10.0.0.255); the master
+///   is [`MASTER`] (10.0.1.254, outside 10.0.0.0/24 so that no station shares it), port 5050;
+///   a request goes master → station, an answer station → master; an answer busnoop could not
+///   pair with a request (so its station is unknown) and bytes that are no telegram come from
+///   [`UNKNOWN`] (0.0.0.0);
+/// * the Ether-S-Bus header: length, version 0, protocol type 0, a sequence number that
+///   increases with every request to the station (from [`FIRST_SEQ`], one count per station,
+///   as each station is a conversation of its own; a retry keeps its request's number, as an
+///   Ether-S-Bus client does, so Wireshark marks it) and is repeated in the answers;
+/// * the telegram as the decoder re-read it (DLE pairs undone, no secure header, no break) and
+///   a CRC-16 over the datagram, computed afresh; for a telegram whose serial CRC failed, the
+///   received CRC bytes instead, so that Wireshark shows the checksum as bad (inverted in the
+///   rare case that they happen to fit the datagram);
+/// * bytes that are no telegram (garbage, a cut telegram, an unknown attribute): a datagram of
+///   those bytes as they were on the wire, from [`UNKNOWN`], with busnoop's verdict as comment.
+#[derive(Clone, Debug)]
+pub struct SbusWrap {
+    /// The sequence number of each station's last request (its conversation), when there was
+    /// one.
+    seqs: Box<[Option<u16>; 256]>,
+    /// The last request's.
+    last: Option<u16>,
+    payload: Vec<u8>,
+}
+
+impl Default for SbusWrap {
+    fn default() -> Self {
+        SbusWrap {
+            seqs: Box::new([None; 256]),
+            last: None,
+            payload: Vec::new(),
+        }
+    }
+}
+
+/// The master's address in the S-Bus export.
+pub const MASTER: [u8; 4] = [10, 0, 1, 254];
+/// The address of unknown senders in the S-Bus export.
+pub const UNKNOWN: [u8; 4] = [0, 0, 0, 0];
+/// The Ether-S-Bus UDP port.
+pub const SBUS_PORT: u16 = 5050;
+/// The first sequence number: Wireshark's PANA heuristic takes Ether-S-Bus datagrams with
+/// sequence numbers 1-4 for PANA, so the numbers stay clear of them.
+pub const FIRST_SEQ: u16 = 0x0100;
+
+/// The address of station `n` in the S-Bus export.
+pub fn station_address(n: u8) -> [u8; 4] {
+    [10, 0, 0, n]
+}
+
+impl SbusWrap {
+    /// The IPv4/UDP packet of `row` into `out`.
+    fn packet(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>, out: &mut Vec<u8>) {
+        let Some((&at, tele)) = unframed.and_then(|u| u.bytes.split_first()) else {
+            // Bytes that are no telegram: as they were.
+            write::udp4_packet(out, (UNKNOWN, SBUS_PORT), (MASTER, SBUS_PORT), row.raw);
+            return;
+        };
+        let seq = if at == AT_REQUEST {
+            let station = tele.first().copied().unwrap_or(0) as usize;
+            let seq = match self.seqs[station] {
+                Some(s) if row.kind == "Retry" => s,
+                Some(s) if s < u16::MAX => s + 1,
+                _ => FIRST_SEQ,
+            };
+            self.seqs[station] = Some(seq);
+            self.last = Some(seq);
+            seq
+        } else {
+            let of_station = row
+                .id
+                .and_then(|i| self.seqs.get(i as usize).copied().flatten());
+            of_station.or(self.last).unwrap_or(FIRST_SEQ)
+        };
+        self.payload.clear();
+        telegram::encode_ether(&mut self.payload, seq, at, tele);
+        if let Some(got) = unframed.and_then(|u| u.bad_check) {
+            let n = self.payload.len();
+            let fresh = u16::from_be_bytes([self.payload[n - 2], self.payload[n - 1]]);
+            let crc = if got == fresh { got ^ 0x00FF } else { got };
+            self.payload[n - 2..].copy_from_slice(&crc.to_be_bytes());
+        }
+        let station = |id: Option<u32>| match id.and_then(|i| u8::try_from(i).ok()) {
+            Some(n) => station_address(n),
+            None => UNKNOWN,
+        };
+        let (src, dst) = if at == AT_REQUEST {
+            (MASTER, station(tele.first().map(|&s| s as u32)))
+        } else {
+            (station(row.id), MASTER)
+        };
+        write::udp4_packet(out, (src, SBUS_PORT), (dst, SBUS_PORT), &self.payload);
     }
 }
 
@@ -43,6 +148,10 @@ pub struct Exporter {
     out: BufWriter<File>,
     link_type: u32,
     interface: (String, String),
+    /// Serial S-Bus: re-wrapped as Ether-S-Bus (otherwise the rows' bytes as they are).
+    sbus: Option<SbusWrap>,
+    /// The packet being written.
+    packet: Vec<u8>,
     anchor: Option<DateTime<Utc>>,
     started: bool,
     /// The last packet's time and bytes: rows of one frame (several values) are one packet.
@@ -69,6 +178,8 @@ impl Exporter {
             out: BufWriter::with_capacity(64 * 1024, file),
             link_type,
             interface: (name.to_string(), description.to_string()),
+            sbus: (command == "sbus").then(SbusWrap::default),
+            packet: Vec::new(),
             anchor: None,
             started: false,
             last: None,
@@ -106,8 +217,9 @@ impl Exporter {
         self.out.write_all(&head)
     }
 
-    /// The packet for `row`, when it carries bytes of a new frame.
-    fn frame(&mut self, row: &Row<'_>) -> io::Result<()> {
+    /// The packet for `row`, when it carries bytes of a new frame; `unframed`: its content
+    /// re-read, when the decoder gives it.
+    fn frame(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>) -> io::Result<()> {
         if row.raw.is_empty() {
             return Ok(());
         }
@@ -130,8 +242,16 @@ impl Exporter {
             }
             c
         });
+        let data = match &mut self.sbus {
+            Some(wrap) => {
+                self.packet.clear();
+                wrap.packet(row, unframed, &mut self.packet);
+                &self.packet[..]
+            }
+            None => row.raw,
+        };
         self.scratch.clear();
-        write_ng::packet(&mut self.scratch, 0, ts, row.raw, comment.as_deref());
+        write_ng::packet(&mut self.scratch, 0, ts, data, comment.as_deref());
         self.out.write_all(&self.scratch)?;
         self.packets += 1;
         let last = self.last.get_or_insert_with(|| (None, Vec::new()));
@@ -164,47 +284,31 @@ pub fn check(path: &Path, command: &str) -> Result<(u32, &'static str), Failure>
     }
     link_for(command).ok_or_else(|| {
         Failure::Usage(format!(
-            "--export is available for sport and sab2; for {command}, record the wire with \
-             --record FILE.pcapng (Ether-S-Bus captures open in Wireshark as they are)"
+            "--export is available for sport, sab2 and sbus; for {command}, record the wire \
+             with --record FILE.pcapng"
         ))
     })
 }
 
 /// A [`Sink`] that also exports every row's frame.
-pub struct Exporting<'a, S: Sink + ?Sized> {
-    pub inner: &'a mut S,
-    pub export: &'a mut Exporter,
-}
+pub type Exporting<'a, S> = Tapped<'a, S, &'a mut Exporter>;
 
-impl<S: Sink + ?Sized> RowOut for Exporting<'_, S> {
-    fn row(&mut self, row: &Row<'_>) -> RowResult {
-        if let Err(e) = self.export.frame(row) {
-            return Err(self.export.error(e));
-        }
-        self.inner.row(row)
+impl Tap for &mut Exporter {
+    fn before_row<S: Sink + ?Sized>(
+        &mut self,
+        row: &Row<'_>,
+        frame: Option<&Unframed<'_>>,
+        _inner: &mut S,
+    ) -> RowResult {
+        self.frame(row, frame).map_err(|e| self.error(e))
     }
-}
-
-impl<S: Sink + ?Sized> Sink for Exporting<'_, S> {
     fn flush(&mut self) -> Result<(), OutputError> {
-        self.export.flush()?;
-        self.inner.flush()
-    }
-    fn close(&mut self) -> Result<(), OutputError> {
-        self.export.flush()?;
-        self.inner.close()
+        Exporter::flush(self)
     }
     fn set_anchor(&mut self, anchor: Option<Anchor>) {
-        if self.export.anchor.is_none() {
-            self.export.anchor = anchor.map(Anchor::as_utc);
+        if self.anchor.is_none() {
+            self.anchor = anchor.map(Anchor::as_utc);
         }
-        self.inner.set_anchor(anchor)
-    }
-    fn quit(&self) -> bool {
-        self.inner.quit()
-    }
-    fn skip(&mut self) {
-        self.inner.skip()
     }
 }
 
@@ -222,14 +326,14 @@ mod tests {
         let raw = [0x7E, 0x22, 0x10, 0x10, 0x02, 0, 0, 0, 0, 0xDD];
         let mut row = Row::empty(Some(96_000));
         row.raw = &raw;
-        ex.frame(&row).unwrap();
-        ex.frame(&row).unwrap(); // a second value of the same frame
-        ex.frame(&Row::empty(Some(97_000))).unwrap(); // a note: no bytes
+        ex.frame(&row, None).unwrap();
+        ex.frame(&row, None).unwrap(); // a second value of the same frame
+        ex.frame(&Row::empty(Some(97_000)), None).unwrap(); // a note: no bytes
         let mut bad = Row::empty(Some(98_000));
         bad.raw = &raw[..4];
         bad.class = Class::Error;
         bad.kind = "BadCRC";
-        ex.frame(&bad).unwrap();
+        ex.frame(&bad, None).unwrap();
         ex.flush().unwrap();
         assert_eq!(ex.packets(), 2);
         let bytes = std::fs::read(&path).unwrap();
@@ -250,6 +354,62 @@ mod tests {
     }
 
     #[test]
+    fn sbus_telegrams_become_ether_sbus_datagrams() {
+        let mut w = SbusWrap::default();
+        let mut row = Row::empty(Some(0));
+        let mut out = Vec::new();
+        let udp = |out: &[u8]| {
+            let Extract::Udp(u) = extract(linktype::RAW, out) else {
+                panic!("{out:?}")
+            };
+            (u.src.to_string(), u.dst.to_string(), u.payload.to_vec())
+        };
+        use crate::sbus::ether::{Extract, extract, parse};
+        // A request to station 7, its response, an unpaired response.
+        let req = [0u8, 7, 6, 0, 0, 1];
+        row.kind = "Request";
+        let frame = |bytes, bad_check| Unframed { bytes, bad_check };
+        w.packet(&row, Some(&frame(&req, None)), &mut out);
+        let (src, dst, payload) = udp(&out);
+        assert_eq!(
+            (src.as_str(), dst.as_str()),
+            ("10.0.1.254:5050", "10.0.0.7:5050")
+        );
+        let t = parse(&payload).unwrap();
+        assert!(t.crc_ok());
+        assert_eq!((t.seq, t.at, t.telegram), (FIRST_SEQ, 0, &req[1..]));
+        out.clear();
+        row.kind = "Response";
+        row.id = Some(7);
+        w.packet(&row, Some(&frame(&[1, 0, 0, 0, 9], None)), &mut out);
+        let (src, _, payload) = udp(&out);
+        assert_eq!(src, "10.0.0.7:5050");
+        assert_eq!(parse(&payload).unwrap().seq, FIRST_SEQ);
+        // A bad CRC stays bad, even when the bytes received happen to fit the datagram.
+        let fresh = parse(&payload).unwrap().crc_want;
+        for got in [0x1234, fresh] {
+            out.clear();
+            row.id = None;
+            w.packet(&row, Some(&frame(&[1, 0, 0, 0, 9], Some(got))), &mut out);
+            let (src, _, payload) = udp(&out);
+            assert_eq!(src, "0.0.0.0:5050");
+            assert!(!parse(&payload).unwrap().crc_ok());
+        }
+        // The next request to station 7 counts on; a retry keeps its number.
+        for kind in ["Request", "Retry"] {
+            out.clear();
+            row.kind = kind;
+            w.packet(&row, Some(&frame(&req, None)), &mut out);
+            assert_eq!(parse(&udp(&out).2).unwrap().seq, FIRST_SEQ + 1);
+        }
+        // Bytes that are no telegram: as they were.
+        out.clear();
+        row.raw = &[0x11, 0x22];
+        w.packet(&row, None, &mut out);
+        assert_eq!(udp(&out).2, [0x11, 0x22]);
+    }
+
+    #[test]
     fn names_and_protocols_checked() {
         assert!(check(Path::new("a.pcapng"), "sport").is_ok());
         assert_eq!(check(Path::new("a.PCAPNG"), "sab2").unwrap().0, USER1);
@@ -257,8 +417,12 @@ mod tests {
             check(Path::new("a.pcap"), "sport"),
             Err(Failure::Usage(_))
         ));
+        assert_eq!(
+            check(Path::new("a.pcapng"), "sbus").unwrap().0,
+            linktype::RAW
+        );
         assert!(matches!(
-            check(Path::new("a.pcapng"), "sbus"),
+            check(Path::new("a.pcapng"), "detect"),
             Err(Failure::Usage(_))
         ));
     }

@@ -14,7 +14,7 @@
 
 use std::ops::RangeInclusive;
 
-use crate::row::{Class, Row, RowOut, RowResult};
+use crate::row::{Class, Row, RowOut, RowResult, Unframed};
 use crate::sink::Sink;
 
 /// What a protocol's table can show, for checking filters and names before the run.
@@ -349,9 +349,14 @@ pub struct Select<'a> {
     pub selection: &'a Selection,
 }
 
-impl RowOut for Select<'_> {
+impl Select<'_> {
+    /// Names the row's device and hands the row on to `write` when the filter keeps it.
     #[inline]
-    fn row(&mut self, row: &Row<'_>) -> RowResult {
+    fn select(
+        &mut self,
+        row: &Row<'_>,
+        write: impl FnOnce(&mut dyn Sink, &Row<'_>) -> RowResult,
+    ) -> RowResult {
         let sel = self.selection;
         let named;
         let row = match row.id.and_then(|id| sel.names.get(id)) {
@@ -365,11 +370,22 @@ impl RowOut for Select<'_> {
             None => row,
         };
         if sel.filter.keep(row) {
-            self.table.row(row)
+            write(self.table, row)
         } else {
             self.table.skip();
             Ok(())
         }
+    }
+}
+
+impl RowOut for Select<'_> {
+    #[inline]
+    fn row(&mut self, row: &Row<'_>) -> RowResult {
+        self.select(row, |t, row| t.row(row))
+    }
+
+    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
+        self.select(row, |t, row| t.row_unframed(row, frame))
     }
 }
 

@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::row::{Row, RowResult};
+use crate::row::{Row, RowResult, Unframed};
 use crate::sink::{Sink, Tap, Tapped};
 
 /// Longer silences of the capture are replayed as one second.
@@ -102,7 +102,12 @@ impl Pacer {
 pub type Paced<'a, S> = Tapped<'a, S, Pacer>;
 
 impl Tap for Pacer {
-    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult {
+    fn before_row<S: Sink + ?Sized>(
+        &mut self,
+        row: &Row<'_>,
+        _frame: Option<&Unframed<'_>>,
+        inner: &mut S,
+    ) -> RowResult {
         if let Some(t) = row.micros {
             while let Some(wait) = self.due_in(t, Instant::now()) {
                 if crate::signal::Stop::received().is_some() {

@@ -152,6 +152,27 @@ pub type RowResult = Result<(), OutputError>;
 /// hands the error back unchanged (`?`), the driver reports it.
 pub trait RowOut {
     fn row(&mut self, row: &Row<'_>) -> RowResult;
+
+    /// A row whose frame comes with its content re-read ([`Unframed`]), for a sink that
+    /// re-wraps frames (the serial S-Bus export). Everything else takes the row alone.
+    fn row_unframed(&mut self, row: &Row<'_>, _frame: &Unframed<'_>) -> RowResult {
+        self.row(row)
+    }
+}
+
+/// A frame's content without its framing, escaping and check, for a sink that re-wraps frames
+/// in another protocol (`--export` of serial S-Bus as Ether-S-Bus datagrams), where
+/// [`Row::raw`] (the bytes as on the wire) is not enough: in break mode nothing on the wire
+/// tells a request from a response. The decoder hands it on with the row
+/// ([`RowOut::row_unframed`]); filters and wrappers pass it on with the row they keep.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Unframed<'a> {
+    /// The frame in its protocol's own layout, unescaped (S-Bus: the attribute byte, 0x00
+    /// request, 0x01 response, 0x02 ACK/NAK, then `station command data`, the response data,
+    /// or the 2-byte ACK/NAK code).
+    pub bytes: &'a [u8],
+    /// The check as received when it failed; `None` when it passed or the frame has none.
+    pub bad_check: Option<u16>,
 }
 
 /// Collects rows as owned strings (tests, tools).
@@ -253,14 +274,29 @@ impl<'a> Latch<'a> {
     }
 }
 
+impl Latch<'_> {
+    fn keep(&mut self, written: RowResult) -> RowResult {
+        if let Err(e) = written {
+            self.error = Some(e);
+        }
+        Ok(())
+    }
+}
+
 impl RowOut for Latch<'_> {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         if self.error.is_some() {
             return Ok(());
         }
-        if let Err(e) = self.out.row(row) {
-            self.error = Some(e);
+        let written = self.out.row(row);
+        self.keep(written)
+    }
+
+    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
+        if self.error.is_some() {
+            return Ok(());
         }
-        Ok(())
+        let written = self.out.row_unframed(row, frame);
+        self.keep(written)
     }
 }

@@ -236,14 +236,20 @@ fn tshark_decodes_the_sport_export_like_the_table() {
 #[test]
 fn export_names_and_protocols_are_checked() {
     let dir = tempfile::tempdir().unwrap();
-    for (protocol, name, says) in [
-        ("sport", "e.pcap", "FILE.pcapng"),
-        ("sbus", "e.pcapng", "--export is available for"),
+    for (protocol, input, name, says) in [
+        ("sport", "sport-sample.bin", "e.pcap", "FILE.pcapng"),
+        // An Ether-S-Bus capture is Wireshark's already.
+        (
+            "sbus",
+            "sbus_seeds_ether.pcap",
+            "e.pcapng",
+            "is a network capture",
+        ),
     ] {
         let target = dir.path().join(name);
         let out = busnoop()
             .arg(protocol)
-            .arg(fixture("sport-sample.bin"))
+            .arg(fixture(input))
             .arg("--export")
             .arg(&target)
             .output()
@@ -427,8 +433,12 @@ fn extcap_captures_a_serial_bus_into_wiresharks_fifo() {
         nix::sys::signal::Signal::SIGTERM,
     )
     .unwrap();
-    wait_exit(&mut child);
+    let status = wait_exit(&mut child);
     drop(b);
+    // SIGTERM is how every capture ends: exit code 0, and nothing on stderr, which Wireshark
+    // would show as an error.
+    let err = common::pty::stderr_of(&mut child);
+    assert_eq!((status.code(), err.as_str()), (Some(0), ""));
     assert!(live.iter().all(|p| p.0 == busnoop::pcap::linktype::USER0));
     assert_eq!(live[..], want[..20]);
 }

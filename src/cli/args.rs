@@ -279,8 +279,10 @@ pub struct LiveArgs {
     pub record: Option<PathBuf>,
 
     /// Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with its
-    /// capture time, for Wireshark (sport: link type USER0, sab2: USER1; dissectors in
-    /// contrib/wireshark/, see docs/wireshark.md). Filters apply, as to the table.
+    /// capture time, for Wireshark (sport: link type USER0, sab2: USER1, dissectors in
+    /// contrib/wireshark/; serial sbus: each telegram as an Ether-S-Bus datagram for
+    /// Wireshark's own sbus dissector, station N = 10.0.0.N; see docs/wireshark.md). Filters
+    /// apply, as to the table.
     #[arg(long, value_name = "FILE.pcapng")]
     pub export: Option<PathBuf>,
 

@@ -1,5 +1,5 @@
-//! `busnoop extcap`: busnoop as a Wireshark extcap, so that Wireshark captures an S.Port or
-//! SAB bus live (docs/wireshark.md, "Live in Wireshark").
+//! `busnoop extcap`: busnoop as a Wireshark extcap, so that Wireshark captures an S.Port, SAB
+//! or serial S-Bus line live (docs/wireshark.md, "Live in Wireshark").
 //!
 //! Wireshark runs the extcap with `--extcap-interfaces`, `--extcap-dlts`, `--extcap-config` to
 //! list what it offers, and with `--capture --fifo PATH` to capture: busnoop then decodes the
@@ -15,7 +15,7 @@ use clap::Args;
 use crate::exit::Failure;
 
 /// The interfaces: (value, display, command, link type name, link type, default baud).
-const INTERFACES: [(&str, &str, &str, &str, u32, u32); 2] = [
+const INTERFACES: [(&str, &str, &str, &str, u32, u32); 3] = [
     (
         "busnoop-sport",
         "FrSky S.Port (busnoop)",
@@ -31,6 +31,14 @@ const INTERFACES: [(&str, &str, &str, &str, u32, u32); 2] = [
         "USER1",
         crate::export::USER1,
         115_200,
+    ),
+    (
+        "busnoop-sbus",
+        "Saia S-Bus, serial (busnoop)",
+        "sbus",
+        "RAW",
+        crate::pcap::linktype::RAW,
+        9_600,
     ),
 ];
 
@@ -90,7 +98,8 @@ fn interface(
     })?;
     INTERFACES.iter().find(|i| i.0 == name).ok_or_else(|| {
         Failure::Usage(format!(
-            "busnoop extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2"
+            "busnoop extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2, \
+             busnoop-sbus"
         ))
     })
 }
@@ -188,7 +197,14 @@ pub fn run(args: &ExtcapArgs) -> Result<(), Failure> {
         argv.extend(cmd);
         let cli = <crate::cli::Cli as clap::Parser>::try_parse_from(argv)
             .map_err(|e| Failure::Usage(format!("busnoop extcap: {e}")))?;
-        return crate::cli::run(cli);
+        // Wireshark shows an extcap's stderr as an error: no end-of-run summary.
+        crate::cli::QUIET_REPORT.store(true, std::sync::atomic::Ordering::Relaxed);
+        // Wireshark ends every capture with SIGTERM, or closes the FIFO: the normal end (exit
+        // code 0).
+        return match crate::cli::run(cli) {
+            Err(Failure::Signal(_) | Failure::BrokenPipe) => Ok(()),
+            other => other,
+        };
     }
     let ports: Vec<String> = crate::source::serial::list_ports()
         .into_iter()
@@ -222,6 +238,15 @@ mod tests {
             describe(&dlts, &[])
                 .unwrap()
                 .contains("{number=148}{name=USER1}")
+        );
+        let sbus = ExtcapArgs {
+            extcap_interface: Some("busnoop-sbus".into()),
+            ..dlts
+        };
+        assert!(
+            describe(&sbus, &[])
+                .unwrap()
+                .contains("{number=101}{name=RAW}")
         );
         let config = ExtcapArgs {
             extcap_config: true,

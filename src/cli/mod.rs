@@ -303,6 +303,13 @@ pub fn run_capture(
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
     }
+    if args.live.export.is_some() && matches!(kind, Kind::Pcap | Kind::Pcapng) {
+        // Only a serial line needs re-wrapping: network captures are Wireshark's already.
+        return Err(Failure::Usage(format!(
+            "--export re-wraps the frames of a serial line; {} is a network capture, which              Wireshark opens as it is",
+            args.source.display()
+        )));
+    }
     for note in option_notes(&args.output, kind) {
         eprintln!("busnoop: note: {note}");
     }
@@ -413,7 +420,7 @@ pub fn run_capture(
                 &rx,
                 &mut crate::export::Exporting {
                     inner: &mut view,
-                    export,
+                    tap: export,
                 },
                 ctx,
             ),
@@ -433,7 +440,7 @@ pub fn run_capture(
             Some(export) => {
                 exporting = crate::export::Exporting {
                     inner: &mut *table,
-                    export,
+                    tap: export,
                 };
                 &mut exporting
             }
@@ -625,6 +632,12 @@ fn list_ports() -> Result<(), Failure> {
     }
 }
 
+/// Set for a capture Wireshark runs (`busnoop extcap --capture`): Wireshark shows whatever an
+/// extcap writes on stderr as an error when the capture stops, so the end-of-run summary
+/// ([`report`]) is left out. Failures are still reported.
+pub(crate) static QUIET_REPORT: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
 /// The end-of-run summary on stderr: the full statistics with --stats, otherwise one line when
 /// something went wrong.
 fn report(
@@ -635,7 +648,9 @@ fn report(
     hidden: u64,
     result: &Result<(), Failure>,
 ) {
-    if matches!(result, Err(Failure::BrokenPipe)) {
+    if matches!(result, Err(Failure::BrokenPipe))
+        || QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
+    {
         return;
     }
     if stats == Some(StatsFormat::Text) {

@@ -43,6 +43,11 @@ pub fn record(out: &mut Vec<u8>, ts_micros: i64, data: &[u8]) {
 /// An Ethernet/IPv4/UDP frame around `payload` (checksum 0 = none).
 pub fn udp4_frame(out: &mut Vec<u8>, src: ([u8; 4], u16), dst: ([u8; 4], u16), payload: &[u8]) {
     out.extend_from_slice(&[0x02, 0, 0, 0, 0, 2, 0x02, 0, 0, 0, 0, 1, 0x08, 0x00]);
+    udp4_packet(out, src, dst, payload);
+}
+
+/// An IPv4/UDP packet around `payload` (UDP checksum 0 = none), as link type RAW carries it.
+pub fn udp4_packet(out: &mut Vec<u8>, src: ([u8; 4], u16), dst: ([u8; 4], u16), payload: &[u8]) {
     let total = 20 + 8 + payload.len();
     let mut ip = [0u8; 20];
     ip[0] = 0x45;

@@ -13,7 +13,7 @@ use super::pairing::{
 use super::stats::{StationStats, Totals, nak_slot};
 use super::telegram::{self, BROADCAST, ReqInfo};
 use crate::fmt::{push_fixed, push_hex, push_u64};
-use crate::row::{Class, Part, Row, RowOut, RowResult};
+use crate::row::{Class, Part, Row, RowOut, RowResult, Unframed};
 
 /// Scratch buffers reused for every row.
 #[derive(Default)]
@@ -23,6 +23,12 @@ pub(super) struct Scratch {
     resp: String,
     seq: String,
     note: String,
+    /// The telegram re-read for a sink that re-wraps it (the serial front end): the attribute
+    /// and the telegram without framing, escaping and CRC; empty for rows that are no
+    /// telegram.
+    unframed: Vec<u8>,
+    /// The CRC as received, when it failed.
+    bad_check: Option<u16>,
 }
 
 impl Scratch {
@@ -32,6 +38,18 @@ impl Scratch {
         self.resp.clear();
         self.seq.clear();
         self.note.clear();
+        self.unframed.clear();
+        self.bad_check = None;
+    }
+
+    /// The row's telegram, re-read: attribute `at`, then `parts` (see [`Unframed`]).
+    pub(super) fn unframed(&mut self, at: u8, parts: &[&[u8]], bad_check: Option<u16>) {
+        self.unframed.clear();
+        self.unframed.push(at);
+        for p in parts {
+            self.unframed.extend_from_slice(p);
+        }
+        self.bad_check = bad_check;
     }
 
     pub(super) fn note(&mut self, text: &str) {
@@ -80,7 +98,7 @@ pub(super) fn put_row(
     } else {
         &[]
     };
-    out.row(&Row {
+    let row = Row {
         micros: Some(micros),
         id,
         device,
@@ -92,7 +110,16 @@ pub(super) fn put_row(
         extra: &extra,
         parts,
         raw,
-    })
+    };
+    if sc.unframed.is_empty() {
+        out.row(&row)
+    } else {
+        let frame = Unframed {
+            bytes: &sc.unframed,
+            bad_check: sc.bad_check,
+        };
+        out.row_unframed(&row, &frame)
+    }
 }
 
 /// The most numbers an S-Bus telegram carries (a read or write of 128 flags).

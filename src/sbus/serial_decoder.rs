@@ -362,6 +362,25 @@ impl SerialCore {
         self.expire(t, out)?;
         let sc = &mut self.map.sc;
         sc.clear();
+        // The telegram without framing, DLE pairs and CRC, for a sink that re-wraps it (the
+        // Ether-S-Bus export).
+        let bad_check = match f.crc {
+            CrcCheck::Bad { got, .. } => Some(got),
+            _ => None,
+        };
+        let checked = f.crc != CrcCheck::None;
+        match f.tele {
+            Tele::Request { station, cmd, body } if checked => {
+                sc.unframed(telegram::AT_REQUEST, &[&[station, cmd], body], bad_check)
+            }
+            Tele::Response { data } if checked => {
+                sc.unframed(telegram::AT_RESPONSE, &[data], bad_check)
+            }
+            Tele::AckNak { code, .. } => {
+                sc.unframed(telegram::AT_ACKNAK, &[&code.to_be_bytes()], bad_check)
+            }
+            _ => {}
+        }
         let seq = f.secure.map(|s| s.seq as u16);
         if let Some(s) = seq {
             sc.seq(s);

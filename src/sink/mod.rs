@@ -14,7 +14,7 @@ use crate::row::{BASE_COLUMNS, Class, Row};
 use crate::time::Anchor;
 pub use output::Output;
 
-use crate::row::{OutputError, RowResult};
+use crate::row::{OutputError, RowResult, Unframed};
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -692,9 +692,15 @@ impl Sink for Table {
 /// first and flushes its own output before the sink does. [`Tapped`] forwards the [`Sink`] calls,
 /// so a tap writes only what it adds.
 pub trait Tap {
-    /// Runs before `inner` takes the row: may wait (flushing `inner` meanwhile) or write the row
+    /// Runs before `inner` takes the row (and the frame's content, when the decoder handed it
+    /// on: [`RowOut::row_unframed`]): may wait (flushing `inner` meanwhile) or write the row
     /// elsewhere. An error stops the run as a sink's would.
-    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult;
+    fn before_row<S: Sink + ?Sized>(
+        &mut self,
+        row: &Row<'_>,
+        frame: Option<&Unframed<'_>>,
+        inner: &mut S,
+    ) -> RowResult;
     /// Flushes what the tap writes; runs before the sink flushes or closes.
     fn flush(&mut self) -> Result<(), OutputError> {
         Ok(())
@@ -711,8 +717,13 @@ pub struct Tapped<'a, S: Sink + ?Sized, T: Tap> {
 
 impl<S: Sink + ?Sized, T: Tap> RowOut for Tapped<'_, S, T> {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
-        self.tap.before_row(row, self.inner)?;
+        self.tap.before_row(row, None, self.inner)?;
         self.inner.row(row)
+    }
+
+    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
+        self.tap.before_row(row, Some(frame), self.inner)?;
+        self.inner.row_unframed(row, frame)
     }
 }
 

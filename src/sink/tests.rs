@@ -293,6 +293,13 @@ impl RowOut for LogSink<'_> {
         self.0.borrow_mut().0.push(format!("sink row {}", row.data));
         Ok(())
     }
+    fn row_unframed(&mut self, row: &Row<'_>, _frame: &crate::row::Unframed<'_>) -> RowResult {
+        self.0
+            .borrow_mut()
+            .0
+            .push(format!("sink row {} framed", row.data));
+        Ok(())
+    }
 }
 impl Sink for LogSink<'_> {
     fn flush(&mut self) -> Result<(), OutputError> {
@@ -322,11 +329,17 @@ struct LogTap<'a> {
     fail_on: Option<&'static str>,
 }
 impl Tap for LogTap<'_> {
-    fn before_row<S: Sink + ?Sized>(&mut self, row: &Row<'_>, inner: &mut S) -> RowResult {
+    fn before_row<S: Sink + ?Sized>(
+        &mut self,
+        row: &Row<'_>,
+        frame: Option<&crate::row::Unframed<'_>>,
+        inner: &mut S,
+    ) -> RowResult {
+        let framed = if frame.is_some() { " framed" } else { "" };
         self.log
             .borrow_mut()
             .0
-            .push(format!("tap row {}", row.data));
+            .push(format!("tap row {}{framed}", row.data));
         if self.fail_on == Some(row.data) {
             return Err(OutputError {
                 path: None,
@@ -360,6 +373,11 @@ fn a_tap_sees_everything_first_and_the_sink_gets_the_rest() {
     };
     t.set_anchor(Some(Anchor::Instant(chrono::DateTime::UNIX_EPOCH)));
     t.row(&sample_row()).unwrap();
+    let frame = crate::row::Unframed {
+        bytes: &[0, 10, 6],
+        bad_check: None,
+    };
+    t.row_unframed(&sample_row(), &frame).unwrap();
     t.skip();
     let bad = Row {
         data: "bad",
@@ -377,6 +395,9 @@ fn a_tap_sees_everything_first_and_the_sink_gets_the_rest() {
             "tap row 65.43",
             "sink flush",
             "sink row 65.43",
+            "tap row 65.43 framed",
+            "sink flush",
+            "sink row 65.43 framed",
             "sink skip",
             "tap row bad",
             "tap flush",
