@@ -111,6 +111,9 @@ pub struct Section {
     /// SAB: name → command code.
     #[serde(default)]
     pub commands: BTreeMap<String, Value>,
+    /// SAB: command → `TYPE[*SCALE][:UNIT]` (`--value`), or per direction (`CMD.req = "u8"`).
+    #[serde(default)]
+    pub values: BTreeMap<String, ValueSpec>,
     #[serde(default)]
     pub filter: FilterSection,
 }
@@ -146,6 +149,14 @@ impl Value {
             Value::Text(s) => s.clone(),
         }
     }
+}
+
+/// `[sab2.values]`: a declaration, or one per direction (`heading.req = "u8"` is a dotted key).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum ValueSpec {
+    Spec(String),
+    Directions(BTreeMap<String, String>),
 }
 
 /// One value or an array of them.
@@ -239,6 +250,13 @@ impl File {
                     name,
                     "commands",
                     "command names are for SAB ([sab2.commands])",
+                ));
+            }
+            if !s.values.is_empty() {
+                return Err(bad(
+                    name,
+                    "values",
+                    "value declarations are for SAB ([sab2.values])",
                 ));
             }
         }
@@ -365,6 +383,20 @@ pub fn file_commands(section: &Section) -> Vec<String> {
         .iter()
         .map(|(n, v)| format!("{n}={}", v.text()))
         .collect()
+}
+
+/// SAB's value declarations from the file, as `CMD=SPEC` (`CMD.req=SPEC` for a dotted key).
+pub fn file_values(section: &Section) -> Vec<String> {
+    let mut out = Vec::new();
+    for (cmd, v) in &section.values {
+        match v {
+            ValueSpec::Spec(s) => out.push(format!("{cmd}={s}")),
+            ValueSpec::Directions(m) => {
+                out.extend(m.iter().map(|(d, s)| format!("{cmd}.{d}={s}")));
+            }
+        }
+    }
+    out
 }
 
 /// The filter and names of a run on `protocol`: the file's section (checked on its own first,
