@@ -58,7 +58,8 @@ pub struct SelectArgs {
     pub errors: bool,
 
     /// Show only rows whose Sensor or Sensor # column is one of these, e.g. `Cels,RxBt` or
-    /// `0210` (case-insensitive; hex numbers match with or without leading zeros).
+    /// `0x0210` (case-insensitive; hex numbers match with or without `0x` and leading zeros:
+    /// `0210`, `210`).
     #[arg(long, value_name = "LIST")]
     pub sensor: Vec<String>,
 
@@ -260,6 +261,29 @@ impl File {
                 ));
             }
         }
+        for (name, s) in [
+            ("sport", &self.sport),
+            ("sbus", &self.sbus),
+            ("sab2", &self.sab2),
+        ] {
+            let ints = match &s.filter.sensor {
+                Some(List::One(Value::Int(_))) => true,
+                Some(List::Many(v)) => v.iter().any(|v| matches!(v, Value::Int(_))),
+                _ => false,
+            };
+            let table = format!("{name}.filter");
+            if let (true, Some(line)) = (ints, find_key(text, &table, "sensor"))
+                && let Some(literal) = radix_literal(text.lines().nth(line - 1).unwrap_or(""))
+            {
+                // `sensor = 0x0300` is the TOML integer 768, which busnoop would read as the
+                // hex digits `768`: refuse it rather than select another sensor.
+                return Err(Failure::Config(format!(
+                    "{}:{line}: [{table}] sensor {literal} is a TOML integer, not hex digits: \
+                     write sensor numbers as text, sensor = \"{literal}\"",
+                    path.display()
+                )));
+            }
+        }
         Ok(())
     }
 
@@ -306,6 +330,30 @@ impl File {
             _ => &self.sab2,
         }
     }
+}
+
+/// A `0x`, `0o` or `0b` integer literal outside quotes and comments on a `key = …` line.
+fn radix_literal(line: &str) -> Option<&str> {
+    let value = line.split_once('=')?.1;
+    let mut quoted = None;
+    for (i, c) in value.char_indices() {
+        match (quoted, c) {
+            (None, '"' | '\'') => quoted = Some(c),
+            (Some(q), c) if c == q => quoted = None,
+            (None, '#') => return None,
+            (None, '0') => {
+                let rest = &value[i..];
+                if rest.starts_with("0x") || rest.starts_with("0o") || rest.starts_with("0b") {
+                    let end = rest
+                        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .unwrap_or(rest.len());
+                    return Some(&rest[..end]);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// The line of `key` inside `[section]` (or `[section.*]`), for messages.
@@ -559,5 +607,19 @@ speed = 0x34
             "command line last: it wins"
         );
         assert_eq!(s.device, ["FLVSS"]);
+    }
+
+    #[test]
+    fn radix_literals_outside_quotes_and_comments() {
+        assert_eq!(radix_literal("sensor = 0x0300"), Some("0x0300"));
+        assert_eq!(
+            radix_literal("sensor = [\"Cels\", 0xF1_01]"),
+            Some("0xF1_01")
+        );
+        assert_eq!(radix_literal("sensor = 0b11 # x"), Some("0b11"));
+        assert_eq!(radix_literal("sensor = \"0x0300\""), None);
+        assert_eq!(radix_literal("sensor = '0x0300'"), None);
+        assert_eq!(radix_literal("sensor = 300 # 0x0300"), None);
+        assert_eq!(radix_literal("sensor = 100"), None);
     }
 }
