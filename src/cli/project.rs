@@ -153,11 +153,40 @@ impl Value {
 }
 
 /// `[sab2.values]`: a declaration, or one per direction (`heading.req = "u8"` is a dotted key).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone)]
 pub enum ValueSpec {
     Spec(String),
     Directions(BTreeMap<String, String>),
+}
+
+/// What a `[sab2.values]` entry must be, for the error message.
+const VALUE_SPEC: &str = "a text such as \"u16*0.01:m\" (TYPE[*SCALE][:UNIT]), or `req`/`ack` \
+     entries of such texts (CMD.req = \"u8\")";
+
+impl<'de> Deserialize<'de> for ValueSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ValueSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(VALUE_SPEC)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ValueSpec, E> {
+                Ok(ValueSpec::Spec(v.to_owned()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<ValueSpec, A::Error> {
+                let mut out = BTreeMap::new();
+                while let Some((k, v)) = map.next_entry::<String, String>()? {
+                    out.insert(k, v);
+                }
+                Ok(ValueSpec::Directions(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// One value or an array of them.

@@ -71,7 +71,8 @@ fn command(cmd: &str, commands: &[(String, u8)]) -> Result<(u8, Direction), Stri
     }
     let names: Vec<&str> = commands.iter().map(|(n, _)| n.as_str()).collect();
     Err(format!(
-        "`{cmd}` is neither a command code (0x34 or 52, 0..=255) nor a --command name{}",
+        "`{cmd}` is neither a command code (0x34 or 52, 0..=255) nor a --command name{}, \
+         optionally with .req or .ack",
         if names.is_empty() {
             String::new()
         } else {
