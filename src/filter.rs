@@ -39,7 +39,7 @@ pub struct Vocab {
     pub sensor_no_text: &'static str,
     /// Whether a value could appear in the Sensor # column.
     pub sensor_no: fn(&str) -> bool,
-    /// The Sensor # column holds hex numbers: `--sensor 0210` matches `210`.
+    /// The Sensor # column holds hex numbers: `--sensor 0210` and `210` match `0x0210`.
     pub sensor_no_hex: bool,
     /// The Device column without names: the name at an ID, or `None` when the protocol's
     /// devices are not known in advance (Ether-S-Bus shows PLC addresses).
@@ -135,7 +135,7 @@ pub struct Filter {
 }
 
 /// A `--sensor` value: the text, and its value when it reads as a hex number (`0210`, `0x34`),
-/// so that `0210` matches the Sensor # `210`.
+/// so that `0210` and `210` match the Sensor # `0x0210`.
 #[derive(Clone, Debug)]
 struct Pattern {
     text: Box<str>,
@@ -552,7 +552,7 @@ mod tests {
             kind,
             class,
             device: "FLVSS",
-            sensor_no: "210",
+            sensor_no: "0x0210",
             sensor: "Cels",
             ..Row::empty(Some(0))
         }
@@ -671,7 +671,8 @@ mod tests {
     fn sensors_by_name_or_number() {
         let f = filter(&spec(|s| s.sensor = vec!["cels".into()])).unwrap();
         assert!(f.keep(&row(Some(1), "Data", Class::Plain)));
-        for v in ["0210", "210", "0x210"] {
+        // The new notation and the S-Port_Snoop sample's (`210`) select the same rows.
+        for v in ["0x0210", "0X0210", "0210", "210", "0x210"] {
             let f = filter(&spec(|s| s.sensor = vec![v.into()])).unwrap();
             assert!(f.keep(&row(Some(1), "Data", Class::Plain)), "{v}");
         }

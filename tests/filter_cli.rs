@@ -100,9 +100,13 @@ fn sport_each_filter() {
     check("sport", SPORT, &["--sensor", "cels,RxBt"], |r| {
         r[SENSOR] == "Cels" || r[SENSOR] == "RxBt"
     });
-    check("sport", SPORT, &["--sensor", "0300"], |r| {
-        r[SENSOR_NO] == "300"
-    });
+    // Sensor # is `0x0300`; the old notation (`300`, as the S-Port_Snoop sample writes it), the
+    // zero-padded one and the new one all select it.
+    for v in ["0300", "300", "0x0300", "0X300"] {
+        check("sport", SPORT, &["--sensor", v], |r| {
+            r[SENSOR_NO] == "0x0300"
+        });
+    }
     check("sport", SPORT, &["--device", "receiver"], |r| {
         r[DEVICE] == "Receiver"
     });
@@ -386,6 +390,40 @@ distance = 0x10
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stdout.contains("\tdistance\t"));
+    // The file's sensor filter in the old and the new hex notation (a bare `300` is read as
+    // the hex digits it shows, as before).
+    for sensor in ["\"300\"", "300", "\"0x0300\"", "[\"0X300\"]"] {
+        let cfg = tempfile::tempdir().unwrap();
+        std::fs::write(
+            cfg.path().join("busnoop.toml"),
+            format!("[sport.filter]\nsensor = {sensor}\n"),
+        )
+        .unwrap();
+        let r = run_in(cfg.path(), &["sport", sport, "-f", "tsv"]);
+        assert_eq!(r.code, 0, "{sensor}: {}", r.stderr);
+        let body: Vec<&str> = r.stdout.lines().skip(1).collect();
+        assert!(!body.is_empty(), "{sensor}");
+        assert!(
+            body.iter().all(|l| l.split('\t').nth(5) == Some("0x0300")),
+            "{sensor}: {body:?}"
+        );
+    }
+    // A bare `0x0300` is the TOML integer 768: refused, with the fix.
+    let cfg = tempfile::tempdir().unwrap();
+    std::fs::write(
+        cfg.path().join("busnoop.toml"),
+        "[sport.filter]\nsensor = [\"Cels\", 0x0300] # hex\n",
+    )
+    .unwrap();
+    let r = run_in(cfg.path(), &["sport", sport, "-f", "tsv"]);
+    assert_eq!(r.code, 12, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("busnoop.toml:2: [sport.filter] sensor 0x0300 is a TOML integer")
+            && r.stderr.contains("sensor = \"0x0300\""),
+        "{}",
+        r.stderr
+    );
     // --config FILE from elsewhere.
     let other = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("busnoop.toml");

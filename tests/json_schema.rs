@@ -105,7 +105,13 @@ fn every_fixture_follows_the_schema() {
     let mut rows = 0;
     let mut with_parts = 0;
     for (protocol, file) in captures {
-        for extra in [&[][..], &["--raw", "--time", "abs"][..]] {
+        // SAB with declared types too: units, scaled numbers and floats in `value` and `parts`.
+        let declared = &["--value", "0x10=u16*0.01:m", "--value", "0x34=f32:deg"][..];
+        let sab = protocol == "sab2";
+        for extra in [&[][..], &["--raw", "--time", "abs"][..], declared] {
+            if extra == declared && !sab {
+                continue;
+            }
             let out = Command::cargo_bin("busnoop")
                 .unwrap()
                 .args([protocol, fixture(file).to_str().unwrap(), "-f", "jsonl"])

@@ -86,7 +86,7 @@ fn demo_session_sab2() {
         t.columns,
         [
             "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data", "Value",
-            "Addr", "Resp ms", "Framing", "Note"
+            "Unit", "Addr", "Resp ms", "Framing", "Note"
         ]
     );
     assert_eq!(t.rows.len(), 24);
@@ -104,6 +104,7 @@ fn demo_session_sab2() {
             "0x10",
             "distance",
             "23 01 (291)",
+            "291",
             "",
             "0x05",
             "1.215",
@@ -257,7 +258,8 @@ fn standard_input_and_other_formats() {
         .success();
     let text = String::from_utf8(out.get_output().stdout.clone()).unwrap();
     let first = text.lines().next().unwrap();
-    assert!(first.starts_with(r#"{"counter":1,"millis":0,"id":1,"device":null,"type":"Request","sensor_no":"0x02","sensor":null,"data":"55 (85)","value":null,"addr":"0x01","resp_ms":null,"framing":"hdlc","note":"framing hdlc: "#), "{first}");
+    assert!(first.starts_with(r#"{"counter":1,"millis":0,"id":1,"device":null,"type":"Request","sensor_no":"0x02","sensor":null,"data":"55 (85)","value":85,"unit":null,"addr":"0x01","resp_ms":null,"framing":"hdlc","note":"framing hdlc: "#), "{first}");
+    assert!(first.ends_with(r#","parts":{"0x02.req":85}}"#), "{first}");
     assert_eq!(text.lines().count(), 24);
 
     let dir = tempfile::tempdir().unwrap();
@@ -269,9 +271,9 @@ fn standard_input_and_other_formats() {
         .assert()
         .success();
     let mut r = csv::Reader::from_path(&csv).unwrap();
-    assert_eq!(&r.headers().unwrap()[13], "Raw");
+    assert_eq!(&r.headers().unwrap()[14], "Raw");
     let rec = r.records().next().unwrap().unwrap();
-    assert_eq!(&rec[13], "7E 01 02 55 E1 5F 7E");
+    assert_eq!(&rec[14], "7E 01 02 55 E1 5F 7E");
 }
 
 #[test]
@@ -348,4 +350,242 @@ fn timed_recordings_use_the_real_times() {
             .starts_with("no response before the end of the capture")
     );
     assert!(stderr.contains("2 timeouts, 1 late response"), "{stderr}");
+}
+
+/// The Value column of the demo sessions (default rule): the number of a request's payload (a
+/// write, or a query's argument) and of an ACK's, unsigned little endian; none for NACKs, bad
+/// frames and empty payloads. Both framings give the same values.
+#[test]
+fn demo_session_values() {
+    for file in ["sab1-session.bin", "sab2-session.bin"] {
+        let path = fixture(file);
+        let (t, _) = run_tsv(&["sab2", path.to_str().unwrap()]);
+        let typed: Vec<(&str, &str, &str)> = (0..t.rows.len())
+            .map(|r| (t.get(r, "Type"), t.get(r, "Sensor #"), t.get(r, "Value")))
+            .filter(|(_, _, v)| !v.is_empty())
+            .collect();
+        assert_eq!(
+            typed,
+            [
+                ("Request", "0x02", "85"),
+                ("ACK", "0x10", "291"),
+                ("Request", "0x34", "3735928559"),
+                ("ACK", "0x34", "305419896"),
+                ("Request", "0x10", "1"),
+                ("Request", "0x02", "126"),
+                ("ACK", "0x02", "125"),
+                ("Request", "0x34", "1"),
+                ("Request", "0x34", "1"),
+                ("ACK", "0x34", "2"),
+                ("Request", "0x03", "10000"),
+            ],
+            "{file}"
+        );
+        assert!(t.column("Unit").iter().all(|u| u.is_empty()));
+    }
+}
+
+/// `--value`: a declared type, scale and unit set Value, Unit and the Data reading; CMD is a
+/// --command name or a code, with `.req`/`.ack` for one direction.
+#[test]
+fn declared_values_on_the_command_line() {
+    let path = fixture("sab2-session.bin");
+    let (t, stderr) = run_tsv(&[
+        "sab2",
+        path.to_str().unwrap(),
+        "--command",
+        "distance=0x10",
+        "--value",
+        "distance=u16*0.01:m",
+        "--value",
+        "0x34.ack=i32*0.5:deg",
+        "--value",
+        "2=i8",
+    ]);
+    assert_eq!(t.get(3, "Data"), "23 01 (2.91 m)");
+    assert_eq!((t.get(3, "Value"), t.get(3, "Unit")), ("2.91", "m"));
+    // The request direction of 0x34 keeps the default rule.
+    assert_eq!((t.get(4, "Value"), t.get(4, "Unit")), ("3735928559", ""));
+    assert_eq!(
+        (t.get(5, "Value"), t.get(5, "Unit")),
+        ("152709948.0", "deg")
+    );
+    // 0x7E as i8; the query argument of `distance` is one byte, not a u16.
+    assert_eq!(t.get(12, "Value"), "126");
+    assert_eq!(t.get(13, "Value"), "125");
+    assert_eq!(t.get(8, "Value"), "");
+    assert_eq!(
+        t.get(8, "Note"),
+        "1 payload byte, --value declares u16 (2): no value"
+    );
+    assert!(stderr.contains("3 timeouts"), "{stderr}");
+
+    for (bad, says) in [
+        ("distance", "CMD=TYPE"),
+        ("speed=u8", "neither a command code"),
+        ("0x10=u64", "unknown type `u64`"),
+        ("0x10=u16*1e-2", "plain decimal"),
+        ("0x10=u16:", "unit"),
+    ] {
+        busnoop()
+            .arg("sab2")
+            .arg(&path)
+            .args(["--value", bad])
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(says));
+    }
+}
+
+/// `[sab2.values]` in the project file, with the file's command names; mistakes there are the
+/// file's (exit code 12), and other protocols have no such table.
+#[test]
+fn declared_values_in_the_project_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("busnoop.toml");
+    std::fs::write(
+        &config,
+        "[sab2.commands]\ndistance = 0x10\n\n[sab2.values]\ndistance = \"u16*0.01:m\"\n\
+         \"0x34\".ack = \"u32\"\n0x34.req = \"i32\"\n",
+    )
+    .unwrap();
+    let path = fixture("sab1-session.bin");
+    let (t, _) = run_tsv(&[
+        "sab2",
+        path.to_str().unwrap(),
+        "--config",
+        config.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        (t.get(3, "Sensor"), t.get(3, "Value"), t.get(3, "Unit")),
+        ("distance", "2.91", "m")
+    );
+    assert_eq!(t.get(4, "Value"), "-559038737");
+    assert_eq!(t.get(5, "Value"), "305419896");
+    // The command line's declaration wins over the file's.
+    let (t, _) = run_tsv(&[
+        "sab2",
+        path.to_str().unwrap(),
+        "--config",
+        config.to_str().unwrap(),
+        "--value",
+        "distance=u16:cm",
+    ]);
+    assert_eq!((t.get(3, "Value"), t.get(3, "Unit")), ("291", "cm"));
+
+    for (text, says) in [
+        (
+            "[sab2.values]\n0x10 = \"u128\"\n",
+            "[sab2.values] `0x10=u128`: unknown type",
+        ),
+        (
+            "[sab2.values]\nspeed = \"u8\"\n",
+            "[sab2.values] `speed` is neither",
+        ),
+        (
+            "[sport.values]\n0x10 = \"u8\"\n",
+            "value declarations are for SAB",
+        ),
+        (
+            "[sab2.values]\n0x10 = 5\n",
+            "busnoop.toml:2: invalid type: integer `5`, expected a text",
+        ),
+    ] {
+        std::fs::write(&config, text).unwrap();
+        busnoop()
+            .arg("sab2")
+            .arg(&path)
+            .arg("--config")
+            .arg(&config)
+            .assert()
+            .code(12)
+            .stderr(predicate::str::contains(says));
+    }
+}
+
+/// `--wide` on SAB: one column per command (and `.req` for request payloads), the last value
+/// held; the one-byte argument of `distance` does not fit its declared u16, so no column.
+#[test]
+fn wide_table_of_the_demo_session() {
+    for file in ["sab1-session.bin", "sab2-session.bin"] {
+        let path = fixture(file);
+        let out = busnoop()
+            .args(["sab2", path.to_str().unwrap(), "--command", "distance=0x10"])
+            .args(["--value", "distance=u16*0.01:m", "--wide", "-f", "csv"])
+            .assert()
+            .success();
+        let mut r = csv::Reader::from_reader(out.get_output().stdout.as_slice());
+        let headers: Vec<String> = r.headers().unwrap().iter().map(str::to_owned).collect();
+        assert_eq!(
+            headers,
+            [
+                "Millis",
+                "0x02.req",
+                "distance(m)",
+                "0x34.req",
+                "0x34",
+                "0x02",
+                "0x03.req"
+            ],
+            "{file}"
+        );
+        let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+        let last = rows.last().unwrap();
+        assert_eq!(
+            last.iter().skip(1).collect::<Vec<_>>(),
+            ["126", "2.91", "1", "2", "125", "10000"],
+            "{file}"
+        );
+        for rec in &rows {
+            for cell in rec.iter().filter(|c| !c.is_empty()) {
+                cell.parse::<f64>().unwrap();
+            }
+        }
+    }
+}
+
+/// `busnoop plot` on SAB: a series per command, the project file's names and types apply.
+#[test]
+fn plot_of_the_demo_session() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("busnoop.toml"),
+        "[sab2.commands]\nheading = 0x34\n\n[sab2.values]\nheading.ack = \"u32*0.001:deg\"\n",
+    )
+    .unwrap();
+    let svg = dir.path().join("sab.svg");
+    busnoop()
+        .current_dir(dir.path())
+        .args(["plot"])
+        .arg(fixture("sab2-session.bin"))
+        .args(["--sensor", "heading", "-o"])
+        .arg(&svg)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("heading"), "no label");
+    assert!(text.contains("deg"), "no unit");
+    // One series line with the two valid answers (the corrupted one is a red mark).
+    let lines: Vec<&str> = text
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.split('>').next().unwrap().contains("stroke-width=\"2\""))
+        .collect();
+    assert_eq!(lines.len(), 1);
+    let points = lines[0]
+        .split("points=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap();
+    assert_eq!(points.split_whitespace().count(), 2, "{points}");
+    // Without names or types: the codes.
+    busnoop()
+        .args(["plot"])
+        .arg(fixture("sab1-session.bin"))
+        .args(["--protocol", "sab2", "--sensor", "0x10", "-o"])
+        .arg(dir.path().join("b.svg"))
+        .assert()
+        .success();
 }

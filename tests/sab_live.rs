@@ -61,7 +61,7 @@ fn timeout_rows_appear_while_the_bus_is_quiet_and_the_recording_replays() {
     assert_eq!(field(&req, 4), "Request", "{req}");
     let timeout = next_line(&rx);
     assert_eq!(field(&timeout, 4), "Timeout", "{timeout}");
-    assert_eq!(field(&timeout, 12), "no response within 200 ms");
+    assert_eq!(field(&timeout, 13), "no response within 200 ms");
     let at = |l: &str| field(l, 1).parse::<u64>().unwrap();
     assert_eq!(at(&timeout), at(&req) + 200, "placed at the deadline");
     live.extend([req, timeout]);
@@ -74,7 +74,7 @@ fn timeout_rows_appear_while_the_bus_is_quiet_and_the_recording_replays() {
     let ack = next_line(&rx);
     assert_eq!(field(&req, 4), "Request", "{req}");
     assert_eq!(field(&ack, 4), "ACK", "{ack}");
-    let resp: f64 = field(&ack, 10).parse().unwrap();
+    let resp: f64 = field(&ack, 11).parse().unwrap();
     assert!(resp > 0.0 && resp < 200.0, "{ack}");
     live.extend([req, ack]);
 
@@ -127,7 +127,7 @@ fn detection_decides_on_a_quiet_line() {
     );
     assert_eq!(field(&req, 4), "Request", "{req}");
     assert!(
-        field(&req, 12).contains("framing hdlc") && field(&req, 12).contains("quiet second"),
+        field(&req, 13).contains("framing hdlc") && field(&req, 13).contains("quiet second"),
         "{req}"
     );
     // The request had long timed out by then.

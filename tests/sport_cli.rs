@@ -64,7 +64,7 @@ fn csv_output_parses_with_the_same_columns() {
     let alt = recs.iter().find(|r| &r[6] == "Alt").unwrap();
     assert_eq!(
         (&alt[0], &alt[1], &alt[5], &alt[7], &alt[8], &alt[9]),
-        ("23", "264", "100", "65.43", "65.43", "m")
+        ("23", "264", "0x0100", "65.43", "65.43", "m")
     );
 }
 
@@ -87,7 +87,7 @@ fn jsonl_output_is_one_object_per_row() {
     assert_eq!(objs[0]["raw"], "7E BA");
     let alt = objs.iter().find(|o| o["sensor"] == "Alt").unwrap();
     assert_eq!(alt["millis"], 264);
-    assert_eq!(alt["sensor_no"], "100");
+    assert_eq!(alt["sensor_no"], "0x0100");
     assert_eq!(alt["data"], "65.43");
     assert_eq!(alt["unit"], "m");
 }

@@ -152,7 +152,7 @@ proptest! {
             prop_assert_eq!(&r.raw, w);
             prop_assert_eq!(r.kind.as_str(), "Data");
             prop_assert_eq!(r.id, Some(*phys as u32));
-            prop_assert_eq!(&r.sensor_no, &format!("{app_id:X}"));
+            prop_assert_eq!(&r.sensor_no, &format!("0x{app_id:04X}"));
             prop_assert!(is_clean(r));
         }
         // Every garbage byte is accounted for: in a row's raw bytes, or the garbage was empty.

@@ -121,7 +121,7 @@ fn check_file(name: &str, crc_valid: bool) -> usize {
             assert!(note.contains("CRC 0xFF, expected"), "{ctx}: {note}");
         }
         if frame_type == 0x10 || app_id != 0 {
-            assert_eq!(row.sensor_no, format!("{app_id:X}"), "{ctx}");
+            assert_eq!(row.sensor_no, format!("0x{app_id:04X}"), "{ctx}");
         }
         let expected = v["expected_decoded"].split(" | ").next().unwrap().trim();
         if expected.is_empty() {

@@ -19,11 +19,24 @@ fn run(args: &[&str]) -> Vec<u8> {
     out.stdout
 }
 
-const CAPTURES: [(&str, &str); 4] = [
+const CAPTURES: [(&str, &str); 5] = [
     ("sport", "edgetx-MODELE24-2014-07-11-sport.log"),
     ("sport", "sport-sample.bin"),
     ("sbus", "sbus-digimat.pcap"),
+    ("sab2", "sab1-session.bin"),
     ("sab2", "sab2-session.bin"),
+];
+
+/// SAB with declared types (`--value`): scaled integers and floats are numbers too.
+const SAB_DECLARED: [&str; 8] = [
+    "--command",
+    "distance=0x10",
+    "--value",
+    "distance=u16*0.01:m",
+    "--value",
+    "0x34=f32*0.5:deg",
+    "--value",
+    "2=i8*-0.1",
 ];
 
 /// The spreadsheet check: every non-empty Value cell of every fixture parses as a number, and
@@ -31,9 +44,13 @@ const CAPTURES: [(&str, &str); 4] = [
 #[test]
 fn every_value_cell_is_a_number() {
     let mut numbers = 0;
-    for (protocol, file) in CAPTURES {
+    let declared = CAPTURES[3..].iter().map(|c| (c, &SAB_DECLARED[..]));
+    let runs = CAPTURES.iter().map(|c| (c, &[][..])).chain(declared);
+    for (&(protocol, file), options) in runs {
         let path = fixture(file);
-        let csv = run(&[protocol, path.to_str().unwrap(), "-f", "csv"]);
+        let mut args = vec![protocol, path.to_str().unwrap(), "-f", "csv"];
+        args.extend_from_slice(options);
+        let csv = run(&args);
         let mut r = csv::Reader::from_reader(csv.as_slice());
         let headers = r.headers().unwrap().clone();
         assert_eq!(&headers[7], "Data");

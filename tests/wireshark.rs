@@ -205,7 +205,7 @@ fn sport_export_matches(input: &Path, all_values: bool) {
             continue;
         }
         if !row["Sensor #"].is_empty() {
-            let app = u16::from_str_radix(&row["Sensor #"], 16).unwrap();
+            let app = u16::from_str_radix(row["Sensor #"].trim_start_matches("0x"), 16).unwrap();
             assert_eq!(pkt[1], format!("0x{app:04x}"), "{what}");
         }
         if all_values || !pkt[2].is_empty() {

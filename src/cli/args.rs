@@ -190,6 +190,14 @@ pub struct SabArgs {
     #[arg(long, value_name = "NAME=CODE", value_parser = crate::sab::parse_command)]
     pub command: Vec<(String, u8)>,
 
+    /// Read a command's payloads as numbers of a type (repeatable): `--value distance=u16*0.01:m`,
+    /// `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32 (little endian); SCALE multiplies
+    /// (a plain decimal); UNIT goes to the Unit column. CMD is a code or a --command name, with
+    /// `.req` or `.ack` for one direction only. Undeclared payloads of 1, 2 or 4 bytes are
+    /// unsigned integers.
+    #[arg(long, value_name = "CMD=TYPE[*SCALE][:UNIT]")]
+    pub value: Vec<String>,
+
     /// Master timeout: a request without a response within this time gets a `Timeout` row
     /// [default: 10].
     #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
@@ -232,6 +240,7 @@ impl SabArgs {
             max_payload: self.max_payload as usize,
             devices: Vec::new(),
             commands: self.command.clone(),
+            values: Vec::new(),
         }
     }
 }

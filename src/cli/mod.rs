@@ -24,6 +24,7 @@ mod extcap;
 mod manual;
 mod paths;
 pub mod project;
+mod sab_values;
 
 pub use args::*;
 use paths::check_distinct;
@@ -180,9 +181,25 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 args.timeout_ms = section.and_then(|s| s.0.timeout_ms);
             }
             let devices = names_u8(&sel.names);
+            // The file's declarations first, the command line's over them (later ones win).
+            let mut values = Vec::new();
+            if let Some((s, path)) = section {
+                for v in project::file_values(s) {
+                    values.push(sab_values::parse_value(&v, &args.command).map_err(|e| {
+                        Failure::Config(format!("{}: [sab2.values] {e}", path.display()))
+                    })?);
+                }
+            }
+            for v in &args.value {
+                values.push(
+                    sab_values::parse_value(v, &args.command)
+                        .map_err(|e| Failure::Usage(format!("--value {e}")))?,
+                );
+            }
             run_capture(&args.capture, protocol, &sel, |_, line| {
                 let mut o = args.options(line.baud);
                 o.devices = devices;
+                o.values = values;
                 crate::sab::decoder(o)
             })
         }

@@ -58,7 +58,8 @@ pub struct SelectArgs {
     pub errors: bool,
 
     /// Show only rows whose Sensor or Sensor # column is one of these, e.g. `Cels,RxBt` or
-    /// `0210` (case-insensitive; hex numbers match with or without leading zeros).
+    /// `0x0210` (case-insensitive; hex numbers match with or without `0x` and leading zeros:
+    /// `0210`, `210`).
     #[arg(long, value_name = "LIST")]
     pub sensor: Vec<String>,
 
@@ -111,6 +112,9 @@ pub struct Section {
     /// SAB: name → command code.
     #[serde(default)]
     pub commands: BTreeMap<String, Value>,
+    /// SAB: command → `TYPE[*SCALE][:UNIT]` (`--value`), or per direction (`CMD.req = "u8"`).
+    #[serde(default)]
+    pub values: BTreeMap<String, ValueSpec>,
     #[serde(default)]
     pub filter: FilterSection,
 }
@@ -145,6 +149,43 @@ impl Value {
             Value::Int(i) => i.to_string(),
             Value::Text(s) => s.clone(),
         }
+    }
+}
+
+/// `[sab2.values]`: a declaration, or one per direction (`heading.req = "u8"` is a dotted key).
+#[derive(Debug, Clone)]
+pub enum ValueSpec {
+    Spec(String),
+    Directions(BTreeMap<String, String>),
+}
+
+/// What a `[sab2.values]` entry must be, for the error message.
+const VALUE_SPEC: &str = "a text such as \"u16*0.01:m\" (TYPE[*SCALE][:UNIT]), or `req`/`ack` \
+     entries of such texts (CMD.req = \"u8\")";
+
+impl<'de> Deserialize<'de> for ValueSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ValueSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(VALUE_SPEC)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ValueSpec, E> {
+                Ok(ValueSpec::Spec(v.to_owned()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<ValueSpec, A::Error> {
+                let mut out = BTreeMap::new();
+                while let Some((k, v)) = map.next_entry::<String, String>()? {
+                    out.insert(k, v);
+                }
+                Ok(ValueSpec::Directions(out))
+            }
+        }
+        d.deserialize_any(V)
     }
 }
 
@@ -241,6 +282,36 @@ impl File {
                     "command names are for SAB ([sab2.commands])",
                 ));
             }
+            if !s.values.is_empty() {
+                return Err(bad(
+                    name,
+                    "values",
+                    "value declarations are for SAB ([sab2.values])",
+                ));
+            }
+        }
+        for (name, s) in [
+            ("sport", &self.sport),
+            ("sbus", &self.sbus),
+            ("sab2", &self.sab2),
+        ] {
+            let ints = match &s.filter.sensor {
+                Some(List::One(Value::Int(_))) => true,
+                Some(List::Many(v)) => v.iter().any(|v| matches!(v, Value::Int(_))),
+                _ => false,
+            };
+            let table = format!("{name}.filter");
+            if let (true, Some(line)) = (ints, find_key(text, &table, "sensor"))
+                && let Some(literal) = radix_literal(text.lines().nth(line - 1).unwrap_or(""))
+            {
+                // `sensor = 0x0300` is the TOML integer 768, which busnoop would read as the
+                // hex digits `768`: refuse it rather than select another sensor.
+                return Err(Failure::Config(format!(
+                    "{}:{line}: [{table}] sensor {literal} is a TOML integer, not hex digits: \
+                     write sensor numbers as text, sensor = \"{literal}\"",
+                    path.display()
+                )));
+            }
         }
         Ok(())
     }
@@ -288,6 +359,30 @@ impl File {
             _ => &self.sab2,
         }
     }
+}
+
+/// A `0x`, `0o` or `0b` integer literal outside quotes and comments on a `key = …` line.
+fn radix_literal(line: &str) -> Option<&str> {
+    let value = line.split_once('=')?.1;
+    let mut quoted = None;
+    for (i, c) in value.char_indices() {
+        match (quoted, c) {
+            (None, '"' | '\'') => quoted = Some(c),
+            (Some(q), c) if c == q => quoted = None,
+            (None, '#') => return None,
+            (None, '0') => {
+                let rest = &value[i..];
+                if rest.starts_with("0x") || rest.starts_with("0o") || rest.starts_with("0b") {
+                    let end = rest
+                        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .unwrap_or(rest.len());
+                    return Some(&rest[..end]);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// The line of `key` inside `[section]` (or `[section.*]`), for messages.
@@ -365,6 +460,20 @@ pub fn file_commands(section: &Section) -> Vec<String> {
         .iter()
         .map(|(n, v)| format!("{n}={}", v.text()))
         .collect()
+}
+
+/// SAB's value declarations from the file, as `CMD=SPEC` (`CMD.req=SPEC` for a dotted key).
+pub fn file_values(section: &Section) -> Vec<String> {
+    let mut out = Vec::new();
+    for (cmd, v) in &section.values {
+        match v {
+            ValueSpec::Spec(s) => out.push(format!("{cmd}={s}")),
+            ValueSpec::Directions(m) => {
+                out.extend(m.iter().map(|(d, s)| format!("{cmd}.{d}={s}")));
+            }
+        }
+    }
+    out
 }
 
 /// The filter and names of a run on `protocol`: the file's section (checked on its own first,
@@ -527,5 +636,19 @@ speed = 0x34
             "command line last: it wins"
         );
         assert_eq!(s.device, ["FLVSS"]);
+    }
+
+    #[test]
+    fn radix_literals_outside_quotes_and_comments() {
+        assert_eq!(radix_literal("sensor = 0x0300"), Some("0x0300"));
+        assert_eq!(
+            radix_literal("sensor = [\"Cels\", 0xF1_01]"),
+            Some("0xF1_01")
+        );
+        assert_eq!(radix_literal("sensor = 0b11 # x"), Some("0b11"));
+        assert_eq!(radix_literal("sensor = \"0x0300\""), None);
+        assert_eq!(radix_literal("sensor = '0x0300'"), None);
+        assert_eq!(radix_literal("sensor = 300 # 0x0300"), None);
+        assert_eq!(radix_literal("sensor = 100"), None);
     }
 }

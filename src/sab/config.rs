@@ -13,8 +13,8 @@ pub const PROTOCOL: Protocol = Protocol {
     line: Line::n81(DEFAULT_BAUD),
     accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
-    // Counter Millis ID Device Type Sensor#(0x10) Sensor Data | Addr Resp ms Framing Note
-    pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 36, 4, 7, 7, 0],
+    // Counter Millis ID Device Type Sensor#(0x10) Sensor Data | Unit Addr Resp ms Framing Note
+    pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 36, 4, 4, 7, 7, 0],
     vocab: &super::vocab::VOCAB,
 };
 
@@ -23,7 +23,7 @@ pub const DEFAULT_TIMEOUT_MS: u64 = 10;
 /// Bits per byte on the wire (8N1: start, 8 data, stop), for time reconstruction.
 pub const BITS_PER_BYTE: u64 = 10;
 /// Extra columns after the eight base columns.
-pub const COLUMNS: &[&str] = &["Addr", "Resp ms", "Framing", "Note"];
+pub const COLUMNS: &[&str] = &["Unit", "Addr", "Resp ms", "Framing", "Note"];
 
 /// `--framing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +50,9 @@ pub struct Options {
     pub devices: Vec<(String, u8)>,
     /// `(name, command)` pairs for the Sensor column.
     pub commands: Vec<(String, u8)>,
+    /// How payloads are read as numbers (`--value`, `[sab2.values]`); the default rule for the
+    /// commands not declared.
+    pub values: Vec<super::values::Declared>,
 }
 
 impl Default for Options {
@@ -61,6 +64,7 @@ impl Default for Options {
             max_payload: hdlc::DEFAULT_MAX_PAYLOAD,
             devices: Vec::new(),
             commands: Vec::new(),
+            values: Vec::new(),
         }
     }
 }

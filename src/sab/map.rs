@@ -8,10 +8,11 @@ use super::header::{self, Flags, NackCode};
 use super::names::Names;
 use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
+use super::values::{Reading, Values};
 use super::{hdlc, sync};
 use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
 use crate::row::RowOut;
-use crate::row::{Class, Row};
+use crate::row::{Class, Part, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
@@ -49,6 +50,12 @@ struct Scratch {
     addr: String,
     resp: String,
     note: String,
+    /// The row's number: its name (`distance`, `0x10`, `speed.req`), text and unit.
+    part_name: String,
+    value: String,
+    unit: String,
+    /// The number's value when the row carries one.
+    number: Option<f64>,
 }
 
 impl Scratch {
@@ -58,6 +65,10 @@ impl Scratch {
         self.addr.clear();
         self.resp.clear();
         self.note.clear();
+        self.part_name.clear();
+        self.value.clear();
+        self.unit.clear();
+        self.number = None;
     }
 
     /// Starts a new part of the note.
@@ -86,6 +97,7 @@ pub(super) struct Mapper {
     baud: u32,
     max_payload: usize,
     pub(super) names: Names,
+    values: Values,
     pub(super) pairing: Pairing,
     pub(super) stats: Stats,
     scratch: Scratch,
@@ -99,6 +111,7 @@ impl Mapper {
             baud: opts.baud.max(1),
             max_payload: opts.max_payload,
             names: Names::new(opts),
+            values: Values::new(&opts.values),
             pairing: Pairing::new(opts.timeout_micros.saturating_mul(1000)),
             stats: Stats::default(),
             scratch: Scratch::default(),
@@ -164,7 +177,21 @@ impl Mapper {
             }
             None => "",
         };
+        let part;
+        let parts: &[Part<'_>] = match sc.number {
+            Some(value) => {
+                part = [Part {
+                    name: &sc.part_name,
+                    unit: &sc.unit,
+                    text: &sc.value,
+                    value,
+                }];
+                &part
+            }
+            None => &[],
+        };
         let extra = [
+            sc.unit.as_str(),
             sc.addr.as_str(),
             sc.resp.as_str(),
             p.framing.name(),
@@ -180,10 +207,71 @@ impl Mapper {
             sensor,
             data: &sc.data,
             extra: &extra,
-            parts: &[],
+            parts,
             raw: p.raw,
         };
         let _ = out.row(&row);
+    }
+
+    /// The number of a valid request or ACK (`docs/sab.md`, "Values"), its Data cell, and a
+    /// note when a declared type does not fit the payload.
+    fn number(
+        values: &Values,
+        names: &Names,
+        sc: &mut Scratch,
+        command: u8,
+        flags: Flags,
+        payload: &[u8],
+    ) {
+        let ack = flags == Flags::Ack;
+        let declared = values.declared(command, ack);
+        match values.read(command, ack, payload, &mut sc.value) {
+            Reading::Number(v) => {
+                sc.number = Some(v);
+                match names.command(command) {
+                    "" => push_0x(&mut sc.part_name, command),
+                    name => sc.part_name.push_str(name),
+                }
+                if !ack {
+                    sc.part_name.push_str(".req");
+                }
+                match declared {
+                    Some(d) => {
+                        sc.unit.push_str(&d.unit);
+                        // The declared reading instead of the integer one: `23 01 (2.91 m)`.
+                        push_hex(&mut sc.data, payload);
+                        sc.data.push_str(" (");
+                        sc.data.push_str(&sc.value);
+                        if !d.unit.is_empty() {
+                            sc.data.push(' ');
+                            sc.data.push_str(&d.unit);
+                        }
+                        sc.data.push(')');
+                    }
+                    None => push_payload(&mut sc.data, payload),
+                }
+            }
+            Reading::WrongSize(ty, len) => {
+                push_payload(&mut sc.data, payload);
+                let n = sc.note();
+                push_u64(n, len as u64);
+                n.push_str(if len == 1 {
+                    " payload byte"
+                } else {
+                    " payload bytes"
+                });
+                n.push_str(", --value declares ");
+                n.push_str(ty.name());
+                n.push_str(" (");
+                push_u64(n, ty.size() as u64);
+                n.push_str("): no value");
+            }
+            Reading::NotFinite => {
+                push_payload(&mut sc.data, payload);
+                sc.note().push_str("f32 NaN or infinite: no value");
+            }
+            Reading::None => push_payload(&mut sc.data, payload),
+        }
     }
 
     pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut dyn RowOut) {
@@ -270,7 +358,11 @@ impl Mapper {
         let per = &mut st.per[addr as usize];
         let sc = &mut self.scratch;
         sc.clear();
-        push_payload(&mut sc.data, payload);
+        if matches!(flags, Flags::Request | Flags::Ack) {
+            Self::number(&self.values, &self.names, sc, command, flags, payload);
+        } else {
+            push_payload(&mut sc.data, payload);
+        }
         match flags {
             Flags::Request => per.requests += 1,
             Flags::Reserved => {

@@ -22,6 +22,7 @@ pub mod pairing;
 pub mod sample;
 pub mod stats;
 pub mod sync;
+pub mod values;
 mod vocab;
 
 pub use config::{
@@ -29,6 +30,7 @@ pub use config::{
 };
 pub use decoder::SabDecoder;
 pub use names::{parse_command, parse_device};
+pub use values::{Declared, Direction, Scale, ValueType};
 
 /// The SAB decoder (every input kind [`PROTOCOL`] accepts is a byte stream).
 pub fn decoder(opts: Options) -> Box<dyn crate::protocol::Decoder> {

@@ -197,7 +197,7 @@ pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'
             data.push_str("deg");
         }
         _ => {
-            let _ = write!(sensor, "{app_id:04X}");
+            let _ = write!(sensor, "0x{app_id:04X}");
             push_u64(data, v as u64);
         }
     }
@@ -266,6 +266,6 @@ mod tests {
             d(0x5001, v).1,
             "mode=5 simple=0 ssimple=0 flying=0 armed=1 batt_fs=0 ekf_fs=0 fs=0 fence=0 breach=0 thr=100% imu_temp=29degC"
         );
-        assert_eq!(d(0x5099, 7), ("5099".into(), "7".into()));
+        assert_eq!(d(0x5099, 7), ("0x5099".into(), "7".into()));
     }
 }

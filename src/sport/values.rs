@@ -185,23 +185,20 @@ fn hub_name(id: u8) -> Option<&'static str> {
 
 const HEX_DIGITS: &[u8; 16] = b"0123456789ABCDEF";
 
-/// Upper-case 4-digit hex label of an unknown app ID (`5100`), as EdgeTX names them.
+/// An app ID in busnoop's one hex notation: `0x` and four upper-case digits, the wire's 16 bits
+/// (`0x0210`, `0xF101`). A spreadsheet keeps it as text, where `210` would become the decimal
+/// number 210 (docs/sport.md, "Hex numbers").
 pub fn push_hex_id(out: &mut String, app_id: u16) {
+    out.push_str("0x");
     for shift in [12, 8, 4, 0] {
         out.push(HEX_DIGITS[(app_id >> shift) as usize & 0xF] as char);
     }
 }
 
-/// The `Sensor #` column: the app ID in hex without leading zeros (0x0210 → `210`).
+/// The `Sensor #` column: the app ID as `0x0210` ([`push_hex_id`]; the S-Port_Snoop sample
+/// writes `210`).
 pub fn push_sensor_no(out: &mut String, app_id: u16) {
-    let mut started = false;
-    for shift in [12, 8, 4, 0] {
-        let d = (app_id >> shift) as usize & 0xF;
-        if d != 0 || started || shift == 0 {
-            started = true;
-            out.push(HEX_DIGITS[d] as char);
-        }
-    }
+    push_hex_id(out, app_id);
 }
 
 /// Sensor label of an app ID without decoding a value (for config frames and notes).
@@ -603,8 +600,8 @@ mod tests {
             let (mut a, mut b) = (String::new(), String::new());
             push_sensor_no(&mut a, id);
             push_hex_id(&mut b, id);
-            assert_eq!(a, format!("{id:X}"));
-            assert_eq!(b, format!("{id:04X}"));
+            assert_eq!(a, format!("0x{id:04X}"));
+            assert_eq!(b, a);
         }
     }
 
@@ -700,7 +697,7 @@ mod tests {
             "SrvA=1.2A SrvV=7.4V SrvT=35degC"
         );
         assert_eq!(n(24, 0xF104, 0x62).2, "RxBt=5.07V");
-        assert_eq!(n(0, 0x5100, 12345).2, "5100=12345");
+        assert_eq!(n(0, 0x5100, 12345).2, "0x5100=12345");
         assert_eq!(n(0, 0x0010, 638).2, "BARO_ALT_BP=638");
         // Text values carry no number.
         assert_eq!(n(3, 0x0850, 0x0E07_0BFF).2, "");
@@ -719,10 +716,10 @@ mod tests {
 
     #[test]
     fn unknown_ids_show_hex_label_and_raw_value() {
-        assert_eq!(d(0x5100, 12345), ("5100".into(), "12345".into(), ""));
-        assert_eq!(d(0x0420, 7).0, "0420");
+        assert_eq!(d(0x5100, 12345), ("0x5100".into(), "12345".into(), ""));
+        assert_eq!(d(0x0420, 7).0, "0x0420");
         let mut s = String::new();
         push_sensor_no(&mut s, 0x0210);
-        assert_eq!(s, "210");
+        assert_eq!(s, "0x0210");
     }
 }

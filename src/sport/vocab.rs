@@ -29,7 +29,7 @@ pub const VOCAB: Vocab = Vocab {
     polls: true,
     keepalives: true,
     sensors,
-    sensor_no_text: "shows app IDs in hex (0210, F101)",
+    sensor_no_text: "shows app IDs in hex (0x0210, 0xF101; 0210 and 210 work too)",
     sensor_no,
     sensor_no_hex: true,
     devices: Some(device),

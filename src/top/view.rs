@@ -448,10 +448,10 @@ mod tests {
  busnoop  S.Port fixtures/sport-sample.bin  replay ×1  elapsed 00:00:01
  bytes/s 220  valid 100.0 %  rows 30  lines 4  CRC 0  T/O+NAK 0  sort ID
   ID   Device         Sensor # Sensor           Value           Unit  Rate/s Age   Min       Max       Frames  CRC  T/O
-  0    Vario          100      Alt              65.43           m     -      0.7s  65.43     65.43     1
-  0    Vario          110      Vario            0.00            m/s   -      0.8s  0         0         1
-  2    FAS-40S        200      Amps             0.0             A     -      0.9s  0         0         1
-  2    FAS-40S        210      Volts            0.00            V     -      0.9s  0         0         1
+  0    Vario          0x0100   Alt              65.43           m     -      0.7s  65.43     65.43     1
+  0    Vario          0x0110   Vario            0.00            m/s   -      0.8s  0         0         1
+  2    FAS-40S        0x0200   Amps             0.0             A     -      0.9s  0         0         1
+  2    FAS-40S        0x0210   Volts            0.00            V     -      0.9s  0         0         1
 
 
 
