@@ -50,6 +50,7 @@ impl<const N: usize> Numbers<N> {
         self.dropped = 0;
     }
 
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.len
     }
@@ -58,7 +59,8 @@ impl<const N: usize> Numbers<N> {
         self.len == 0
     }
 
-    /// Numbers that did not fit.
+    /// Numbers that did not fit (none in practice: `N` is the most a frame carries).
+    #[cfg(test)]
     pub fn dropped(&self) -> usize {
         self.dropped
     }
@@ -139,6 +141,7 @@ impl<const N: usize> Numbers<N> {
     }
 
     /// An unsigned integer of up to 64 bits (exact text; the `f64` may round above 2^53).
+    #[cfg(test)]
     pub fn uint(&mut self, name: &str, unit: &'static str, v: u64) {
         match i64::try_from(v) {
             Ok(v) => self.int(name, unit, v),

@@ -3,9 +3,9 @@
 //! The table mapping and the timing rule are documented in `docs/sport.md`.
 
 pub mod names;
-pub mod passthrough;
-pub mod values;
-pub mod vocab;
+pub(crate) mod passthrough;
+pub(crate) mod values;
+pub(crate) mod vocab;
 pub mod wire;
 
 use std::fmt::Write as _;

@@ -373,10 +373,7 @@ fn other(
 /// Receiver analog inputs: low byte, 0..255 = 0..13.2 V with EdgeTX's default ratio. Two
 /// decimals, as the radio's CSV log writes them (raw 98 → 5.07): one raw step is 52 mV, so a
 /// third decimal would only show the ratio's arithmetic, not the wire.
-pub fn push_receiver_volts(data: &mut String, raw: u8) {
-    push_fixed(data, receiver_centivolts(raw), 2);
-}
-
+///
 /// Hundredths of a volt of a receiver analog input (raw * 1320 / 255, rounded half up).
 fn receiver_centivolts(raw: u8) -> i64 {
     (raw as i64 * 1320 * 2 + 255) / (2 * 255)
