@@ -4,19 +4,10 @@
 mod common;
 
 use std::io::Write as _;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 use common::fixture;
-
-fn busnoop() -> Command {
-    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
-    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
-    c
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use common::{busnoop, text};
 
 fn run(args: &[&str], source: &std::path::Path) -> Output {
     busnoop().args(args).arg(source).output().unwrap()

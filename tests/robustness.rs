@@ -4,20 +4,11 @@
 mod common;
 
 use std::os::unix::process::CommandExt;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 use busnoop::sport::wire;
 use common::fixture;
-
-fn busnoop() -> Command {
-    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
-    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
-    c
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use common::{busnoop, text};
 
 /// No panic message, whatever happened.
 fn no_panic(out: &Output) {

@@ -7,20 +7,11 @@ use std::ffi::OsStr;
 use std::io::{BufRead, BufReader};
 use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 use busnoop::sport::wire;
 use common::fixture;
-
-fn busnoop() -> Command {
-    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
-    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
-    c
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use common::{busnoop, text};
 
 fn no_panic(out: &Output) {
     let err = text(&out.stderr);

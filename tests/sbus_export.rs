@@ -6,28 +6,14 @@
 //! busnoop's Ether-S-Bus decoder.
 
 mod common;
+use common::{busnoop, ok};
 
 use std::collections::HashMap;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use busnoop::sbus::telegram::{
     CrcBasis, encode_break_request, encode_break_response, encode_data, encode_secure,
 };
-
-fn busnoop() -> Command {
-    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
-    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
-    c
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn ok(out: &Output) -> String {
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
-    text(&out.stdout)
-}
 
 /// A small deterministic generator.
 struct Rng(u64);

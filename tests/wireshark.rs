@@ -4,24 +4,10 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use common::fixture;
-
-fn busnoop() -> Command {
-    let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
-    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
-    c
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn ok(out: &Output) -> String {
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
-    text(&out.stdout)
-}
+use common::{busnoop, ok, text};
 
 /// The rows (TSV) of `protocol` on `source`.
 fn rows(protocol: &str, source: &Path) -> String {

@@ -8,6 +8,24 @@ pub mod pty;
 use busnoop::protocol::Decoder;
 use busnoop::row::{Collected, OwnedRow};
 
+/// The busnoop binary of this build, without the caller's `NO_COLOR` and `RUST_LOG`.
+pub fn busnoop() -> std::process::Command {
+    let mut c = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
+    c.env_remove("NO_COLOR").env_remove("RUST_LOG");
+    c
+}
+
+/// Output bytes as text (lossy).
+pub fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// Standard output of a run that must have succeeded (its stderr in the message otherwise).
+pub fn ok(out: &std::process::Output) -> String {
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    text(&out.stdout)
+}
+
 /// Path of a file in `fixtures/`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
