@@ -29,6 +29,15 @@ pub mod kind {
     pub const TIME_JUMP: &str = "TimeJump";
 }
 
+/// Starts a new part of a row's Note: the parts of a note are joined with `; ` in every
+/// protocol. Returns the note to write the part into.
+pub fn note_part(note: &mut String) -> &mut String {
+    if !note.is_empty() {
+        note.push_str("; ");
+    }
+    note
+}
+
 /// Garbage is shown in rows of at most this many bytes, so that a long run of noise stays
 /// readable and every byte is still in exactly one row.
 pub const GARBAGE_ROW_MAX: usize = 64;

@@ -73,10 +73,7 @@ impl Scratch {
 
     /// Starts a new part of the note.
     fn note(&mut self) -> &mut String {
-        if !self.note.is_empty() {
-            self.note.push_str("; ");
-        }
-        &mut self.note
+        crate::row::note_part(&mut self.note)
     }
 }
 

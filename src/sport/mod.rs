@@ -106,10 +106,7 @@ impl Scratch {
     }
 
     fn note(&mut self, text: &str) {
-        if !self.note.is_empty() {
-            self.note.push_str("; ");
-        }
-        self.note.push_str(text);
+        crate::row::note_part(&mut self.note).push_str(text);
     }
 }
 
