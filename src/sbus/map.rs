@@ -71,29 +71,40 @@ pub(super) fn put_row(
     raw: &[u8],
 ) -> RowResult {
     let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
-    // Only rows that list values pay for the parts' buffer.
-    let mut buf;
-    let parts: &[Part<'_>] = if class != Class::Error && sc.data.contains('=') {
-        buf = [Part::EMPTY; MAX_PARTS];
+    macro_rules! row {
+        ($parts:expr) => {
+            out.row(&Row {
+                micros: Some(micros),
+                id,
+                device,
+                kind,
+                class,
+                sensor_no: &sc.sensor_no,
+                sensor,
+                data: &sc.data,
+                extra: &extra,
+                parts: $parts,
+                raw,
+            })
+        };
+    }
+    // Only rows that list values pay for the parts' buffer, and most need a small one.
+    if class != Class::Error && sc.data.as_bytes().contains(&b'=') {
+        let tokens = 1 + sc.data.bytes().filter(|&b| b == b' ').count();
+        if tokens <= FEW_PARTS {
+            let mut buf = [Part::EMPTY; FEW_PARTS];
+            let n = media_parts(&sc.data, &mut buf);
+            return row!(&buf[..n]);
+        }
+        let mut buf = [Part::EMPTY; MAX_PARTS];
         let n = media_parts(&sc.data, &mut buf);
-        &buf[..n]
-    } else {
-        &[]
-    };
-    out.row(&Row {
-        micros: Some(micros),
-        id,
-        device,
-        kind,
-        class,
-        sensor_no: &sc.sensor_no,
-        sensor,
-        data: &sc.data,
-        extra: &extra,
-        parts,
-        raw,
-    })
+        return row!(&buf[..n]);
+    }
+    row!(&[])
 }
+
+/// A parts buffer for the usual row (up to 16 registers), cheaper to set up than the largest.
+const FEW_PARTS: usize = 16;
 
 /// The most numbers an S-Bus telegram carries (a read or write of 128 flags).
 const MAX_PARTS: usize = 128;
@@ -102,19 +113,36 @@ const MAX_PARTS: usize = 128;
 /// `R`/`F`/`I`/`O`/`T`/`C` with its address and an integer is a number named like the medium
 /// (`R0`, `F3`). Any other Data (a range `R0..R3`, a status, a NAK, a clock) carries none: every
 /// token must be such a pair.
-fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>; MAX_PARTS]) -> usize {
+/// `buf` holds at most [`MAX_PARTS`] parts; more tokens than `buf` holds give none.
+fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>]) -> usize {
+    let bytes = data.as_bytes();
     let mut n = 0;
-    for tok in data.split(' ') {
-        let Some((name, text)) = tok.split_once('=') else {
+    let mut start = 0;
+    loop {
+        // The token up to the next space, and its first '=' (both ASCII: the slices below
+        // are at character boundaries).
+        let mut end = start;
+        let mut eq = None;
+        while end < bytes.len() && bytes[end] != b' ' {
+            if bytes[end] == b'=' && eq.is_none() {
+                eq = Some(end);
+            }
+            end += 1;
+        }
+        let Some(eq) = eq else {
             return 0;
         };
-        let mut chars = name.chars();
-        let medium = chars.next().is_some_and(|c| "RFIOTC".contains(c));
-        let addr = name.len() > 1 && name[1..].bytes().all(|b| b.is_ascii_digit());
+        let name = &data[start..eq];
+        let text = &data[eq + 1..end];
+        let medium = matches!(
+            name.as_bytes().first(),
+            Some(b'R' | b'F' | b'I' | b'O' | b'T' | b'C')
+        );
+        let addr = name.len() > 1 && name.as_bytes()[1..].iter().all(|b| b.is_ascii_digit());
         let Ok(value) = text.parse::<i64>() else {
             return 0;
         };
-        if !medium || !addr || n == MAX_PARTS {
+        if !medium || !addr || n == buf.len() {
             return 0;
         }
         buf[n] = Part {
@@ -124,8 +152,11 @@ fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>; MAX_PARTS]) -> usize {
             value: value as f64,
         };
         n += 1;
+        if end == bytes.len() {
+            return n;
+        }
+        start = end + 1;
     }
-    n
 }
 
 #[cfg(test)]
@@ -163,6 +194,70 @@ mod media_tests {
         ] {
             assert!(parts(none).is_empty(), "{none}");
         }
+    }
+
+    /// The rule as first written with `str::split` (the reference for the byte scanner).
+    fn reference(data: &str) -> Vec<(String, f64)> {
+        let mut v = Vec::new();
+        for tok in data.split(' ') {
+            let Some((name, text)) = tok.split_once('=') else {
+                return Vec::new();
+            };
+            let medium = name.chars().next().is_some_and(|c| "RFIOTC".contains(c));
+            let addr = name.len() > 1 && name.bytes().skip(1).all(|b| b.is_ascii_digit());
+            let Ok(value) = text.parse::<i64>() else {
+                return Vec::new();
+            };
+            if !medium || !addr || v.len() == MAX_PARTS {
+                return Vec::new();
+            }
+            v.push((format!("{name}={text}"), value as f64));
+        }
+        v
+    }
+
+    #[test]
+    fn the_byte_scanner_reads_like_the_reference_and_the_small_buffer_like_the_large() {
+        let many = |n: usize| {
+            (0..n)
+                .map(|i| format!("F{i}={}", i % 2))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let mut cases: Vec<String> = [
+            "R0=1",
+            "R0=1 ",
+            " R0=1",
+            "R0=1  R1=2",
+            "R0=1=2",
+            "R0==1",
+            "=1",
+            "R0=",
+            "R0=+7 T12=-3 C1=0",
+            "R00=1 O7=99999999999",
+            "R0=99999999999999999999",
+            "é5=1",
+            "Ré=1",
+            "R1=1 é",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for n in [1, 15, 16, 17, 127, 128, 129, 200] {
+            cases.push(many(n));
+        }
+        for data in &cases {
+            let want = reference(data);
+            assert_eq!(parts(data), want, "{data}");
+            let tokens = 1 + data.bytes().filter(|&b| b == b' ').count();
+            if tokens <= FEW_PARTS {
+                let mut buf = [Part::EMPTY; FEW_PARTS];
+                let n = media_parts(data, &mut buf);
+                assert_eq!(n, want.len(), "{data}");
+            }
+        }
+        assert_eq!(parts(&many(128)).len(), 128);
+        assert!(parts(&many(129)).is_empty());
     }
 }
 
