@@ -114,48 +114,68 @@ const MAX_PARTS: usize = 128;
 /// (`R0`, `F3`). Any other Data (a range `R0..R3`, a status, a NAK, a clock) carries none: every
 /// token must be such a pair.
 /// `buf` holds at most [`MAX_PARTS`] parts; more tokens than `buf` holds give none.
+///
+/// One pass over the bytes: every token must read `[RFIOTC][0-9]+=[+-]?[0-9]+` with the number
+/// in the range of an `i64` (what `str::parse::<i64>` accepts), tokens separated by single
+/// spaces.
 fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>]) -> usize {
     let bytes = data.as_bytes();
-    let mut n = 0;
-    let mut start = 0;
-    loop {
-        // The token up to the next space, and its first '=' (both ASCII: the slices below
-        // are at character boundaries).
-        let mut end = start;
-        let mut eq = None;
-        while end < bytes.len() && bytes[end] != b' ' {
-            if bytes[end] == b'=' && eq.is_none() {
-                eq = Some(end);
-            }
-            end += 1;
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
         }
-        let Some(eq) = eq else {
+        i
+    };
+    let mut n = 0;
+    let mut i = 0;
+    loop {
+        // the name: a medium letter and its address (the slices below are at ASCII bytes)
+        let start = i;
+        if !matches!(bytes.get(i), Some(b'R' | b'F' | b'I' | b'O' | b'T' | b'C')) {
             return 0;
-        };
-        let name = &data[start..eq];
-        let text = &data[eq + 1..end];
-        let medium = matches!(
-            name.as_bytes().first(),
-            Some(b'R' | b'F' | b'I' | b'O' | b'T' | b'C')
-        );
-        let addr = name.len() > 1 && name.as_bytes()[1..].iter().all(|b| b.is_ascii_digit());
-        let Ok(value) = text.parse::<i64>() else {
+        }
+        let eq = digits(i + 1);
+        if eq == i + 1 || bytes.get(eq) != Some(&b'=') {
             return 0;
-        };
-        if !medium || !addr || n == buf.len() {
+        }
+        // the number
+        i = eq + 1;
+        let neg = bytes.get(i) == Some(&b'-');
+        if neg || bytes.get(i) == Some(&b'+') {
+            i += 1;
+        }
+        let first = i;
+        let mut value: i64 = 0;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            let d = (bytes[i] - b'0') as i64;
+            let v = value.checked_mul(10).and_then(|v| {
+                if neg {
+                    v.checked_sub(d)
+                } else {
+                    v.checked_add(d)
+                }
+            });
+            let Some(v) = v else {
+                return 0;
+            };
+            value = v;
+            i += 1;
+        }
+        if i == first || n == buf.len() {
             return 0;
         }
         buf[n] = Part {
-            name,
+            name: &data[start..eq],
             unit: "",
-            text,
+            text: &data[eq + 1..i],
             value: value as f64,
         };
         n += 1;
-        if end == bytes.len() {
-            return n;
+        match bytes.get(i) {
+            None => return n,
+            Some(b' ') => i += 1,
+            Some(_) => return 0,
         }
-        start = end + 1;
     }
 }
 
@@ -239,6 +259,17 @@ mod media_tests {
             "é5=1",
             "Ré=1",
             "R1=1 é",
+            "R1=+",
+            "R1=-",
+            "R1=+-5",
+            "R1=-0 R2=+0",
+            "R1=-9223372036854775808",
+            "R1=-9223372036854775809",
+            "R1=9223372036854775807",
+            "R1=9223372036854775808",
+            "R1=5x",
+            "R1x=5",
+            "r1=5",
         ]
         .iter()
         .map(|s| s.to_string())
