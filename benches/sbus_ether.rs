@@ -1,16 +1,20 @@
-//! Ether-S-Bus throughput: busnoop against `tshark -r` on the same generated capture.
+//! Ether-S-Bus throughput: busnoop against `tshark -r` and `tshark -T fields` on the same
+//! generated capture.
 //!
 //! ```sh
 //! cargo bench --bench sbus_ether                                # 1 000 000 packets
 //! BUSNOOP_BENCH_PACKETS=4000000 cargo bench --bench sbus_ether  # more
+//! BUSNOOP_BENCH_BIN=/path/to/busnoop cargo bench --bench sbus_ether   # another build
 //! ```
 //!
 //! Generates `target/bench-data/sbus-ether-<N>.pcap` (Ethernet/IPv4/UDP, 4 clients polling 8
 //! PLCs: register reads of 1-16 registers, flag reads, register and flag writes answered by
 //! ACK, 2 % NAKs), then measures in one run: busnoop decoding in process (rows rendered and
-//! discarded), the release binary writing TSV to /dev/null, and `tshark -r FILE` writing its
-//! summary lines to /dev/null (skipped with a message when tshark is not installed), all pinned
-//! to CPU 0.
+//! discarded), the release binary writing TSV to /dev/null, `tshark -r FILE` writing its
+//! summary lines and `tshark -T fields` writing the fields of busnoop's columns (see
+//! [`TSHARK_FIELDS`]) to /dev/null (skipped with a message when tshark is not installed), all
+//! pinned to CPU 0. Times are CPU times (user + system; the machine is shared), busnoop's the
+//! best of three runs, tshark's of one.
 
 mod common;
 
@@ -22,7 +26,7 @@ use std::time::Duration;
 
 use busnoop::pcap::write as pw;
 use busnoop::sbus::telegram::encode_ether;
-use common::{Rng, decode_file, pin_to_core0, time_command};
+use common::{Rng, cpu_time, cpu_time_command, decode_file, pin_to_core0};
 
 /// Writes the capture; returns the number of packets.
 pub fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
@@ -94,14 +98,38 @@ pub fn generate(path: &Path, packets: u64) -> std::io::Result<u64> {
     Ok(n)
 }
 
+/// Decodes in this process; returns the CPU time and the number of rows.
 fn decode_in_process(path: &Path) -> (Duration, u64) {
-    decode_file(
+    let before = cpu_time(libc::RUSAGE_SELF);
+    let (_, rows) = decode_file(
         path,
         &mut busnoop::protocol::PcapBytes::new(busnoop::sbus::EtherDecoder::new(
             &busnoop::sbus::Options::default(),
         )),
-    )
+    );
+    (cpu_time(libc::RUSAGE_SELF) - before, rows)
 }
+
+/// The fields `tshark -T fields` writes: what busnoop's TSV columns hold (frame number, time,
+/// addresses and ports, sequence, telegram attribute, station, command, register count, data,
+/// ACK/NAK code, CRC status, response time).
+const TSHARK_FIELDS: &[&str] = &[
+    "frame.number",
+    "frame.time_relative",
+    "ip.src",
+    "udp.srcport",
+    "ip.dst",
+    "udp.dstport",
+    "sbus.seq",
+    "sbus.att",
+    "sbus.destination",
+    "sbus.cmd",
+    "sbus.rcount",
+    "sbus.data_rtc",
+    "sbus.nakcode",
+    "sbus.crc.status",
+    "sbus.response_time",
+];
 
 fn rate(packets: u64, d: Duration) -> f64 {
     packets as f64 / d.as_secs_f64()
@@ -142,11 +170,13 @@ fn main() {
     );
 
     // the release binary to TSV, best of three
-    let exe = env!("CARGO_BIN_EXE_busnoop");
+    let exe = std::env::var_os("BUSNOOP_BENCH_BIN")
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_busnoop").into());
     let mut best = Duration::MAX;
     for _ in 0..3 {
-        let d = time_command(Command::new(exe).args(["sbus", "-f", "tsv"]).arg(&path))
-            .expect("busnoop failed");
+        let mut cmd = Command::new(&exe);
+        cmd.args(["sbus", "--no-config", "-f", "tsv"]).arg(&path);
+        let d = cpu_time_command(&mut cmd).expect("busnoop failed");
         best = best.min(d);
     }
     let binary = rate(packets, best);
@@ -157,21 +187,32 @@ fn main() {
         common::children_peak_kb()
     );
 
-    // tshark, once (it is slow)
-    match time_command(Command::new("tshark").arg("-r").arg(&path)) {
-        Some(d) => {
-            let ts = rate(packets, d);
-            println!(
-                "tshark -r FILE:             {:>8.3} s  {:>12.0} packets/s",
-                d.as_secs_f64(),
-                ts
-            );
-            println!(
-                "busnoop / tshark: {:.1}× (binary to TSV), {:.1}× (decode only)",
-                binary / ts,
-                decode / ts
-            );
+    // tshark, once each (it is slow)
+    let mut fields = Command::new("tshark");
+    fields.arg("-r").arg(&path).args(["-T", "fields"]);
+    for f in TSHARK_FIELDS {
+        fields.args(["-e", f]);
+    }
+    let mut summary = Command::new("tshark");
+    summary.arg("-r").arg(&path);
+    for (label, cmd) in [("tshark -r FILE:", summary), ("tshark -T fields:", fields)] {
+        let mut cmd = cmd;
+        match cpu_time_command(&mut cmd) {
+            Some(d) => {
+                let ts = rate(packets, d);
+                println!(
+                    "{label:<27} {:>8.3} s  {:>12.0} packets/s",
+                    d.as_secs_f64(),
+                    ts
+                );
+                println!(
+                    "  busnoop / {}: {:.1}× (binary to TSV), {:.1}× (decode only)",
+                    label.trim_end_matches(':'),
+                    binary / ts,
+                    decode / ts
+                );
+            }
+            None => println!("{label} tshark is not installed (or failed): skipped"),
         }
-        None => println!("tshark is not installed (or failed): skipping the comparison"),
     }
 }

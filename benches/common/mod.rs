@@ -110,6 +110,24 @@ pub fn time_command(cmd: &mut Command) -> Option<Duration> {
     status.success().then_some(d)
 }
 
+/// User + system CPU time of this process (`libc::RUSAGE_SELF`) or of its waited-for children
+/// (`libc::RUSAGE_CHILDREN`): on a machine shared with other work, wall times say more about
+/// the neighbours than about the program measured.
+pub fn cpu_time(who: i32) -> Duration {
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe { libc::getrusage(who, &mut ru) };
+    let tv = |t: libc::timeval| Duration::new(t.tv_sec as u64, t.tv_usec as u32 * 1000);
+    tv(ru.ru_utime) + tv(ru.ru_stime)
+}
+
+/// Runs `cmd` pinned to CPU 0 (output thrown away) and returns its CPU time (user + system);
+/// `None` when it cannot run or fails.
+pub fn cpu_time_command(cmd: &mut Command) -> Option<Duration> {
+    let before = cpu_time(libc::RUSAGE_CHILDREN);
+    time_command(cmd)?;
+    Some(cpu_time(libc::RUSAGE_CHILDREN) - before)
+}
+
 /// The release binary under benchmark.
 pub fn busnoop() -> Command {
     Command::new(env!("CARGO_BIN_EXE_busnoop"))

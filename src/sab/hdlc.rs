@@ -265,7 +265,8 @@ impl Reassembler {
             EventKind::Runt
         } else if n > STORE_MAX as u64 {
             EventKind::Overlong
-        } else if crc16(&self.body[..stored]) == 0 {
+        } else if Self::crc_of(&self.body[..stored]).0 {
+            // (the CRC over body and CRC field is 0 exactly when the field holds the body's CRC)
             EventKind::Frame
         } else if n > (self.max_payload + OVERHEAD) as u64 {
             EventKind::Overlong
@@ -283,10 +284,9 @@ impl Reassembler {
         ev.body_len = n;
         match kind {
             EventKind::Frame | EventKind::BadCrc => {
-                let body = &self.body[..stored - 2];
-                let received = u16::from_le_bytes([self.body[stored - 2], self.body[stored - 1]]);
-                ev.body = body;
-                ev.crc = Some((received, crc16(body)));
+                let (_, received, computed) = Self::crc_of(&self.body[..stored]);
+                ev.body = &self.body[..stored - 2];
+                ev.crc = Some((received, computed));
             }
             _ => ev.body = &self.body[..stored],
         }
@@ -295,6 +295,17 @@ impl Reassembler {
             self.frames += 1;
         }
         self.in_frame = false;
+    }
+
+    /// A body with its CRC field (at least 2 bytes): whether the CRC checks, the received CRC
+    /// and the CRC computed over the body, in one pass. (CRC-16/MODBUS has no final XOR, so
+    /// the CRC over the body and its little-endian CRC is 0 exactly when the two are equal.)
+    #[inline]
+    fn crc_of(body_and_crc: &[u8]) -> (bool, u16, u16) {
+        let n = body_and_crc.len();
+        let received = u16::from_le_bytes([body_and_crc[n - 2], body_and_crc[n - 1]]);
+        let computed = crc16(&body_and_crc[..n - 2]);
+        (computed == received, received, computed)
     }
 
     fn garbage_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
@@ -403,6 +414,39 @@ mod tests {
         let ev = events(&parse_hex("7E 01 02 81 E2 7E").unwrap());
         assert_eq!(ev[0].kind, EventKind::BadCrc);
         assert_eq!(ev[0].crc, Some((0xE281, 0xE181)));
+    }
+
+    #[test]
+    fn a_frame_checks_exactly_when_its_crc_field_is_the_bodys_crc() {
+        // The CRC is computed once per frame; every bit error in body or CRC field is a bad
+        // CRC reporting the received and the computed value.
+        let body = [0x01, 0x02, 0x30, 0x41];
+        let crc = crc16(&body);
+        let mut frame = body.to_vec();
+        frame.extend_from_slice(&crc.to_le_bytes());
+        for bit in 0..frame.len() * 8 {
+            let mut f = frame.clone();
+            f[bit / 8] ^= 1 << (bit % 8);
+            let mut wire = vec![FLAG];
+            for &b in &f {
+                push_escaped(&mut wire, b);
+            }
+            wire.push(FLAG);
+            let ev = events(&wire);
+            assert_eq!(ev.len(), 1, "{bit}");
+            assert_eq!(ev[0].kind, EventKind::BadCrc, "{bit}");
+            let n = f.len();
+            let received = u16::from_le_bytes([f[n - 2], f[n - 1]]);
+            assert_eq!(ev[0].crc, Some((received, crc16(&f[..n - 2]))), "{bit}");
+        }
+        let mut wire = vec![FLAG];
+        for &b in &frame {
+            push_escaped(&mut wire, b);
+        }
+        wire.push(FLAG);
+        let ev = events(&wire);
+        assert_eq!(ev[0].kind, EventKind::Frame);
+        assert_eq!(ev[0].crc, Some((crc, crc)));
     }
 
     #[test]

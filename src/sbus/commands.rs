@@ -190,8 +190,25 @@ const fn change(mut cmd: Command) -> Command {
     cmd
 }
 
-/// Looks a command code up.
-pub const fn command(code: u8) -> Option<Command> {
+/// Looks a command code up (a table lookup: the framers ask for every candidate byte).
+#[inline]
+pub fn command(code: u8) -> Option<Command> {
+    TABLE[code as usize]
+}
+
+/// [`lookup`] of every code, built at compile time.
+static TABLE: [Option<Command>; 256] = {
+    let mut t = [None; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = lookup(i as u8);
+        i += 1;
+    }
+    t
+};
+
+/// The command table itself.
+const fn lookup(code: u8) -> Option<Command> {
     use Elem::*;
     use Layout::*;
     use Reply::*;

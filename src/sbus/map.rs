@@ -53,17 +53,11 @@ impl Scratch {
     }
 
     pub(super) fn note(&mut self, text: &str) {
-        if !self.note.is_empty() {
-            self.note.push_str("; ");
-        }
-        self.note.push_str(text);
+        crate::row::note_part(&mut self.note).push_str(text);
     }
 
     pub(super) fn note_with(&mut self, f: impl FnOnce(&mut String)) {
-        if !self.note.is_empty() {
-            self.note.push_str("; ");
-        }
-        f(&mut self.note);
+        f(crate::row::note_part(&mut self.note));
     }
 
     pub(super) fn resp_time(&mut self, us: u64) {
@@ -89,38 +83,57 @@ pub(super) fn put_row(
     raw: &[u8],
 ) -> RowResult {
     let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
-    // Only rows that list values pay for the parts' buffer.
-    let mut buf;
-    let parts: &[Part<'_>] = if class != Class::Error && sc.data.contains('=') {
-        buf = [Part::EMPTY; MAX_PARTS];
+    macro_rules! row {
+        ($parts:expr) => {
+            put(
+                out,
+                sc,
+                &Row {
+                    micros: Some(micros),
+                    id,
+                    device,
+                    kind,
+                    class,
+                    sensor_no: &sc.sensor_no,
+                    sensor,
+                    data: &sc.data,
+                    extra: &extra,
+                    parts: $parts,
+                    raw,
+                },
+            )
+        };
+    }
+    // Only rows that list values pay for the parts' buffer, and most need a small one.
+    if class != Class::Error && sc.data.as_bytes().contains(&b'=') {
+        let tokens = 1 + sc.data.bytes().filter(|&b| b == b' ').count();
+        if tokens <= FEW_PARTS {
+            let mut buf = [Part::EMPTY; FEW_PARTS];
+            let n = media_parts(&sc.data, &mut buf);
+            return row!(&buf[..n]);
+        }
+        let mut buf = [Part::EMPTY; MAX_PARTS];
         let n = media_parts(&sc.data, &mut buf);
-        &buf[..n]
-    } else {
-        &[]
-    };
-    let row = Row {
-        micros: Some(micros),
-        id,
-        device,
-        kind,
-        class,
-        sensor_no: &sc.sensor_no,
-        sensor,
-        data: &sc.data,
-        extra: &extra,
-        parts,
-        raw,
-    };
+        return row!(&buf[..n]);
+    }
+    row!(&[])
+}
+
+/// Hands the row on, with the telegram's content when the decoder kept it (the export).
+fn put(out: &mut dyn RowOut, sc: &Scratch, row: &Row<'_>) -> RowResult {
     if sc.unframed.is_empty() {
-        out.row(&row)
+        out.row(row)
     } else {
         let frame = Unframed {
             bytes: &sc.unframed,
             bad_check: sc.bad_check,
         };
-        out.row_unframed(&row, &frame)
+        out.row_unframed(row, &frame)
     }
 }
+
+/// A parts buffer for the usual row (up to 16 registers), cheaper to set up than the largest.
+const FEW_PARTS: usize = 16;
 
 /// The most numbers an S-Bus telegram carries (a read or write of 128 flags).
 const MAX_PARTS: usize = 128;
@@ -129,30 +142,70 @@ const MAX_PARTS: usize = 128;
 /// `R`/`F`/`I`/`O`/`T`/`C` with its address and an integer is a number named like the medium
 /// (`R0`, `F3`). Any other Data (a range `R0..R3`, a status, a NAK, a clock) carries none: every
 /// token must be such a pair.
-fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>; MAX_PARTS]) -> usize {
+/// `buf` holds at most [`MAX_PARTS`] parts; more tokens than `buf` holds give none.
+///
+/// One pass over the bytes: every token must read `[RFIOTC][0-9]+=[+-]?[0-9]+` with the number
+/// in the range of an `i64` (what `str::parse::<i64>` accepts), tokens separated by single
+/// spaces.
+fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>]) -> usize {
+    let bytes = data.as_bytes();
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
     let mut n = 0;
-    for tok in data.split(' ') {
-        let Some((name, text)) = tok.split_once('=') else {
+    let mut i = 0;
+    loop {
+        // the name: a medium letter and its address (the slices below are at ASCII bytes)
+        let start = i;
+        if !matches!(bytes.get(i), Some(b'R' | b'F' | b'I' | b'O' | b'T' | b'C')) {
             return 0;
-        };
-        let mut chars = name.chars();
-        let medium = chars.next().is_some_and(|c| "RFIOTC".contains(c));
-        let addr = name.len() > 1 && name[1..].bytes().all(|b| b.is_ascii_digit());
-        let Ok(value) = text.parse::<i64>() else {
+        }
+        let eq = digits(i + 1);
+        if eq == i + 1 || bytes.get(eq) != Some(&b'=') {
             return 0;
-        };
-        if !medium || !addr || n == MAX_PARTS {
+        }
+        // the number
+        i = eq + 1;
+        let neg = bytes.get(i) == Some(&b'-');
+        if neg || bytes.get(i) == Some(&b'+') {
+            i += 1;
+        }
+        let first = i;
+        let mut value: i64 = 0;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            let d = (bytes[i] - b'0') as i64;
+            let v = value.checked_mul(10).and_then(|v| {
+                if neg {
+                    v.checked_sub(d)
+                } else {
+                    v.checked_add(d)
+                }
+            });
+            let Some(v) = v else {
+                return 0;
+            };
+            value = v;
+            i += 1;
+        }
+        if i == first || n == buf.len() {
             return 0;
         }
         buf[n] = Part {
-            name,
+            name: &data[start..eq],
             unit: "",
-            text,
+            text: &data[eq + 1..i],
             value: value as f64,
         };
         n += 1;
+        match bytes.get(i) {
+            None => return n,
+            Some(b' ') => i += 1,
+            Some(_) => return 0,
+        }
     }
-    n
 }
 
 #[cfg(test)]
@@ -190,6 +243,81 @@ mod media_tests {
         ] {
             assert!(parts(none).is_empty(), "{none}");
         }
+    }
+
+    /// The rule as first written with `str::split` (the reference for the byte scanner).
+    fn reference(data: &str) -> Vec<(String, f64)> {
+        let mut v = Vec::new();
+        for tok in data.split(' ') {
+            let Some((name, text)) = tok.split_once('=') else {
+                return Vec::new();
+            };
+            let medium = name.chars().next().is_some_and(|c| "RFIOTC".contains(c));
+            let addr = name.len() > 1 && name.bytes().skip(1).all(|b| b.is_ascii_digit());
+            let Ok(value) = text.parse::<i64>() else {
+                return Vec::new();
+            };
+            if !medium || !addr || v.len() == MAX_PARTS {
+                return Vec::new();
+            }
+            v.push((format!("{name}={text}"), value as f64));
+        }
+        v
+    }
+
+    #[test]
+    fn the_byte_scanner_reads_like_the_reference_and_the_small_buffer_like_the_large() {
+        let many = |n: usize| {
+            (0..n)
+                .map(|i| format!("F{i}={}", i % 2))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let mut cases: Vec<String> = [
+            "R0=1",
+            "R0=1 ",
+            " R0=1",
+            "R0=1  R1=2",
+            "R0=1=2",
+            "R0==1",
+            "=1",
+            "R0=",
+            "R0=+7 T12=-3 C1=0",
+            "R00=1 O7=99999999999",
+            "R0=99999999999999999999",
+            "é5=1",
+            "Ré=1",
+            "R1=1 é",
+            "R1=+",
+            "R1=-",
+            "R1=+-5",
+            "R1=-0 R2=+0",
+            "R1=-9223372036854775808",
+            "R1=-9223372036854775809",
+            "R1=9223372036854775807",
+            "R1=9223372036854775808",
+            "R1=5x",
+            "R1x=5",
+            "r1=5",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for n in [1, 15, 16, 17, 127, 128, 129, 200] {
+            cases.push(many(n));
+        }
+        for data in &cases {
+            let want = reference(data);
+            assert_eq!(parts(data), want, "{data}");
+            let tokens = 1 + data.bytes().filter(|&b| b == b' ').count();
+            if tokens <= FEW_PARTS {
+                let mut buf = [Part::EMPTY; FEW_PARTS];
+                let n = media_parts(data, &mut buf);
+                assert_eq!(n, want.len(), "{data}");
+            }
+        }
+        assert_eq!(parts(&many(128)).len(), 128);
+        assert!(parts(&many(129)).is_empty());
     }
 }
 

@@ -5,8 +5,8 @@
 //! timestamps. See `docs/sbus.md` for what cannot be recovered.
 
 use super::readings::{
-    Cand, crc_of, map, plausible_response_len, request_len, resp_at, searched, tail_dominated,
-    zero_dominated,
+    Cand, Memo, SearchMemo, crc_of, map, plausible_response_len, request_len, resp_at, searched,
+    tail_dominated, zero_dominated,
 };
 use super::{CrcCheck, Event, Frame, GapClock, GarbageRun, Tele, expect_of};
 use crate::sbus::commands::Expect;
@@ -74,6 +74,8 @@ pub struct BreakFramer {
     /// Requests were seen after break characters: a bad-CRC reading is then only confirmed by
     /// a request that has its break too.
     breaks_seen: bool,
+    /// The CRC searches of requests without a known length, kept while the bytes arrive.
+    memo: SearchMemo,
 }
 
 impl BreakFramer {
@@ -84,6 +86,7 @@ impl BreakFramer {
             timeout,
             req_time: None,
             breaks_seen: false,
+            memo: SearchMemo::default(),
             parity,
             buf: Vec::with_capacity(4096),
             times: Vec::with_capacity(4096),
@@ -137,6 +140,14 @@ impl BreakFramer {
 
     fn avail(&self) -> &[u8] {
         &self.buf[self.head..]
+    }
+
+    /// The search memo for readings of [`Self::avail`] (which starts at stream position `base`).
+    fn memo(&self) -> Memo<'_> {
+        Memo {
+            table: &self.memo,
+            origin: self.base,
+        }
     }
 
     /// Decides as much as the buffered bytes allow; `at_end`: no byte follows them (gap or end
@@ -257,7 +268,7 @@ impl BreakFramer {
                         crc_ok: true,
                         mismatch: false,
                     }),
-                    Cand::Match(()) => match tail_dominated(b, n + 2, at_end) {
+                    Cand::Match(()) => match tail_dominated(b, n + 2, at_end, self.memo()) {
                         Cand::Match(()) => Cand::No,
                         Cand::More => Cand::More,
                         Cand::No => Cand::Match(Found::Response {
@@ -289,7 +300,7 @@ impl BreakFramer {
                         if at_end { Cand::No } else { Cand::More }
                     } else {
                         let ok = match self.boundary(b, n + 2, at_end) {
-                            Cand::Match(()) => self.clean_inside(b, n + 2, at_end),
+                            Cand::Match(()) => self.clean_inside(b, n + 2, at_end, self.memo()),
                             other => other,
                         };
                         map(ok, |()| Found::Response {
@@ -336,9 +347,9 @@ impl BreakFramer {
                     }
                 }
             }
-            match request_len(b, k + skip, at_end) {
+            match request_len(b, k + skip, at_end, self.memo()) {
                 Cand::Match((body, true)) => {
-                    match zero_dominated(b, k + skip, at_end) {
+                    match zero_dominated(b, k + skip, at_end, self.memo()) {
                         Cand::Match(()) => continue,
                         Cand::More => return Cand::More,
                         Cand::No => {}
@@ -346,7 +357,12 @@ impl BreakFramer {
                     if searched(b, k + skip) {
                         // A CRC-16 with init 0 has residue 0 over a whole telegram, so a
                         // search can also check across complete telegrams: refuse that.
-                        match self.clean_inside(&b[k + skip..], 2 + body + 2, at_end) {
+                        match self.clean_inside(
+                            &b[k + skip..],
+                            2 + body + 2,
+                            at_end,
+                            self.memo().at(k + skip),
+                        ) {
                             Cand::Match(()) => {}
                             Cand::More => return Cand::More,
                             Cand::No => continue,
@@ -379,7 +395,7 @@ impl BreakFramer {
                     return Cand::More;
                 }
             }
-            match request_len(b, skip, at_end) {
+            match request_len(b, skip, at_end, self.memo()) {
                 Cand::Match((body, false)) => {
                     let r = ReqAt {
                         skip,
@@ -388,7 +404,7 @@ impl BreakFramer {
                     };
                     // (the boundary first: it is cheap and rules out most garbage)
                     let ok = match self.boundary(b, r.total(), at_end) {
-                        Cand::Match(()) => self.clean_inside(b, r.total(), at_end),
+                        Cand::Match(()) => self.clean_inside(b, r.total(), at_end, self.memo()),
                         other => other,
                     };
                     match ok {
@@ -452,7 +468,7 @@ impl BreakFramer {
                     }
                     if b.get(e..e + skip)
                         .is_some_and(|z| z.iter().all(|&x| x == 0))
-                        && let Cand::Match(_) = request_len(b, e + skip, at_end)
+                        && let Cand::Match(_) = request_len(b, e + skip, at_end, self.memo())
                     {
                         return Cand::Match(());
                     }
@@ -486,15 +502,16 @@ impl BreakFramer {
     }
 
     /// A bad-CRC reading of `0..end` is only taken when no valid request starts inside it.
-    fn clean_inside(&self, b: &[u8], end: usize, at_end: bool) -> Cand<()> {
+    /// (`memo`: for `b`, which may start after [`Self::avail`].)
+    fn clean_inside(&self, b: &[u8], end: usize, at_end: bool, memo: Memo<'_>) -> Cand<()> {
         // Only requests of known length count here, which keeps the work bounded (no search
         // inside a search).
         for j in 1..end {
             if searched(b, j) {
                 continue;
             }
-            match request_len(b, j, at_end) {
-                Cand::Match((_, true)) => match zero_dominated(b, j, at_end) {
+            match request_len(b, j, at_end, memo) {
+                Cand::Match((_, true)) => match zero_dominated(b, j, at_end, memo) {
                     Cand::Match(()) => {}
                     Cand::More => return Cand::More,
                     Cand::No => return Cand::No,
@@ -512,7 +529,9 @@ impl BreakFramer {
     fn clean_search(&self, b: &[u8], at_end: bool, expected: Option<usize>) -> Cand<usize> {
         match self.search_resp(b, at_end, expected) {
             Cand::Match(len) => match self.boundary(b, len + 2, at_end) {
-                Cand::Match(()) => map(self.clean_inside(b, len + 2, at_end), |()| len),
+                Cand::Match(()) => {
+                    map(self.clean_inside(b, len + 2, at_end, self.memo()), |()| len)
+                }
                 other => map(other, |()| len),
             },
             other => other,

@@ -28,6 +28,17 @@ enum Phase {
     Body,
 }
 
+/// The logical length (AT … CRC) the open telegram must have, as far as its bytes tell yet.
+/// Worked out once it is knowable and kept: it never changes while the telegram grows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Known {
+    /// Not yet: more bytes tell (a request's command or its length byte).
+    NotYet,
+    /// Never: the telegram ends at the next B5, a gap or the end of the input.
+    Never,
+    Len(usize),
+}
+
 /// Pure SM2 / secure data-mode reassembler.
 #[derive(Clone, Debug)]
 pub struct DataFramer {
@@ -51,6 +62,8 @@ pub struct DataFramer {
     clock: GapClock,
     /// What the last request asked for (for responses, which carry no length).
     expect: Expect,
+    /// The open telegram's length, once known.
+    known: Known,
 }
 
 impl DataFramer {
@@ -72,6 +85,7 @@ impl DataFramer {
             garbage: GarbageRun::default(),
             clock: GapClock { gap, last: None },
             expect: Expect::Nothing,
+            known: Known::NotYet,
         }
     }
 
@@ -114,6 +128,7 @@ impl DataFramer {
         self.no_inner = false;
         self.time = time;
         self.offset = self.pos;
+        self.known = Known::NotYet;
     }
 
     fn byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
@@ -186,6 +201,7 @@ impl DataFramer {
         // The inner AT follows; `tele` starts with it.
         self.tele.clear();
         self.tele_at.clear();
+        self.known = Known::NotYet;
     }
 
     fn logical(&mut self, v: u8, wire_at: usize, emit: &mut impl FnMut(&Event<'_>)) {
@@ -234,39 +250,59 @@ impl DataFramer {
     fn push_tele(&mut self, v: u8, wire_at: usize, emit: &mut impl FnMut(&Event<'_>)) {
         self.tele.push(v);
         self.tele_at.push(wire_at as u16);
-        if self.complete_len() == Some(self.tele.len())
-            && (self.secure.is_some() || self.crc_check().ok())
-        {
-            self.close(emit);
+        if self.known == Known::NotYet {
+            self.known = self.complete_len();
+        }
+        if self.known == Known::Len(self.tele.len()) {
+            if self.secure.is_some() {
+                self.close(emit);
+            } else {
+                let crc = self.crc_check();
+                if crc.ok() {
+                    self.close_checked(Some(crc), emit);
+                }
+            }
         }
     }
 
-    /// The logical length (AT … CRC) the open telegram must have, when known.
-    fn complete_len(&self) -> Option<usize> {
+    /// The logical length (AT … CRC) the open telegram must have, as far as its bytes tell.
+    fn complete_len(&self) -> Known {
+        use Known::{Len, Never, NotYet};
         if let Some(s) = &self.secure {
             // LEN counts the inner FS too.
-            return (s.len as usize).checked_sub(1).filter(|&n| n > 0);
+            return match (s.len as usize).checked_sub(1).filter(|&n| n > 0) {
+                Some(n) => Len(n),
+                None => Never,
+            };
         }
         let t = &self.tele;
-        match *t.first()? {
-            AT_ACKNAK => Some(1 + 2 + 2),
+        let Some(&at) = t.first() else {
+            return NotYet;
+        };
+        match at {
+            AT_ACKNAK => Len(1 + 2 + 2),
             AT_REQUEST => {
                 if t.len() < 3 {
-                    return None;
+                    return NotYet;
                 }
-                let cmd = commands::command(t[2])?;
-                let body = &t[3..];
-                match cmd.layout.body_len(body)? {
-                    Ok(n) => Some(1 + 2 + n + 2),
-                    Err(_) => None,
+                let Some(cmd) = commands::command(t[2]) else {
+                    return Never;
+                };
+                match cmd.layout.body_len(&t[3..]) {
+                    Some(Ok(n)) => Len(1 + 2 + n + 2),
+                    Some(Err(_)) => NotYet,
+                    None => Never,
                 }
             }
             AT_RESPONSE => match self.expect {
-                Expect::Data(n) => Some(1 + n + 2),
-                Expect::LengthPrefixed => t.get(1).map(|&n| 1 + 1 + n as usize + 2),
-                _ => None,
+                Expect::Data(n) => Len(1 + n + 2),
+                Expect::LengthPrefixed => match t.get(1) {
+                    Some(&n) => Len(1 + 1 + n as usize + 2),
+                    None => NotYet,
+                },
+                _ => Never,
             },
-            _ => None,
+            _ => Never,
         }
     }
 
@@ -282,7 +318,13 @@ impl DataFramer {
         d.update(&self.tele[..n - 2]);
         let unescaped = d.finalize();
         let crc_wire = self.tele_at[n - 2] as usize;
-        let escaped = crc16(&self.wire[self.tele_fs..crc_wire]);
+        // Both readings in one pass when no DLE pair was undone before the CRC (the usual
+        // case): the wire then holds the same bytes as the logical telegram.
+        let escaped = if self.wire[self.tele_fs] == FS && crc_wire - self.tele_fs == n - 1 {
+            unescaped
+        } else {
+            crc16(&self.wire[self.tele_fs..crc_wire])
+        };
         if got == escaped && got == unescaped {
             CrcCheck::Ok(CrcBasis::Both)
         } else if got == escaped {
@@ -300,6 +342,11 @@ impl DataFramer {
 
     /// Ends the open telegram (if any) and emits it.
     fn close(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.close_checked(None, emit);
+    }
+
+    /// [`Self::close`] with the CRC check of the open telegram when it is already done.
+    fn close_checked(&mut self, checked: Option<CrcCheck>, emit: &mut impl FnMut(&Event<'_>)) {
         if self.phase == Phase::Outside {
             return;
         }
@@ -326,7 +373,7 @@ impl DataFramer {
         // assumed B5 would say: it is shown as broken, never as a telegram.
         let (tele, crc) = if self.phase == Phase::Body && self.tele.len() >= 3 && !self.no_inner {
             let n = self.tele.len();
-            let crc = self.crc_check();
+            let crc = checked.unwrap_or_else(|| self.crc_check());
             (classify(self.tele[0], &self.tele[1..n - 2]), crc)
         } else {
             problem = problem.or(Some("cut short"));
@@ -476,6 +523,63 @@ mod tests {
             );
             assert_eq!(evs[1].crc(), CrcCheck::Ok(basis));
         }
+    }
+
+    #[test]
+    fn a_dle_pair_only_in_the_crc_leaves_both_readings_equal() {
+        // Both CRC readings are worked out in one pass when no DLE pair precedes the CRC; a
+        // pair inside the CRC field itself must not change that.
+        let mut seen = 0;
+        for x in 0..=255u8 {
+            let payload = [1, 6, 3, 0, x];
+            let mut logical = vec![FS, AT_REQUEST];
+            logical.extend_from_slice(&payload);
+            let crc = crc16(&logical).to_be_bytes();
+            if payload.contains(&FS) || payload.contains(&DLE) {
+                continue;
+            }
+            if !crc.contains(&FS) && !crc.contains(&DLE) {
+                continue;
+            }
+            seen += 1;
+            let wire = data(AT_REQUEST, &payload, CrcBasis::Both);
+            assert!(wire.len() > logical.len() + 2, "{wire:02X?}");
+            let (before, evs) = run(&[wire.clone(), wire.clone()].concat());
+            assert_eq!((before, evs.len()), (2, 2), "{evs:?}");
+            for e in &evs {
+                assert_eq!(e.tele(), Some(&request(&payload)));
+                assert_eq!(e.wire(), wire);
+                assert_eq!(e.crc(), CrcCheck::Ok(CrcBasis::Both), "{x:02X}");
+            }
+        }
+        assert!(seen > 0);
+    }
+
+    #[test]
+    fn a_length_known_from_the_body_ends_the_telegram_at_its_crc() {
+        // write 2 registers: the count byte tells the length; the telegram ends at its CRC,
+        // byte by byte or at once, and a wrong CRC keeps it open until the next B5
+        let req = data(
+            AT_REQUEST,
+            &[3, 0x0E, 9, 0, 7, 1, 2, 3, 4, 5, 6, 7, 8],
+            CrcBasis::Both,
+        );
+        let single: Vec<(Vec<u8>, Option<u64>)> = req.iter().map(|&b| (vec![b], None)).collect();
+        for segments in [vec![(req.clone(), None)], single] {
+            let mut evs = Vec::new();
+            let mut f = DataFramer::new(None);
+            for (bytes, t) in &segments {
+                f.push(bytes, *t, &mut |e| evs.push(Ev::of(e)));
+            }
+            assert_eq!(evs.len(), 1, "{evs:?}");
+            assert_eq!(evs[0].wire(), req);
+            assert_eq!(evs[0].crc(), CrcCheck::Ok(CrcBasis::Both));
+        }
+        let mut bad = req.clone();
+        *bad.last_mut().unwrap() ^= 0x40;
+        let (before, evs) = run(&[bad.clone(), vec![0x11, 0x22]].concat());
+        assert_eq!((before, evs.len()), (0, 1), "{evs:?}");
+        assert_eq!(evs[0].wire().len(), bad.len() + 2);
     }
 
     #[test]
