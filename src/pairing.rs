@@ -227,6 +227,7 @@ impl<K: Copy + Eq, R: Copy> LateWindow<K, R> {
     }
 
     /// Forgets everything.
+    #[cfg(test)]
     pub fn clear(&mut self) {
         self.entries.clear();
     }

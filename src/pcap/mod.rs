@@ -15,10 +15,10 @@
 //!
 //! The sources (`crate::source`) open the containers; protocols see [`Packet`]s only.
 
-pub mod read;
-pub mod rtac;
+pub(crate) mod read;
+pub(crate) mod rtac;
 pub mod write;
-pub mod write_ng;
+pub(crate) mod write_ng;
 
 pub use read::PcapStream;
 

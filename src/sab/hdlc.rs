@@ -125,11 +125,6 @@ impl Reassembler {
         }
     }
 
-    /// The configured payload limit.
-    pub fn max_payload(&self) -> usize {
-        self.max_payload
-    }
-
     /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         for &b in data {
@@ -206,16 +201,6 @@ impl Reassembler {
         ev.before_first = self.frames == 0;
         emit(&ev);
         self.garbage_len = 0;
-    }
-
-    /// Bytes consumed so far.
-    pub fn position(&self) -> u64 {
-        self.pos
-    }
-
-    /// Valid frames emitted so far.
-    pub fn frames(&self) -> u64 {
-        self.frames
     }
 
     fn open(&mut self, time: Option<u64>) {

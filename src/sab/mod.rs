@@ -12,16 +12,16 @@
 
 mod config;
 mod decoder;
-pub mod detect;
+pub(crate) mod detect;
 pub mod frame;
-pub mod hdlc;
+pub(crate) mod hdlc;
 pub mod header;
 mod map;
 mod names;
-pub mod pairing;
+pub(crate) mod pairing;
 pub mod sample;
-pub mod stats;
-pub mod sync;
+pub(crate) mod stats;
+pub(crate) mod sync;
 pub mod values;
 mod vocab;
 

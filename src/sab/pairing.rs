@@ -211,12 +211,6 @@ impl Pairing {
             }
         })
     }
-
-    /// A gap in the capture: forget everything.
-    pub fn reset(&mut self) {
-        self.open = None;
-        self.recent.clear();
-    }
 }
 
 #[cfg(test)]

@@ -198,19 +198,10 @@ impl Reassembler {
         self.run.bad_lengths = 0;
     }
 
-    /// Bytes consumed so far (the stream offset after the last byte pushed).
-    pub fn position(&self) -> u64 {
-        self.base + self.len as u64
-    }
-
+    #[cfg(test)]
     /// Bytes held back while a candidate is undecided (for tests of the memory bound).
     pub fn held(&self) -> usize {
         self.len
-    }
-
-    /// Valid frames emitted so far.
-    pub fn frames(&self) -> u64 {
-        self.frames
     }
 
     fn check(&self, q: usize) -> Check {

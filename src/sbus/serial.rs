@@ -18,8 +18,7 @@ mod data;
 mod readings;
 
 pub use break_mode::BreakFramer;
-pub use data::{DataFramer, MAX_WIRE};
-pub use readings::MAX_SEARCH_BODY;
+pub use data::DataFramer;
 
 use super::commands::{self, Expect};
 use super::telegram::{AT_ACKNAK, AT_REQUEST, AT_RESPONSE, BROADCAST, CrcBasis};
