@@ -9,10 +9,24 @@
 use crate::fmt::push_fixed;
 use crate::row::Part;
 
-/// One number being built: ranges into the buffers.
+/// A number's name: a constant (most sensors), or a range of the names buffer (names built
+/// per row, `Cell3`, `0x5100`).
+#[derive(Clone, Copy)]
+enum Name {
+    Static(&'static str),
+    Built(u32, u32),
+}
+
+impl Default for Name {
+    fn default() -> Self {
+        Name::Static("")
+    }
+}
+
+/// One number being built: its name and ranges into the buffers.
 #[derive(Clone, Copy, Default)]
 struct Slot {
-    name: (u32, u32),
+    name: Name,
     unit: &'static str,
     text: (u32, u32),
     value: f64,
@@ -86,23 +100,28 @@ impl<const N: usize> Numbers<N> {
         &s[a as usize..b as usize]
     }
 
-    /// Starts a number: writes its name with `name` and returns its slot, or `None` when full.
-    fn start(&mut self, name: impl FnOnce(&mut String), unit: &'static str) -> Option<usize> {
+    /// Starts a number named `name` and returns its slot, or `None` when full.
+    #[inline]
+    fn start(&mut self, name: Name, unit: &'static str) -> Option<usize> {
         if self.len == N {
             self.dropped += 1;
             return None;
         }
-        let a = self.names.len() as u32;
-        name(&mut self.names);
-        let b = self.names.len() as u32;
         let i = self.len;
         self.slots[i] = Slot {
-            name: (a, b),
+            name,
             unit,
             text: (0, 0),
             value: 0.0,
         };
         Some(i)
+    }
+
+    /// Writes a name with `name` into the names buffer.
+    fn build_name(&mut self, name: impl FnOnce(&mut String)) -> Name {
+        let a = self.names.len() as u32;
+        name(&mut self.names);
+        Name::Built(a, self.names.len() as u32)
     }
 
     /// `raw / 10^prec`, named with `name`.
@@ -113,6 +132,21 @@ impl<const N: usize> Numbers<N> {
         raw: i64,
         prec: u8,
     ) {
+        if self.len == N {
+            self.dropped += 1;
+            return;
+        }
+        let name = self.build_name(name);
+        self.push_fixed(name, unit, raw, prec);
+    }
+
+    /// `raw / 10^prec`.
+    pub fn fixed(&mut self, name: &'static str, unit: &'static str, raw: i64, prec: u8) {
+        self.push_fixed(Name::Static(name), unit, raw, prec);
+    }
+
+    #[inline]
+    fn push_fixed(&mut self, name: Name, unit: &'static str, raw: i64, prec: u8) {
         let Some(i) = self.start(name, unit) else {
             return;
         };
@@ -125,13 +159,8 @@ impl<const N: usize> Numbers<N> {
         self.len += 1;
     }
 
-    /// `raw / 10^prec`.
-    pub fn fixed(&mut self, name: &str, unit: &'static str, raw: i64, prec: u8) {
-        self.fixed_with(|s| s.push_str(name), unit, raw, prec);
-    }
-
     /// An integer.
-    pub fn int(&mut self, name: &str, unit: &'static str, v: i64) {
+    pub fn int(&mut self, name: &'static str, unit: &'static str, v: i64) {
         self.fixed(name, unit, v, 0);
     }
 
@@ -142,11 +171,11 @@ impl<const N: usize> Numbers<N> {
 
     /// An unsigned integer of up to 64 bits (exact text; the `f64` may round above 2^53).
     #[cfg(test)]
-    pub fn uint(&mut self, name: &str, unit: &'static str, v: u64) {
+    pub fn uint(&mut self, name: &'static str, unit: &'static str, v: u64) {
         match i64::try_from(v) {
             Ok(v) => self.int(name, unit, v),
             Err(_) => {
-                let Some(i) = self.start(|s| s.push_str(name), unit) else {
+                let Some(i) = self.start(Name::Static(name), unit) else {
                     return;
                 };
                 let a = self.text.len() as u32;
@@ -167,7 +196,10 @@ impl<const N: usize> Numbers<N> {
         let mut parts = [Part::EMPTY; N];
         for (p, s) in parts.iter_mut().zip(&self.slots[..self.len]) {
             *p = Part {
-                name: self.range(&self.names, s.name),
+                name: match s.name {
+                    Name::Static(n) => n,
+                    Name::Built(a, b) => self.range(&self.names, (a, b)),
+                },
                 unit: s.unit,
                 text: self.range(&self.text, s.text),
                 value: s.value,
