@@ -1,6 +1,7 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
 pub mod output;
+mod tap;
 pub mod wide;
 
 use std::io::Write as _;
@@ -13,8 +14,9 @@ use crate::row::RowOut;
 use crate::row::{BASE_COLUMNS, Class, Row};
 use crate::time::Anchor;
 pub use output::Output;
+pub use tap::{Tap, Tapped};
 
-use crate::row::{OutputError, RowResult, Unframed};
+use crate::row::{OutputError, RowResult};
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -685,66 +687,6 @@ impl Sink for Table {
     }
     fn skip(&mut self) {
         Table::skip(self)
-    }
-}
-
-/// A stage a row passes on its way into the sink it wraps (pacing, exporting): it sees every row
-/// first and flushes its own output before the sink does. [`Tapped`] forwards the [`Sink`] calls,
-/// so a tap writes only what it adds.
-pub trait Tap {
-    /// Runs before `inner` takes the row (and the frame's content, when the decoder handed it
-    /// on: [`RowOut::row_unframed`]): may wait (flushing `inner` meanwhile) or write the row
-    /// elsewhere. An error stops the run as a sink's would.
-    fn before_row<S: Sink + ?Sized>(
-        &mut self,
-        row: &Row<'_>,
-        frame: Option<&Unframed<'_>>,
-        inner: &mut S,
-    ) -> RowResult;
-    /// Flushes what the tap writes; runs before the sink flushes or closes.
-    fn flush(&mut self) -> Result<(), OutputError> {
-        Ok(())
-    }
-    /// The wall-clock time of the capture's start became known (before the sink hears it).
-    fn set_anchor(&mut self, _anchor: Option<Anchor>) {}
-}
-
-/// A sink with a [`Tap`] in front of it.
-pub struct Tapped<'a, S: Sink + ?Sized, T: Tap> {
-    pub inner: &'a mut S,
-    pub tap: T,
-}
-
-impl<S: Sink + ?Sized, T: Tap> RowOut for Tapped<'_, S, T> {
-    fn row(&mut self, row: &Row<'_>) -> RowResult {
-        self.tap.before_row(row, None, self.inner)?;
-        self.inner.row(row)
-    }
-
-    fn row_unframed(&mut self, row: &Row<'_>, frame: &Unframed<'_>) -> RowResult {
-        self.tap.before_row(row, Some(frame), self.inner)?;
-        self.inner.row_unframed(row, frame)
-    }
-}
-
-impl<S: Sink + ?Sized, T: Tap> Sink for Tapped<'_, S, T> {
-    fn flush(&mut self) -> Result<(), OutputError> {
-        self.tap.flush()?;
-        self.inner.flush()
-    }
-    fn close(&mut self) -> Result<(), OutputError> {
-        self.tap.flush()?;
-        self.inner.close()
-    }
-    fn set_anchor(&mut self, anchor: Option<Anchor>) {
-        self.tap.set_anchor(anchor);
-        self.inner.set_anchor(anchor)
-    }
-    fn quit(&self) -> bool {
-        self.inner.quit()
-    }
-    fn skip(&mut self) {
-        self.inner.skip()
     }
 }
 
