@@ -215,6 +215,16 @@ pub struct Packets {
 }
 
 impl Packets {
+    /// Room for `bytes` bytes of packet data in about `bytes / 64` packets, so that a batch read
+    /// from `bytes` input bytes does not grow its buffers by doubling (the driver holds up to 16
+    /// batches in flight; doubled buffers were half empty).
+    pub fn for_input(bytes: usize) -> Self {
+        Packets {
+            data: Vec::with_capacity(bytes),
+            slots: Vec::with_capacity(bytes / 64 + 1),
+        }
+    }
+
     /// Appends a copy of `p`.
     pub fn push(&mut self, p: &Packet<'_>) {
         self.data.extend_from_slice(p.data);

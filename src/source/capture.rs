@@ -79,7 +79,7 @@ impl ChunkReader for CaptureReader {
                 }
                 return Ok(None);
             }
-            let mut packets = Packets::default();
+            let mut packets = Packets::for_input(n);
             let input = &self.buf[..n];
             self.error = self.stream.push(input, &mut |p| packets.push(&p)).err();
             if !self.anchored
