@@ -7,23 +7,10 @@ use std::io::Write as _;
 use std::process::{Output, Stdio};
 
 use common::fixture;
-use common::{busnoop, text};
+use common::{busnoop, noise, text};
 
 fn run(args: &[&str], source: &std::path::Path) -> Output {
     busnoop().args(args).arg(source).output().unwrap()
-}
-
-/// Deterministic pseudo-random bytes (xorshift).
-fn noise(n: usize, seed: u64) -> Vec<u8> {
-    let mut x = seed;
-    (0..n)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 24) as u8
-        })
-        .collect()
 }
 
 /// The `verdict:` and `run:` lines of a detect report.

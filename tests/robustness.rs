@@ -8,26 +8,13 @@ use std::process::{Output, Stdio};
 
 use busnoop::sport::wire;
 use common::fixture;
-use common::{busnoop, text};
+use common::{busnoop, noise, text};
 
 /// No panic message, whatever happened.
 fn no_panic(out: &Output) {
     let err = text(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
     assert!(!err.contains("RUST_BACKTRACE"), "{err}");
-}
-
-/// Deterministic pseudo-random bytes (xorshift).
-fn noise(n: usize, seed: u64) -> Vec<u8> {
-    let mut x = seed;
-    (0..n)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 24) as u8
-        })
-        .collect()
 }
 
 const HEADER: &str = "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote";
