@@ -39,13 +39,15 @@ local ef_short = ProtoExpert.new("sab.short", "Not a whole SAB frame", expert.gr
   expert.severity.ERROR)
 p.experts = { ef_crc, ef_short }
 
-local function crc8_maxim(tvb, from, to)
-  local crc = 0
+-- A reflected CRC over bytes `from`..`to` of `tvb`: CRC-8/MAXIM-DOW is (0x00, 0x8C),
+-- CRC-16/MODBUS is (0xFFFF, 0xA001).
+local function crc_reflected(tvb, from, to, init, poly)
+  local crc = init
   for i = from, to do
     crc = bit32.bxor(crc, tvb(i, 1):uint())
     for _ = 1, 8 do
       if bit32.band(crc, 1) == 1 then
-        crc = bit32.bxor(bit32.rshift(crc, 1), 0x8C)
+        crc = bit32.bxor(bit32.rshift(crc, 1), poly)
       else
         crc = bit32.rshift(crc, 1)
       end
@@ -54,19 +56,12 @@ local function crc8_maxim(tvb, from, to)
   return crc
 end
 
+local function crc8_maxim(tvb, from, to)
+  return crc_reflected(tvb, from, to, 0x00, 0x8C)
+end
+
 local function crc16_modbus(tvb, from, to)
-  local crc = 0xFFFF
-  for i = from, to do
-    crc = bit32.bxor(crc, tvb(i, 1):uint())
-    for _ = 1, 8 do
-      if bit32.band(crc, 1) == 1 then
-        crc = bit32.bxor(bit32.rshift(crc, 1), 0xA001)
-      else
-        crc = bit32.rshift(crc, 1)
-      end
-    end
-  end
-  return crc
+  return crc_reflected(tvb, from, to, 0xFFFF, 0xA001)
 end
 
 -- HEADER and COMMAND at `at` of `u`, payload of `n` bytes after them.
