@@ -229,7 +229,7 @@ fn export_names_and_protocols_are_checked() {
             "sbus",
             "sbus_seeds_ether.pcap",
             "e.pcapng",
-            "is a network capture",
+            "is a network capture, which Wireshark opens as it is",
         ),
     ] {
         let target = dir.path().join(name);

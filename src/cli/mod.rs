@@ -323,7 +323,8 @@ pub fn run_capture(
     if args.live.export.is_some() && matches!(kind, Kind::Pcap | Kind::Pcapng) {
         // Only a serial line needs re-wrapping: network captures are Wireshark's already.
         return Err(Failure::Usage(format!(
-            "--export re-wraps the frames of a serial line; {} is a network capture, which              Wireshark opens as it is",
+            "--export re-wraps the frames of a serial line; {} is a network capture, which \
+             Wireshark opens as it is",
             args.source.display()
         )));
     }
