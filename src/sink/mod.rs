@@ -1,10 +1,10 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
+mod line;
 pub mod output;
 mod tap;
 pub mod wide;
 
-use std::io::Write as _;
 use std::path::Path;
 
 use chrono::{DateTime, Local};
@@ -13,6 +13,7 @@ use crate::fmt::push_hex_bytes;
 use crate::row::RowOut;
 use crate::row::{BASE_COLUMNS, Class, Row};
 use crate::time::Anchor;
+use line::W;
 pub use output::Output;
 pub use tap::{Tap, Tapped};
 
@@ -118,11 +119,6 @@ impl Digits {
 
     fn as_bytes(&self) -> &[u8] {
         &self.buf[self.start..]
-    }
-
-    fn as_str(&self) -> &str {
-        // Only ASCII digits are ever stored.
-        std::str::from_utf8(self.as_bytes()).unwrap_or("")
     }
 }
 
@@ -244,34 +240,37 @@ impl Table {
         }
         let cols = self.columns.clone();
         match self.opts.format {
-            Format::Tsv => {
-                let buf = self.out.buf();
+            Format::Tsv => self.out.line(|w| {
                 for (i, c) in cols.iter().enumerate() {
                     if i > 0 {
-                        buf.push(b'\t');
+                        w.byte(b'\t');
                     }
-                    buf.extend_from_slice(c.as_bytes());
+                    w.put(c.as_bytes());
                 }
-                buf.push(b'\n');
-            }
-            Format::Csv => {
-                let buf = self.out.buf();
+                w.byte(b'\n');
+            }),
+            Format::Csv => self.out.line(|w| {
                 for (i, c) in cols.iter().enumerate() {
                     if i > 0 {
-                        buf.push(b',');
+                        w.byte(b',');
                     }
-                    push_csv_field(buf, c.as_bytes());
+                    w.csv(c.as_bytes());
                 }
-                buf.extend_from_slice(b"\r\n");
-            }
+                w.put(b"\r\n");
+            }),
             Format::Pretty => {
-                let color = self.opts.color;
-                let buf = self.out.buf();
-                let mut line = PrettyLine::start(buf, color.then_some(BOLD));
-                for (i, c) in cols.iter().enumerate() {
-                    line.cell(&mut self.widths, i, c, false, i + 1 == cols.len());
+                let style = self.opts.color.then_some(BOLD);
+                if self.widths.len() < cols.len() {
+                    self.widths.resize(cols.len(), 4);
                 }
-                line.finish();
+                let widths = &mut self.widths[..];
+                self.out.line(|w| {
+                    let mut line = PrettyLine::start(w, style);
+                    for (i, c) in cols.iter().enumerate() {
+                        line.cell(widths, i, c, false, i + 1 == cols.len());
+                    }
+                    line.finish();
+                });
             }
             Format::Jsonl => {}
         }
@@ -293,7 +292,8 @@ impl Table {
             return Ok(());
         }
         if let Some(w) = &mut self.wide {
-            w.row(row, self.anchor, self.out.buf());
+            let anchor = self.anchor;
+            self.out.append(|buf| w.row(row, anchor, buf));
             return self.out.row_done();
         }
         match self.opts.format {
@@ -325,7 +325,8 @@ impl Table {
             })?;
         }
         if let Some(mut w) = self.wide.take() {
-            w.finish(self.anchor, self.out.buf());
+            let anchor = self.anchor;
+            self.out.append(|buf| w.finish(anchor, buf));
             if !w.has_columns() {
                 eprintln!(
                     "busnoop: note: --wide: no row carried a number, so the table has no columns"
@@ -373,145 +374,145 @@ impl Table {
         if self.opts.time_abs {
             self.wall_time(row.micros);
         }
-        let time = self.opts.time_abs.then_some(self.scratch.as_str());
-        let raw = self.opts.raw;
-        let n_extra = self.n_extra;
-        let buf = self.out.buf();
-        let mut ib = itoa::Buffer::new();
-        buf.extend_from_slice(self.digits.as_bytes());
-        buf.push(b'\t');
-        if let Some(us) = row.micros {
-            buf.extend_from_slice(ib.format(us / 1000).as_bytes());
-        }
-        buf.push(b'\t');
-        if let Some(id) = row.id {
-            buf.extend_from_slice(ib.format(id).as_bytes());
-        }
-        for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-            buf.push(b'\t');
-            push_tsv_field(buf, field);
-        }
-        buf.push(b'\t');
-        buf.extend_from_slice(row.value().as_bytes());
-        for i in 0..n_extra {
-            buf.push(b'\t');
-            push_tsv_field(buf, row.extra.get(i).copied().unwrap_or(""));
-        }
-        if raw {
-            buf.push(b'\t');
-            push_hex_bytes(buf, row.raw);
-        }
-        if let Some(t) = time {
-            buf.push(b'\t');
-            buf.extend_from_slice(t.as_bytes());
-        }
-        buf.push(b'\n');
+        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
+        let time = &self.scratch;
+        self.out.line(|w| {
+            w.put(digits.as_bytes());
+            w.byte(b'\t');
+            if let Some(us) = row.micros {
+                w.dec(us / 1000);
+            }
+            w.byte(b'\t');
+            if let Some(id) = row.id {
+                w.dec(id.into());
+            }
+            for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
+                w.byte(b'\t');
+                w.tsv(field.as_bytes());
+            }
+            w.byte(b'\t');
+            w.put(row.value().as_bytes());
+            for i in 0..n_extra {
+                w.byte(b'\t');
+                w.tsv(row.extra.get(i).copied().unwrap_or("").as_bytes());
+            }
+            if opts.raw {
+                w.byte(b'\t');
+                w.hex(row.raw);
+            }
+            if opts.time_abs {
+                w.byte(b'\t');
+                w.put(time.as_bytes());
+            }
+            w.byte(b'\n');
+        });
     }
 
     fn csv_row(&mut self, row: &Row<'_>) {
         if self.opts.time_abs {
             self.wall_time(row.micros);
         }
-        let time = self.opts.time_abs.then_some(self.scratch.as_str());
-        let buf = self.out.buf();
-        let mut ib = itoa::Buffer::new();
-        buf.extend_from_slice(self.digits.as_bytes());
-        buf.push(b',');
-        if let Some(us) = row.micros {
-            buf.extend_from_slice(ib.format(us / 1000).as_bytes());
-        }
-        buf.push(b',');
-        if let Some(id) = row.id {
-            buf.extend_from_slice(ib.format(id).as_bytes());
-        }
-        for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-            buf.push(b',');
-            push_csv_field(buf, field.as_bytes());
-        }
-        buf.push(b',');
-        push_csv_field(buf, row.value().as_bytes());
-        for i in 0..self.n_extra {
-            buf.push(b',');
-            push_csv_field(buf, row.extra.get(i).copied().unwrap_or("").as_bytes());
-        }
-        if self.opts.raw {
-            // Hex digits and spaces: never quoted.
-            buf.push(b',');
-            push_hex_bytes(buf, row.raw);
-        }
-        if let Some(t) = time {
-            buf.push(b',');
-            push_csv_field(buf, t.as_bytes());
-        }
-        buf.extend_from_slice(b"\r\n");
+        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
+        let time = &self.scratch;
+        self.out.line(|w| {
+            w.put(digits.as_bytes());
+            w.byte(b',');
+            if let Some(us) = row.micros {
+                w.dec(us / 1000);
+            }
+            w.byte(b',');
+            if let Some(id) = row.id {
+                w.dec(id.into());
+            }
+            for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
+                w.byte(b',');
+                w.csv(field.as_bytes());
+            }
+            w.byte(b',');
+            w.csv(row.value().as_bytes());
+            for i in 0..n_extra {
+                w.byte(b',');
+                w.csv(row.extra.get(i).copied().unwrap_or("").as_bytes());
+            }
+            if opts.raw {
+                // Hex digits and spaces: never quoted.
+                w.byte(b',');
+                w.hex(row.raw);
+            }
+            if opts.time_abs {
+                w.byte(b',');
+                w.csv(time.as_bytes());
+            }
+            w.put(b"\r\n");
+        });
     }
 
     fn jsonl(&mut self, row: &Row<'_>) {
         if self.opts.time_abs {
             self.wall_time(row.micros);
         }
-        let time = self.opts.time_abs.then_some(self.scratch.as_str());
-        let buf = self.out.buf();
-        let mut ib = itoa::Buffer::new();
-        buf.extend_from_slice(b"{\"counter\":");
-        buf.extend_from_slice(self.digits.as_bytes());
-        buf.extend_from_slice(b",\"millis\":");
-        match row.micros {
-            Some(us) => buf.extend_from_slice(ib.format(us / 1000).as_bytes()),
-            None => buf.extend_from_slice(b"null"),
-        }
-        buf.extend_from_slice(b",\"id\":");
-        match row.id {
-            Some(id) => buf.extend_from_slice(ib.format(id).as_bytes()),
-            None => buf.extend_from_slice(b"null"),
-        }
-        let base = [
-            (&b",\"device\":"[..], row.device),
-            (b",\"type\":", row.kind),
-            (b",\"sensor_no\":", row.sensor_no),
-            (b",\"sensor\":", row.sensor),
-            (b",\"data\":", row.data),
-        ];
-        for (k, v) in base {
-            buf.extend_from_slice(k);
-            push_json_str(buf, v);
-        }
-        buf.extend_from_slice(b",\"value\":");
-        match row.parts.first() {
-            Some(p) => buf.extend_from_slice(p.text.as_bytes()),
-            None => buf.extend_from_slice(b"null"),
-        }
-        for (i, (key, numeric)) in self.json_keys.iter().enumerate() {
-            buf.extend_from_slice(key);
-            let v = row.extra.get(i).copied().unwrap_or("");
-            if *numeric && is_json_number(v) {
-                buf.extend_from_slice(v.as_bytes());
-            } else {
-                push_json_str(buf, v);
+        let (digits, opts, keys) = (&self.digits, &self.opts, &self.json_keys);
+        let time = &self.scratch;
+        self.out.line(|w| {
+            w.put(b"{\"counter\":");
+            w.put(digits.as_bytes());
+            w.put(b",\"millis\":");
+            match row.micros {
+                Some(us) => w.dec(us / 1000),
+                None => w.put(b"null"),
             }
-        }
-        if !row.parts.is_empty() {
-            buf.extend_from_slice(b",\"parts\":{");
-            for (i, p) in row.parts.iter().enumerate() {
-                if i > 0 {
-                    buf.push(b',');
+            w.put(b",\"id\":");
+            match row.id {
+                Some(id) => w.dec(id.into()),
+                None => w.put(b"null"),
+            }
+            w.put(b",\"device\":");
+            w.json_str(row.device);
+            w.put(b",\"type\":");
+            w.json_str(row.kind);
+            w.put(b",\"sensor_no\":");
+            w.json_str(row.sensor_no);
+            w.put(b",\"sensor\":");
+            w.json_str(row.sensor);
+            w.put(b",\"data\":");
+            w.json_str(row.data);
+            w.put(b",\"value\":");
+            match row.parts.first() {
+                Some(p) => w.put(p.text.as_bytes()),
+                None => w.put(b"null"),
+            }
+            for (i, (key, numeric)) in keys.iter().enumerate() {
+                w.put(key);
+                let v = row.extra.get(i).copied().unwrap_or("");
+                if *numeric && is_json_number(v) {
+                    w.put(v.as_bytes());
+                } else {
+                    w.json_str(v);
                 }
-                push_json_str(buf, p.name);
-                buf.push(b':');
-                buf.extend_from_slice(p.text.as_bytes());
             }
-            buf.push(b'}');
-        }
-        if self.opts.raw {
-            buf.extend_from_slice(b",\"raw\":\"");
-            push_hex_bytes(buf, row.raw);
-            buf.push(b'"');
-        }
-        if let Some(t) = time {
-            buf.extend_from_slice(b",\"time\":");
-            push_json_str(buf, t);
-        }
-        buf.extend_from_slice(b"}\n");
+            if !row.parts.is_empty() {
+                w.put(b",\"parts\":{");
+                for (i, p) in row.parts.iter().enumerate() {
+                    if i > 0 {
+                        w.byte(b',');
+                    }
+                    w.json_str(p.name);
+                    w.byte(b':');
+                    w.put(p.text.as_bytes());
+                }
+                w.byte(b'}');
+            }
+            if opts.raw {
+                w.put(b",\"raw\":\"");
+                w.hex(row.raw);
+                w.byte(b'"');
+            }
+            if opts.time_abs {
+                w.put(b",\"time\":");
+                w.json_str(time);
+            }
+            w.put(b"}\n");
+        });
     }
 
     fn pretty(&mut self, row: &Row<'_>) {
@@ -529,6 +530,7 @@ impl Table {
             Class::Error => Some(RED),
             Class::Info => Some(CYAN),
         };
+        let style = style.filter(|_| self.opts.color);
         let mut ib = itoa::Buffer::new();
         let mut ib2 = itoa::Buffer::new();
         let millis = row.micros.map_or("", |us| ib.format(us / 1000));
@@ -536,36 +538,36 @@ impl Table {
         // Hex digits and spaces only.
         let raw = std::str::from_utf8(&self.hex).unwrap_or("");
         let n = 8 + self.n_extra + usize::from(self.opts.raw) + usize::from(self.opts.time_abs);
-        let widths = &mut self.widths;
-        let mut line = PrettyLine::start(self.out.buf(), style.filter(|_| self.opts.color));
-        let base = [
-            self.digits.as_str(),
-            millis,
-            id,
-            row.device,
-            row.kind,
-            row.sensor_no,
-            row.sensor,
-            row.data,
-        ];
-        let mut i = 0;
-        let mut cell = |line: &mut PrettyLine<'_>, text: &str| {
-            line.cell(widths, i, text, true, i + 1 == n);
-            i += 1;
-        };
-        for text in base {
-            cell(&mut line, text);
+        if self.widths.len() < n {
+            self.widths.resize(n, 4);
         }
-        for e in 0..self.n_extra {
-            cell(&mut line, row.extra.get(e).copied().unwrap_or(""));
-        }
-        if self.opts.raw {
-            cell(&mut line, raw);
-        }
-        if self.opts.time_abs {
-            cell(&mut line, &self.scratch);
-        }
-        line.finish();
+        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
+        let time = &self.scratch;
+        let widths = &mut self.widths[..];
+        self.out.line(|w| {
+            let mut line = PrettyLine::start(w, style);
+            line.digits(widths, 0, digits.as_bytes());
+            line.digits(widths, 1, millis.as_bytes());
+            line.digits(widths, 2, id.as_bytes());
+            let mut i = 3;
+            let mut cell = |line: &mut PrettyLine<'_, '_>, text: &str| {
+                line.cell(widths, i, text, true, i + 1 == n);
+                i += 1;
+            };
+            for text in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
+                cell(&mut line, text);
+            }
+            for e in 0..n_extra {
+                cell(&mut line, row.extra.get(e).copied().unwrap_or(""));
+            }
+            if opts.raw {
+                cell(&mut line, raw);
+            }
+            if opts.time_abs {
+                cell(&mut line, time);
+            }
+            line.finish();
+        });
     }
 }
 
@@ -577,78 +579,117 @@ const RED: &[u8] = b"\x1b[31m";
 const CYAN: &[u8] = b"\x1b[36m";
 const RESET: &[u8] = b"\x1b[0m";
 
-/// One pretty line written straight into the output buffer: cells padded to the column widths
-/// (the first three right-aligned), trailing blanks trimmed, optionally wrapped in a colour.
-struct PrettyLine<'b> {
-    buf: &'b mut Vec<u8>,
+/// One pretty line: cells padded to the column widths (the first three right-aligned),
+/// trailing blanks trimmed, optionally wrapped in a colour. Blanks are held back until a cell
+/// with text follows them, so that the blanks at the end of a line are never written.
+struct PrettyLine<'b, 'l> {
+    line: &'b mut W<'l>,
     style: Option<&'static [u8]>,
     /// Where the line's text starts (after the colour code).
     start: usize,
+    /// Blanks owed before the next text.
+    blanks: usize,
 }
 
-impl<'b> PrettyLine<'b> {
-    fn start(buf: &'b mut Vec<u8>, style: Option<&'static [u8]>) -> Self {
+impl<'b, 'l> PrettyLine<'b, 'l> {
+    fn start(line: &'b mut W<'l>, style: Option<&'static [u8]>) -> Self {
         if let Some(s) = style {
-            buf.extend_from_slice(s);
+            line.put(s);
         }
-        let start = buf.len();
-        PrettyLine { buf, style, start }
+        let start = line.len();
+        PrettyLine {
+            line,
+            style,
+            start,
+            blanks: 0,
+        }
     }
 
     /// Cell `i`; with `grow`, a column whose value is longer than its width (up to
     /// [`PRETTY_GROW_MAX`]) widens for this row and every later one.
-    fn cell(&mut self, widths: &mut Vec<usize>, i: usize, cell: &str, grow: bool, last: bool) {
-        let buf = &mut *self.buf;
-        if i > 0 {
-            buf.extend_from_slice(b"  ");
-        }
-        if i >= widths.len() {
-            widths.push(4);
-        }
+    #[inline(always)]
+    fn cell(&mut self, widths: &mut [usize], i: usize, cell: &str, grow: bool, last: bool) {
         // Printable ASCII: one column per byte, copied whole. Otherwise control characters
         // become spaces and every char is one column.
         let bytes = cell.as_bytes();
-        let ascii = bytes.iter().all(|&b| (0x20..0x7F).contains(&b));
-        let len = if ascii {
-            bytes.len()
+        if line::scan(bytes, line::not_printable) == 0 {
+            self.text(widths, i, bytes, None, grow, last);
         } else {
-            cell.chars().count()
-        };
-        if grow && !last && len > widths[i] && len <= PRETTY_GROW_MAX {
-            widths[i] = len;
+            self.text(widths, i, bytes, Some(cell), grow, last);
         }
-        let pad = widths[i].saturating_sub(len);
+    }
+
+    /// A cell of ASCII digits (Counter, Millis, ID).
+    #[inline(always)]
+    fn digits(&mut self, widths: &mut [usize], i: usize, digits: &[u8]) {
+        self.text(widths, i, digits, None, true, false);
+    }
+
+    /// A cell: `bytes`, printable ASCII, or the `chars` of a cell that is not.
+    #[inline(always)]
+    fn text(
+        &mut self,
+        widths: &mut [usize],
+        i: usize,
+        bytes: &[u8],
+        chars: Option<&str>,
+        grow: bool,
+        last: bool,
+    ) {
+        if i > 0 {
+            self.blanks += 2;
+        }
+        let mut spare = 4;
+        let width = widths.get_mut(i).unwrap_or(&mut spare);
+        let len = match chars {
+            None => bytes.len(),
+            Some(cell) => cell.chars().count(),
+        };
+        if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
+            *width = len;
+        }
+        let pad = width.saturating_sub(len);
         let right = i < 3;
         if right {
-            buf.resize(buf.len() + pad, b' ');
+            self.blanks += pad;
         }
-        if ascii {
-            buf.extend_from_slice(bytes);
-        } else {
-            for c in cell.chars() {
-                let c = if c.is_control() { ' ' } else { c };
-                let mut tmp = [0u8; 4];
-                buf.extend_from_slice(c.encode_utf8(&mut tmp).as_bytes());
+        if !bytes.is_empty() {
+            self.line.spaces(self.blanks);
+            self.blanks = 0;
+            match chars {
+                None => self.line.put(bytes),
+                Some(cell) => {
+                    for c in cell.chars() {
+                        let c = if c.is_control() { ' ' } else { c };
+                        let mut tmp = [0u8; 4];
+                        self.line.put(c.encode_utf8(&mut tmp).as_bytes());
+                    }
+                }
             }
         }
         if !right && !last {
-            buf.resize(buf.len() + pad, b' ');
+            self.blanks += pad;
         }
     }
 
     /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
     /// the line.
     fn finish(self) {
-        let text = &self.buf[self.start..];
-        let keep = match std::str::from_utf8(text) {
-            Ok(t) => t.trim_end().len(),
-            Err(_) => text.len(),
+        let text = &self.line.bytes()[self.start..];
+        // Blanks held back were never written; a line that ends in printable ASCII other than
+        // a blank has nothing to trim.
+        let keep = match text.last() {
+            None | Some(0x21..=0x7E) => text.len(),
+            Some(_) => match std::str::from_utf8(text) {
+                Ok(t) => t.trim_end().len(),
+                Err(_) => text.len(),
+            },
         };
-        self.buf.truncate(self.start + keep);
+        self.line.truncate(self.start + keep);
         if self.style.is_some() {
-            self.buf.extend_from_slice(RESET);
+            self.line.put(RESET);
         }
-        self.buf.push(b'\n');
+        self.line.byte(b'\n');
     }
 }
 
@@ -690,39 +731,6 @@ impl Sink for Table {
     }
 }
 
-/// Copies a TSV field, control characters (tabs, newlines) that would break the row replaced
-/// with spaces in the same pass over the copy.
-fn push_tsv_field(buf: &mut Vec<u8>, field: &str) {
-    let at = buf.len();
-    buf.extend_from_slice(field.as_bytes());
-    for b in &mut buf[at..] {
-        if *b < 0x20 {
-            *b = b' ';
-        }
-    }
-}
-
-/// A CSV field (RFC 4180): as it is, or in double quotes with inner quotes doubled when it
-/// holds a comma, a quote, CR or LF (what the csv crate's `QuoteStyle::Necessary` does).
-fn push_csv_field(buf: &mut Vec<u8>, field: &[u8]) {
-    if !field
-        .iter()
-        .any(|&b| matches!(b, b',' | b'"' | b'\r' | b'\n'))
-    {
-        buf.extend_from_slice(field);
-        return;
-    }
-    buf.push(b'"');
-    let mut rest = field;
-    while let Some(q) = rest.iter().position(|&b| b == b'"') {
-        buf.extend_from_slice(&rest[..=q]);
-        buf.push(b'"');
-        rest = &rest[q + 1..];
-    }
-    buf.extend_from_slice(rest);
-    buf.push(b'"');
-}
-
 /// The JSON key of a column, with its comma and colon: `,"sensor_no":` for `Sensor #`.
 fn json_key(name: &str) -> Vec<u8> {
     let mut key = b",\"".to_vec();
@@ -751,34 +759,6 @@ fn is_json_number(s: &str) -> bool {
     };
     let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
     digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
-}
-
-/// A JSON string, or `null` for an empty cell.
-fn push_json_str(buf: &mut Vec<u8>, s: &str) {
-    if s.is_empty() {
-        buf.extend_from_slice(b"null");
-        return;
-    }
-    buf.push(b'"');
-    let bytes = s.as_bytes();
-    let needs = |b: u8| b < 0x20 || b == b'"' || b == b'\\';
-    // Copied whole up to the first byte that needs escaping (usually the whole string).
-    let clean = bytes.iter().position(|&b| needs(b)).unwrap_or(bytes.len());
-    buf.extend_from_slice(&bytes[..clean]);
-    for &b in &bytes[clean..] {
-        match b {
-            b'"' => buf.extend_from_slice(b"\\\""),
-            b'\\' => buf.extend_from_slice(b"\\\\"),
-            b'\n' => buf.extend_from_slice(b"\\n"),
-            b'\r' => buf.extend_from_slice(b"\\r"),
-            b'\t' => buf.extend_from_slice(b"\\t"),
-            0..=0x1F => {
-                let _ = write!(buf, "\\u{b:04x}");
-            }
-            _ => buf.push(b),
-        }
-    }
-    buf.push(b'"');
 }
 
 #[cfg(test)]

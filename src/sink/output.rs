@@ -8,6 +8,7 @@ use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use super::line::{self, W};
 use crate::row::OutputError;
 
 /// Flush the buffer once it holds this much.
@@ -28,7 +29,10 @@ enum Dest {
 /// A buffered destination that only ever writes complete rows.
 pub struct Output {
     dest: Dest,
+    /// `buf[..len]` are the rows not written out yet; the rest is room for the next line
+    /// (zeroed once, so that a line is written into it without a check per byte).
     buf: Vec<u8>,
+    len: usize,
     /// Bytes known to be in the file (whole rows).
     committed: u64,
     /// Last write error; once set, nothing more is written.
@@ -61,21 +65,33 @@ impl Output {
     fn new(dest: Dest) -> Self {
         Output {
             dest,
-            buf: Vec::with_capacity(HIGH_WATER * 2),
+            buf: vec![0; HIGH_WATER * 2],
+            len: 0,
             committed: 0,
             failed: false,
         }
     }
 
-    /// The buffer to append whole rows to. Call [`Output::row_done`] after each row.
-    pub fn buf(&mut self) -> &mut Vec<u8> {
-        &mut self.buf
+    /// Appends whole rows with `append`: for text written seldom (headers, the wide table).
+    /// Call [`Output::row_done`] after each row.
+    pub fn append(&mut self, append: impl FnOnce(&mut Vec<u8>)) {
+        self.buf.truncate(self.len);
+        append(&mut self.buf);
+        self.len = self.buf.len();
+        self.buf.resize(self.len + line::ROOM, 0);
+    }
+
+    /// Appends one row, written with `write` straight into the buffer's room (see
+    /// [`line::write_line`]). Call [`Output::row_done`] after it.
+    #[inline(always)]
+    pub(super) fn line(&mut self, write: impl FnMut(&mut W<'_>)) {
+        self.len += line::write_line(&mut self.buf, self.len, write);
     }
 
     /// A complete row is in the buffer: write out when enough has gathered.
     #[inline]
     pub fn row_done(&mut self) -> Result<(), OutputError> {
-        if self.buf.len() >= HIGH_WATER {
+        if self.len >= HIGH_WATER {
             self.flush()
         } else {
             Ok(())
@@ -84,34 +100,32 @@ impl Output {
 
     /// Writes every buffered row.
     pub fn flush(&mut self) -> Result<(), OutputError> {
-        if self.failed {
-            self.buf.clear();
-            return Ok(());
-        }
-        if self.buf.is_empty() {
+        let rows = &self.buf[..self.len];
+        if self.failed || rows.is_empty() {
+            self.len = 0;
             return Ok(());
         }
         let result = match &mut self.dest {
             Dest::Stdout(s) => {
                 let mut lock = s.lock();
-                lock.write_all(&self.buf).and_then(|_| lock.flush())
+                lock.write_all(rows).and_then(|_| lock.flush())
             }
-            Dest::File { file, .. } => file.write_all(&self.buf),
+            Dest::File { file, .. } => file.write_all(rows),
             #[cfg(test)]
             Dest::Memory(v) => {
-                v.extend_from_slice(&self.buf);
+                v.extend_from_slice(rows);
                 Ok(())
             }
         };
+        let written = rows.len();
+        self.len = 0;
         match result {
             Ok(()) => {
-                self.committed += self.buf.len() as u64;
-                self.buf.clear();
+                self.committed += written as u64;
                 Ok(())
             }
             Err(error) => {
                 self.failed = true;
-                self.buf.clear();
                 let path = match &mut self.dest {
                     Dest::File {
                         file,

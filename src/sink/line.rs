@@ -1,0 +1,406 @@
+//! One output line, assembled before it is appended to the output buffer.
+//!
+//! The row writers put a row's cells into a [`Line`]: a buffer that is kept at its full length
+//! (zeroed once, grown when a row needs more) with a write position, so that appending a cell
+//! costs no capacity check per byte and no call for a short copy. A row is then appended to
+//! the output in one copy. The checks for bytes that need escaping (control characters in TSV,
+//! quotes in CSV and JSON, non-printable bytes in pretty output) look at eight bytes at a time
+//! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
+//! exactly what the byte-by-byte rules always produced.
+
+const SPACES: [u8; 32] = [b' '; 32];
+
+/// Writes one line with `write` into the room after `buf[..len]` and returns the line's length.
+/// A line longer than the room is written again into more room (`buf` grows, and stays grown),
+/// until it fits: nothing is cut, and nothing can overrun.
+#[inline(always)]
+pub(super) fn write_line(
+    buf: &mut Vec<u8>,
+    len: usize,
+    mut write: impl FnMut(&mut W<'_>),
+) -> usize {
+    loop {
+        let mut w = W {
+            buf: buf.get_mut(len..).unwrap_or_default(),
+            pos: 0,
+            over: false,
+        };
+        write(&mut w);
+        if !w.over {
+            return w.pos;
+        }
+        grow(buf, len);
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn grow(buf: &mut Vec<u8>, len: usize) {
+    let more = buf.len().saturating_sub(len).max(ROOM);
+    buf.resize(buf.len() + more, 0);
+}
+
+/// Room a line gets at least when it did not fit.
+pub(super) const ROOM: usize = 1024;
+
+/// A line being written into the room [`write_line`] gives: `buf[..pos]` is the text so far.
+/// A write that does not fit sets `over` (and is dropped); [`write_line`] then starts again.
+pub(super) struct W<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+    over: bool,
+}
+
+impl W<'_> {
+    /// The line so far.
+    #[inline]
+    pub fn bytes(&self) -> &[u8] {
+        &self.buf[..self.pos]
+    }
+
+    /// Length of the line so far.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.pos
+    }
+
+    /// Cuts the line back to `len` bytes.
+    #[inline]
+    pub fn truncate(&mut self, len: usize) {
+        self.pos = self.pos.min(len);
+    }
+
+    /// Appends `s` as it is.
+    #[inline(always)]
+    pub fn put(&mut self, s: &[u8]) {
+        let end = self.pos + s.len();
+        match self.buf.get_mut(self.pos..end) {
+            Some(room) => {
+                copy(room, s);
+                self.pos = end;
+            }
+            None => self.over = true,
+        }
+    }
+
+    /// Appends one byte.
+    #[inline(always)]
+    pub fn byte(&mut self, b: u8) {
+        match self.buf.get_mut(self.pos) {
+            Some(room) => {
+                *room = b;
+                self.pos += 1;
+            }
+            None => self.over = true,
+        }
+    }
+
+    /// Appends `n` blanks.
+    #[inline(always)]
+    pub fn spaces(&mut self, mut n: usize) {
+        while n > 0 {
+            let k = n.min(SPACES.len());
+            self.put(&SPACES[..k]);
+            n -= k;
+        }
+    }
+
+    /// A TSV field: copied whole, control characters (tabs, newlines) that would break the
+    /// row replaced with spaces.
+    #[inline(always)]
+    pub fn tsv(&mut self, field: &[u8]) {
+        let at = self.pos;
+        self.put(field);
+        if scan(field, below_0x20) != 0 {
+            for b in self.buf.get_mut(at..self.pos).unwrap_or_default() {
+                if *b < 0x20 {
+                    *b = b' ';
+                }
+            }
+        }
+    }
+
+    /// A CSV field (RFC 4180): as it is, or in double quotes with inner quotes doubled when it
+    /// holds a comma, a quote, CR or LF (what the csv crate's `QuoteStyle::Necessary` does).
+    #[inline(always)]
+    pub fn csv(&mut self, field: &[u8]) {
+        // Control characters are looked at exactly below; a comma or a quote always quotes.
+        if scan(field, |x| {
+            below_0x20(x) | zero_byte(x ^ rep(b',')) | zero_byte(x ^ rep(b'"'))
+        }) == 0
+            || !field
+                .iter()
+                .any(|&b| matches!(b, b',' | b'"' | b'\r' | b'\n'))
+        {
+            self.put(field);
+            return;
+        }
+        self.csv_quoted(field);
+    }
+
+    #[cold]
+    fn csv_quoted(&mut self, field: &[u8]) {
+        self.byte(b'"');
+        let mut rest = field;
+        while let Some(q) = rest.iter().position(|&b| b == b'"') {
+            self.put(&rest[..=q]);
+            self.byte(b'"');
+            rest = &rest[q + 1..];
+        }
+        self.put(rest);
+        self.byte(b'"');
+    }
+
+    /// A JSON string, or `null` for an empty cell.
+    #[inline(always)]
+    pub fn json_str(&mut self, s: &str) {
+        if s.is_empty() {
+            self.put(b"null");
+            return;
+        }
+        let bytes = s.as_bytes();
+        self.byte(b'"');
+        if scan(bytes, |x| {
+            below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\'))
+        }) == 0
+        {
+            self.put(bytes);
+        } else {
+            self.json_escaped(bytes);
+        }
+        self.byte(b'"');
+    }
+
+    #[cold]
+    fn json_escaped(&mut self, bytes: &[u8]) {
+        const HEX: &[u8; 16] = b"0123456789abcdef";
+        for &b in bytes {
+            match b {
+                b'"' => self.put(b"\\\""),
+                b'\\' => self.put(b"\\\\"),
+                b'\n' => self.put(b"\\n"),
+                b'\r' => self.put(b"\\r"),
+                b'\t' => self.put(b"\\t"),
+                0..=0x1F => self.put(&[
+                    b'\\',
+                    b'u',
+                    b'0',
+                    b'0',
+                    HEX[(b >> 4) as usize],
+                    HEX[(b & 0xF) as usize],
+                ]),
+                _ => self.byte(b),
+            }
+        }
+    }
+
+    /// Bytes as spaced hex (`7E A1 10`).
+    pub fn hex(&mut self, bytes: &[u8]) {
+        const HEX: &[u8; 16] = b"0123456789ABCDEF";
+        for (i, &b) in bytes.iter().enumerate() {
+            if i > 0 {
+                self.byte(b' ');
+            }
+            self.put(&[HEX[(b >> 4) as usize], HEX[(b & 0x0F) as usize]]);
+        }
+    }
+
+    /// A number in decimal.
+    #[inline(always)]
+    pub fn dec(&mut self, n: u64) {
+        // `u32` arithmetic where it fits: cheaper than `u64`.
+        match u32::try_from(n) {
+            Ok(n) => self.put(itoa::Buffer::new().format(n).as_bytes()),
+            Err(_) => self.put(itoa::Buffer::new().format(n).as_bytes()),
+        }
+    }
+}
+
+/// Copies `src` to the start of `dst` (at least as long): short copies are done with one or
+/// two overlapping fixed-size moves instead of a call.
+#[inline(always)]
+fn copy(dst: &mut [u8], src: &[u8]) {
+    let n = src.len();
+    let dst = &mut dst[..n];
+    match n {
+        0 => {}
+        1..=3 => {
+            dst[0] = src[0];
+            dst[n / 2] = src[n / 2];
+            dst[n - 1] = src[n - 1];
+        }
+        4..=7 => {
+            dst[..4].copy_from_slice(&src[..4]);
+            dst[n - 4..].copy_from_slice(&src[n - 4..]);
+        }
+        8..=16 => {
+            dst[..8].copy_from_slice(&src[..8]);
+            dst[n - 8..].copy_from_slice(&src[n - 8..]);
+        }
+        17..=32 => {
+            dst[..16].copy_from_slice(&src[..16]);
+            dst[n - 16..].copy_from_slice(&src[n - 16..]);
+        }
+        _ => dst.copy_from_slice(src),
+    }
+}
+
+/// `b` in every byte of a word.
+pub(super) const fn rep(b: u8) -> u64 {
+    u64::from_le_bytes([b; 8])
+}
+
+const HIGH: u64 = rep(0x80);
+
+/// Non-zero when some byte of `x` is zero. Exact as to whether one is (a borrow can mark a
+/// byte above a zero byte, never a word without one).
+#[inline(always)]
+pub(super) fn zero_byte(x: u64) -> u64 {
+    x.wrapping_sub(rep(1)) & !x & HIGH
+}
+
+/// Non-zero when some byte of `x` is below 0x20 (exact as to whether one is, as [`zero_byte`]).
+#[inline(always)]
+pub(super) fn below_0x20(x: u64) -> u64 {
+    x.wrapping_sub(rep(0x20)) & !x & HIGH
+}
+
+/// Non-zero when some byte of `x` is not printable ASCII (below 0x20, or 0x7F and above).
+#[inline(always)]
+pub(super) fn not_printable(x: u64) -> u64 {
+    // x + 1 sets a byte's high bit for 0x7F; bytes of 0x80 and above have it already (and the
+    // carry out of an 0xFF byte only reaches bytes above one that is marked anyway).
+    below_0x20(x) | x & HIGH | x.wrapping_add(rep(1)) & HIGH
+}
+
+/// ORs `test` over words that cover `s` (overlapping where `s` is not a multiple of eight
+/// long; short slices padded with `A`, which no test marks): zero when no byte of `s` is
+/// marked.
+#[inline(always)]
+pub(super) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
+    let n = s.len();
+    let word = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([b'A'; 8]));
+    let half = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([b'A'; 4])) as u64;
+    match n {
+        0 => 0,
+        1..=3 => {
+            let x = (rep(b'A') & !0xFF_FFFF)
+                | s[0] as u64
+                | (s[n / 2] as u64) << 8
+                | (s[n - 1] as u64) << 16;
+            test(x)
+        }
+        4..=7 => test(half(0) | half(n - 4) << 32),
+        8..=16 => test(word(0)) | test(word(n - 8)),
+        _ => {
+            let mut acc = test(word(n - 8));
+            let mut i = 0;
+            while i + 8 <= n {
+                acc |= test(word(i));
+                i += 8;
+            }
+            acc
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every length up to 40 and every position of a marked byte: the word tests agree with
+    /// the byte tests.
+    #[test]
+    fn scans_agree_with_byte_tests() {
+        let tests: [(&dyn Fn(u64) -> u64, &dyn Fn(u8) -> bool); 4] = [
+            (&below_0x20, &|b| b < 0x20),
+            (&not_printable, &|b| !(0x20..0x7F).contains(&b)),
+            (&|x| zero_byte(x ^ rep(b'"')), &|b| b == b'"'),
+            (&|x| zero_byte(x ^ rep(b',')), &|b| b == b','),
+        ];
+        let specials = [
+            0x00, 0x01, 0x09, 0x0A, 0x0D, 0x1F, 0x20, 0x21, 0x22, 0x2C, 0x5C, 0x7E, 0x7F, 0x80,
+            0xC3, 0xFE, 0xFF,
+        ];
+        for (word_test, byte_test) in tests {
+            for n in 0..40 {
+                for &fill in &[b'a', b' ', b'~', 0x21, 0xFF, 0x80] {
+                    let base = vec![fill; n];
+                    assert_eq!(
+                        scan(&base, word_test) != 0,
+                        base.iter().any(|&b| byte_test(b)),
+                        "n {n} fill {fill:#x}"
+                    );
+                    for at in 0..n {
+                        for &sp in &specials {
+                            let mut s = base.clone();
+                            s[at] = sp;
+                            assert_eq!(
+                                scan(&s, word_test) != 0,
+                                s.iter().any(|&b| byte_test(b)),
+                                "n {n} at {at} byte {sp:#x} fill {fill:#x}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn copies_every_length_and_grows() {
+        let mut buf = vec![0; ROOM];
+        let src: Vec<u8> = (0..=255u8).cycle().take(3000).collect();
+        let mut expected = Vec::new();
+        for n in 0..70 {
+            expected.extend_from_slice(&src[n..n * 2]);
+        }
+        expected.extend_from_slice(&src);
+        expected.extend_from_slice(&[b' '; 150]);
+        let mut tries = 0;
+        let len = write_line(&mut buf, 0, |w| {
+            tries += 1;
+            for n in 0..70 {
+                w.put(&src[n..n * 2]);
+            }
+            w.put(&src);
+            w.spaces(150);
+        });
+        assert_eq!(&buf[..len], &expected[..]);
+        // 5565 bytes: 1024 bytes of room at first, then 2048, 4096, 8192 (kept for the next
+        // line).
+        assert_eq!(tries, 4);
+        assert_eq!(buf.len(), 8192);
+        // After 5565 bytes kept, a line in the rest of the room.
+        let n = write_line(&mut buf, len, |w| w.put(b"x"));
+        assert_eq!(&buf[len..len + n], b"x");
+    }
+
+    #[test]
+    fn fields_as_the_byte_rules_write_them() {
+        let mut buf = vec![0; 4];
+        let len = write_line(&mut buf, 0, |w| {
+            w.tsv(b"a\tb\nc");
+            w.byte(b'|');
+            w.csv(b"plain");
+            w.byte(b'|');
+            w.csv(b"a,\"b\"");
+            w.byte(b'|');
+            w.csv(b"tab\tonly");
+            w.byte(b'|');
+            w.json_str("q\"\\\n\x01 \u{e9}");
+            w.byte(b'|');
+            w.json_str("");
+            w.byte(b'|');
+            w.hex(&[0x7E, 0xA1, 0x00]);
+            w.byte(b'|');
+            w.dec(0);
+            w.byte(b' ');
+            w.dec(u64::MAX);
+        });
+        assert_eq!(
+            std::str::from_utf8(&buf[..len]).unwrap(),
+            "a b c|plain|\"a,\"\"b\"\"\"|tab\tonly|\"q\\\"\\\\\\n\\u0001 \u{e9}\"|null|7E A1 00|0 18446744073709551615"
+        );
+    }
+}
