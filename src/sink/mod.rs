@@ -549,22 +549,22 @@ impl Table {
             line.digits(widths, 0, digits.as_bytes());
             line.digits(widths, 1, millis.as_bytes());
             line.digits(widths, 2, id.as_bytes());
-            let mut i = 3;
-            let mut cell = |line: &mut PrettyLine<'_, '_>, text: &str| {
+            let base = [row.device, row.kind, row.sensor_no, row.sensor, row.data];
+            for (i, text) in (3..).zip(base) {
                 line.cell(widths, i, text, true, i + 1 == n);
-                i += 1;
-            };
-            for text in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-                cell(&mut line, text);
             }
             for e in 0..n_extra {
-                cell(&mut line, row.extra.get(e).copied().unwrap_or(""));
+                let i = 8 + e;
+                let text = row.extra.get(e).copied().unwrap_or("");
+                line.cell(widths, i, text, true, i + 1 == n);
             }
+            let mut i = 8 + n_extra;
             if opts.raw {
-                cell(&mut line, raw);
+                line.cell(widths, i, raw, true, i + 1 == n);
+                i += 1;
             }
             if opts.time_abs {
-                cell(&mut line, time);
+                line.cell(widths, i, time, true, i + 1 == n);
             }
             line.finish();
         });
@@ -658,13 +658,13 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             self.blanks = 0;
             match chars {
                 None => self.line.put(bytes),
-                Some(cell) => {
+                Some(cell) => self.line.aside(|w| {
                     for c in cell.chars() {
                         let c = if c.is_control() { ' ' } else { c };
                         let mut tmp = [0u8; 4];
-                        self.line.put(c.encode_utf8(&mut tmp).as_bytes());
+                        w.put(c.encode_utf8(&mut tmp).as_bytes());
                     }
-                }
+                }),
             }
         }
         if !right && !last {
