@@ -6,8 +6,52 @@
 //! never `3.92` and never `3.9180000000000001`), which the sinks print as it is, and as an `f64`
 //! for the wide export and plots.
 
-use crate::fmt::push_fixed;
 use crate::row::Part;
+
+/// Appends `raw / 10^prec` exactly as [`crate::fmt::push_fixed`] does (`6543, 2` → `65.43`,
+/// `-150, 2` → `-1.50`, `5, 3` → `0.005`), converting the magnitude to digits once and placing
+/// the decimal point in them.
+pub fn push_decimal(out: &mut String, raw: i64, prec: u8) {
+    let prec = prec as usize;
+    if prec > 18 {
+        crate::fmt::push_fixed(out, raw, prec as u8);
+        return;
+    }
+    // Digit values from the last one back, at least `prec + 1` of them (leading zeros); then
+    // pushed in order, each one known to be ASCII (a one-byte push).
+    let mut digits = [0u8; 20];
+    let mut n = 0;
+    let mut mag = raw.unsigned_abs();
+    loop {
+        digits[n] = (mag % 10) as u8;
+        mag /= 10;
+        n += 1;
+        if mag == 0 {
+            break;
+        }
+    }
+    let n = n.max(prec + 1);
+    out.reserve(n + 2);
+    if raw < 0 {
+        out.push('-');
+    }
+    for k in (0..n).rev() {
+        if k + 1 == prec {
+            out.push('.');
+        }
+        out.push(char::from(b'0' | (digits[k] & 0x0F)));
+    }
+}
+
+/// Appends an unsigned integer in decimal; a single digit without going through `itoa`.
+#[inline]
+pub fn push_uint(out: &mut String, v: u64) {
+    if v < 10 {
+        out.push(char::from(b'0' + v as u8));
+    } else {
+        out.push_str(itoa::Buffer::new().format(v));
+    }
+}
 
 /// A number's name: a constant (most sensors), or a range of the names buffer (names built
 /// per row, `Cell3`, `0x5100`).
@@ -87,6 +131,14 @@ impl<const N: usize> Numbers<N> {
         }
     }
 
+    /// The text of the number added last, or "" (to copy it into a Data cell).
+    pub fn last_text(&self) -> &str {
+        match self.len {
+            0 => "",
+            n => self.range(&self.text, self.slots[n - 1].text),
+        }
+    }
+
     /// The first number's unit, or "".
     pub fn first_unit(&self) -> &'static str {
         if self.len == 0 {
@@ -151,7 +203,7 @@ impl<const N: usize> Numbers<N> {
             return;
         };
         let a = self.text.len() as u32;
-        push_fixed(&mut self.text, raw, prec);
+        push_decimal(&mut self.text, raw, prec);
         let b = self.text.len() as u32;
         let value = raw as f64 / POW10[(prec as usize).min(9)];
         self.slots[i].text = (a, b);
@@ -212,6 +264,40 @@ impl<const N: usize> Numbers<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decimal_matches_push_fixed() {
+        let raws = [
+            0,
+            1,
+            -1,
+            5,
+            9,
+            10,
+            99,
+            100,
+            6543,
+            -150,
+            1959 * 2,
+            123_456_789,
+            i64::MAX,
+            i64::MIN,
+            i64::MIN + 1,
+        ];
+        for raw in raws {
+            for prec in 0..=18 {
+                let (mut a, mut b) = (String::from("x"), String::from("x"));
+                crate::fmt::push_fixed(&mut a, raw, prec);
+                push_decimal(&mut b, raw, prec);
+                assert_eq!(a, b, "{raw} prec {prec}");
+            }
+        }
+        for v in [0, 1, 9, 10, 11, 255, u64::MAX] {
+            let mut s = String::new();
+            push_uint(&mut s, v);
+            assert_eq!(s, v.to_string());
+        }
+    }
 
     #[test]
     fn text_and_value_agree() {

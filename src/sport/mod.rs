@@ -8,9 +8,8 @@ pub(crate) mod values;
 pub(crate) mod vocab;
 pub mod wire;
 
-use std::fmt::Write as _;
-
-use crate::fmt::{push_hex, push_u64};
+use crate::fmt::{push_0x, push_hex, push_hex_u8, push_u64};
+use crate::numbers::push_uint;
 use crate::protocol::{Decoder, Kind, Line, Protocol};
 use crate::row::{Class, Row};
 use crate::row::{Latch, RowOut, RowResult};
@@ -86,10 +85,38 @@ impl Default for Stats {
     }
 }
 
+/// The `Sensor #` texts (`0x0210`) by app ID, each built once: a direct-mapped cache of 256
+/// entries (a capture carries a few dozen app IDs; an entry another ID took is built again).
+struct IdTexts {
+    slots: Vec<(u32, String)>,
+}
+
+impl Default for IdTexts {
+    fn default() -> Self {
+        IdTexts {
+            slots: vec![(u32::MAX, String::new()); 256],
+        }
+    }
+}
+
+impl IdTexts {
+    fn get(&mut self, app_id: u16) -> &str {
+        let i = (app_id as u32).wrapping_mul(0x9E37_79B1) >> 24;
+        let (key, text) = &mut self.slots[i as usize];
+        if *key != app_id as u32 {
+            *key = app_id as u32;
+            text.clear();
+            values::push_sensor_no(text, app_id);
+        }
+        text
+    }
+}
+
 /// Scratch buffers reused for every row.
 #[derive(Default)]
 struct Scratch {
-    sensor_no: String,
+    /// The `Sensor #` column's app ID (the text is in [`IdTexts`]).
+    sensor_no: Option<u16>,
     sensor: String,
     data: String,
     note: String,
@@ -98,7 +125,7 @@ struct Scratch {
 
 impl Scratch {
     fn clear(&mut self) {
-        self.sensor_no.clear();
+        self.sensor_no = None;
         self.sensor.clear();
         self.data.clear();
         self.note.clear();
@@ -121,6 +148,7 @@ pub struct SportDecoder {
 #[derive(Default)]
 struct Mapper {
     scratch: Scratch,
+    ids: IdTexts,
     stats: Stats,
 }
 
@@ -164,7 +192,7 @@ impl Mapper {
         ps.last_poll = Some(micros);
 
         let mut class = Class::Plain;
-        let mut unit = "";
+        let mut cols = values::Decoded::built("");
         let kind: &str = match s.body {
             Body::None => "",
             Body::Truncated { bytes, len } => {
@@ -172,10 +200,10 @@ impl Mapper {
                 st.truncated += 1;
                 class = Class::Error;
                 push_hex(&mut sc.data, &bytes[..len as usize]);
-                let _ = write!(
-                    sc.note,
-                    "{len} of {BODY_LEN} bytes before the frame was cut"
-                );
+                push_uint(&mut sc.note, len as u64);
+                sc.note.push_str(" of ");
+                push_uint(&mut sc.note, BODY_LEN as u64);
+                sc.note.push_str(" bytes before the frame was cut");
                 crate::row::kind::TRUNCATED
             }
             Body::Complete(b) => {
@@ -210,20 +238,25 @@ impl Mapper {
                         st.crc_errors += 1;
                         class = Class::Error;
                     }
-                    unit = describe(b[0], s.header, app_id, value, sc);
+                    cols = describe(b[0], s.header, app_id, value, sc);
                     if !ok {
                         // A number that failed its check is not one to chart: Data shows it,
                         // Value stays empty.
+                        if cols.data_is_value {
+                            sc.data.push_str(sc.nums.first_text());
+                            cols.data_is_value = false;
+                        }
                         sc.nums.clear();
                         let expected = wire::crc(&b[..7]);
                         let type_name = names::frame_type(b[0]).unwrap_or("unknown");
-                        let mut note = String::new();
-                        let _ = write!(
-                            note,
-                            "CRC 0x{:02X}, expected 0x{expected:02X} ({type_name} frame)",
-                            b[7]
-                        );
-                        sc.note(&note);
+                        let note = crate::row::note_part(&mut sc.note);
+                        note.push_str("CRC ");
+                        push_0x(note, b[7]);
+                        note.push_str(", expected ");
+                        push_0x(note, expected);
+                        note.push_str(" (");
+                        note.push_str(type_name);
+                        note.push_str(" frame)");
                         crate::row::kind::BAD_CRC
                     } else {
                         match names::frame_type(b[0]) {
@@ -235,9 +268,9 @@ impl Mapper {
                             }
                             None => {
                                 class = Class::Warning;
-                                let mut note = String::new();
-                                let _ = write!(note, "unknown frame type 0x{:02X}", b[0]);
-                                sc.note(&note);
+                                let note = crate::row::note_part(&mut sc.note);
+                                note.push_str("unknown frame type ");
+                                push_0x(note, b[0]);
                                 "Unknown"
                             }
                         }
@@ -247,9 +280,10 @@ impl Mapper {
         };
         if !wire::header_ok(s.header) {
             st.check_bits += 1;
-            let mut note = String::new();
-            let _ = write!(note, "non-standard check bits (header 0x{:02X})", s.header);
-            sc.note(&note);
+            let note = crate::row::note_part(&mut sc.note);
+            note.push_str("non-standard check bits (header ");
+            push_0x(note, s.header);
+            note.push(')');
             if class == Class::Plain || class == Class::Quiet {
                 class = Class::Warning;
             }
@@ -261,7 +295,17 @@ impl Mapper {
                 class = Class::Warning;
             }
         }
-        let extra = [unit, sc.note.as_str()];
+        let extra = [cols.unit, sc.note.as_str()];
+        let sensor_no = match sc.sensor_no {
+            Some(app_id) => self.ids.get(app_id),
+            None => "",
+        };
+        let sensor = cols.sensor.unwrap_or(&sc.sensor);
+        let data = if cols.data_is_value {
+            sc.nums.first_text()
+        } else {
+            &sc.data
+        };
         sc.nums.with_parts(|parts| {
             out.row(&Row {
                 micros: Some(micros),
@@ -269,9 +313,9 @@ impl Mapper {
                 device: names::device(phys),
                 kind,
                 class,
-                sensor_no: &sc.sensor_no,
-                sensor: &sc.sensor,
-                data: &sc.data,
+                sensor_no,
+                sensor,
+                data,
                 extra: &extra,
                 parts,
                 raw: s.wire(),
@@ -315,12 +359,13 @@ impl Mapper {
     }
 }
 
-/// Fills Sensor #, Sensor, Data and Note for a complete frame of type `kind`; returns the unit.
-fn describe(kind: u8, header: u8, app_id: u16, value: u32, sc: &mut Scratch) -> &'static str {
+/// Fills Sensor #, Sensor, Data and Note for a complete frame of type `kind`; returns the unit
+/// and what of Sensor and Data is not in the buffers ([`values::Decoded`]).
+fn describe(kind: u8, header: u8, app_id: u16, value: u32, sc: &mut Scratch) -> values::Decoded {
     match kind {
         0x10 => {
-            values::push_sensor_no(&mut sc.sensor_no, app_id);
-            values::decode_numbers(
+            sc.sensor_no = Some(app_id);
+            values::decode_row(
                 header & 0x1F,
                 app_id,
                 value,
@@ -333,39 +378,47 @@ fn describe(kind: u8, header: u8, app_id: u16, value: u32, sc: &mut Scratch) -> 
             // Keep-alive: the sample leaves Sensor #/Sensor/Data empty; Pawelsky-style sensors
             // name the app ID due next, which is worth showing.
             if app_id != 0 {
-                values::push_sensor_no(&mut sc.sensor_no, app_id);
+                sc.sensor_no = Some(app_id);
                 values::label(app_id, &mut sc.sensor);
             }
             if value != 0 {
-                let _ = write!(sc.data, "value=0x{value:08X}");
+                push_value_hex(&mut sc.data, value);
                 sc.note("keep-alive with a non-zero value");
             }
-            ""
+            values::Decoded::built("")
         }
         0x20 | 0x21 => {
-            values::push_sensor_no(&mut sc.sensor_no, app_id);
+            sc.sensor_no = Some(app_id);
             values::label(app_id, &mut sc.sensor);
-            let _ = write!(sc.data, "value=0x{value:08X}");
+            push_value_hex(&mut sc.data, value);
             sc.note(names::frame_type_long(kind));
-            ""
+            values::Decoded::built("")
         }
         0x30..=0x32 => {
-            values::push_sensor_no(&mut sc.sensor_no, app_id);
+            sc.sensor_no = Some(app_id);
             values::label(app_id, &mut sc.sensor);
             let mut payload = [0u8; 6];
             payload[..2].copy_from_slice(&app_id.to_le_bytes());
             payload[2..].copy_from_slice(&value.to_le_bytes());
             push_hex(&mut sc.data, &payload);
             config_note(kind, header, value, sc);
-            ""
+            values::Decoded::built("")
         }
         _ => {
             let mut payload = [0u8; 6];
             payload[..2].copy_from_slice(&app_id.to_le_bytes());
             payload[2..].copy_from_slice(&value.to_le_bytes());
             push_hex(&mut sc.data, &payload);
-            ""
+            values::Decoded::built("")
         }
+    }
+}
+
+/// `value=0x` and the value as eight upper-case hex digits.
+fn push_value_hex(out: &mut String, value: u32) {
+    out.push_str("value=0x");
+    for b in value.to_be_bytes() {
+        push_hex_u8(out, b);
     }
 }
 
@@ -382,20 +435,23 @@ fn config_note(kind: u8, header: u8, value: u32, sc: &mut Scratch) {
     }
     let field = value as u8;
     let arg = value >> 8;
-    let mut note = String::new();
+    let note = crate::row::note_part(&mut sc.note);
     match (kind, field) {
         (0x30, 0x01) => note.push_str("config: read physical ID"),
         (0x31, 0x01) => {
-            let _ = write!(note, "config: set physical ID to {arg}");
+            note.push_str("config: set physical ID to ");
+            push_u64(note, arg as u64);
         }
         (0x32, 0x01) => {
-            let _ = write!(note, "config: physical ID is {arg}");
+            note.push_str("config: physical ID is ");
+            push_u64(note, arg as u64);
         }
         _ => {
-            let _ = write!(note, "{} field 0x{field:02X}", names::frame_type_long(kind));
+            note.push_str(names::frame_type_long(kind));
+            note.push_str(" field ");
+            push_0x(note, field);
         }
     }
-    sc.note(&note);
 }
 
 impl Decoder for SportDecoder {

@@ -3,7 +3,8 @@
 
 use std::fmt::Write as _;
 
-use crate::fmt::{push_fixed, push_i64, push_u64};
+use crate::fmt::push_i64;
+use crate::numbers::{push_decimal, push_uint};
 
 /// `bits` bits of `v` starting at bit `from`.
 fn field(v: u32, from: u32, bits: u32) -> u32 {
@@ -33,20 +34,35 @@ fn kv(data: &mut String, key: &str) {
 
 /// Writes Sensor and Data for a passthrough frame; returns the unit (always empty: each field
 /// carries its own).
+#[cfg(test)]
 pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'static str {
+    match decode_row(app_id, v, data) {
+        Some(label) => sensor.push_str(label),
+        None => {
+            let _ = write!(sensor, "0x{app_id:04X}");
+            crate::fmt::push_u64(data, v as u64);
+        }
+    }
+    ""
+}
+
+/// Writes the Data column of a passthrough frame and returns its Sensor label; `None` (and
+/// nothing written) for an app ID without a known layout.
+pub(crate) fn decode_row(app_id: u16, v: u32, data: &mut String) -> Option<&'static str> {
+    let label: &'static str;
     match app_id {
         0x5000 => {
-            sensor.push_str("AP Text");
+            label = "AP Text";
             text(v, data);
         }
         0x5001 => {
-            sensor.push_str("AP Status");
+            label = "AP Status";
             let mode = field(v, 0, 5);
             kv(data, "mode");
             if mode == 0 {
                 data.push('?');
             } else {
-                push_u64(data, (mode - 1) as u64);
+                push_uint(data, (mode - 1) as u64);
             }
             for (bit, name) in [
                 (5, "simple"),
@@ -60,7 +76,7 @@ pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'
                 (14, "breach"),
             ] {
                 kv(data, name);
-                push_u64(data, field(v, bit, 1) as u64);
+                push_uint(data, field(v, bit, 1) as u64);
             }
             // (2,0) signed: magnitude in bits 0-5, sign in bit 6; -63..63 = -100..100 %.
             let t = field(v, 19, 7);
@@ -70,81 +86,81 @@ pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'
             push_i64(data, (thr * 100 + thr.signum() * 31) / 63);
             data.push('%');
             kv(data, "imu_temp");
-            push_u64(data, (field(v, 26, 6) + 19) as u64);
+            push_uint(data, (field(v, 26, 6) + 19) as u64);
             data.push_str("degC");
         }
         0x5002 => {
-            sensor.push_str("AP GPS");
+            label = "AP GPS";
             kv(data, "sats");
-            push_u64(data, field(v, 0, 4) as u64);
+            push_uint(data, field(v, 0, 4) as u64);
             kv(data, "fix");
-            push_u64(data, field(v, 4, 2) as u64);
+            push_uint(data, field(v, 4, 2) as u64);
             kv(data, "hdop");
-            push_fixed(data, compressed(v, 6, 1, 7, false), 1);
+            push_decimal(data, compressed(v, 6, 1, 7, false), 1);
             kv(data, "adv_fix");
-            push_u64(data, field(v, 14, 2) as u64);
+            push_uint(data, field(v, 14, 2) as u64);
             kv(data, "alt_msl");
-            push_fixed(data, compressed(v, 22, 2, 7, true), 1);
+            push_decimal(data, compressed(v, 22, 2, 7, true), 1);
             data.push('m');
         }
         0x5003 | 0x5008 => {
-            sensor.push_str(if app_id == 0x5003 {
+            label = if app_id == 0x5003 {
                 "AP Batt1"
             } else {
                 "AP Batt2"
-            });
+            };
             kv(data, "volts");
-            push_fixed(data, field(v, 0, 9) as i64, 1);
+            push_decimal(data, field(v, 0, 9) as i64, 1);
             data.push('V');
             kv(data, "amps");
-            push_fixed(data, compressed(v, 9, 1, 7, false), 1);
+            push_decimal(data, compressed(v, 9, 1, 7, false), 1);
             data.push('A');
             kv(data, "used");
-            push_u64(data, field(v, 17, 15) as u64);
+            push_uint(data, field(v, 17, 15) as u64);
             data.push_str("mAh");
         }
         0x5004 => {
-            sensor.push_str("AP Home");
+            label = "AP Home";
             kv(data, "dist");
             push_i64(data, compressed(v, 0, 2, 10, false));
             data.push('m');
             kv(data, "alt");
-            push_fixed(data, compressed(v, 12, 2, 10, true), 1);
+            push_decimal(data, compressed(v, 12, 2, 10, true), 1);
             data.push('m');
             kv(data, "bearing");
-            push_u64(data, field(v, 25, 7) as u64 * 3);
+            push_uint(data, field(v, 25, 7) as u64 * 3);
             data.push_str("deg");
         }
         0x5005 => {
-            sensor.push_str("AP Vel/Yaw");
+            label = "AP Vel/Yaw";
             kv(data, "vspd");
-            push_fixed(data, compressed(v, 0, 1, 7, true), 1);
+            push_decimal(data, compressed(v, 0, 1, 7, true), 1);
             data.push_str("m/s");
             kv(data, if field(v, 28, 1) == 1 { "aspd" } else { "hspd" });
-            push_fixed(data, compressed(v, 9, 1, 7, false), 1);
+            push_decimal(data, compressed(v, 9, 1, 7, false), 1);
             data.push_str("m/s");
             kv(data, "yaw");
-            push_fixed(data, field(v, 17, 11) as i64 * 2, 1);
+            push_decimal(data, field(v, 17, 11) as i64 * 2, 1);
             data.push_str("deg");
         }
         0x5006 => {
-            sensor.push_str("AP Attitude");
+            label = "AP Attitude";
             // (angle + offset) * 5 → tenths of a degree = raw * 2 - offset * 10.
             kv(data, "roll");
-            push_fixed(data, field(v, 0, 11) as i64 * 2 - 1800, 1);
+            push_decimal(data, field(v, 0, 11) as i64 * 2 - 1800, 1);
             data.push_str("deg");
             kv(data, "pitch");
-            push_fixed(data, field(v, 11, 10) as i64 * 2 - 900, 1);
+            push_decimal(data, field(v, 11, 10) as i64 * 2 - 900, 1);
             data.push_str("deg");
             kv(data, "range");
             push_i64(data, compressed(v, 21, 1, 10, false));
             data.push_str("cm");
         }
         0x5007 => {
-            sensor.push_str("AP Param");
+            label = "AP Param";
             let id = field(v, 24, 8);
             kv(data, "id");
-            push_u64(data, id as u64);
+            push_uint(data, id as u64);
             let name = match id {
                 1 => Some("frame_type"),
                 2 => Some("batt_fs_volt"),
@@ -159,49 +175,46 @@ pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'
                 data.push_str(n);
             }
             kv(data, "value");
-            push_u64(data, field(v, 0, 24) as u64);
+            push_uint(data, field(v, 0, 24) as u64);
         }
         0x500A => {
-            sensor.push_str("AP RPM");
+            label = "AP RPM";
             kv(data, "rpm1");
             push_i64(data, (v as u16 as i16) as i64 * 10);
             kv(data, "rpm2");
             push_i64(data, ((v >> 16) as u16 as i16) as i64 * 10);
         }
         0x500B => {
-            sensor.push_str("AP Terrain");
+            label = "AP Terrain";
             kv(data, "height");
-            push_fixed(data, compressed(v, 0, 2, 10, true), 1);
+            push_decimal(data, compressed(v, 0, 2, 10, true), 1);
             data.push('m');
             kv(data, "unhealthy");
-            push_u64(data, field(v, 13, 1) as u64);
+            push_uint(data, field(v, 13, 1) as u64);
         }
         0x500C => {
-            sensor.push_str("AP Wind");
+            label = "AP Wind";
             kv(data, "dir");
-            push_u64(data, field(v, 0, 7) as u64 * 3);
+            push_uint(data, field(v, 0, 7) as u64 * 3);
             data.push_str("deg");
             kv(data, "speed");
-            push_fixed(data, compressed(v, 7, 1, 7, false), 1);
+            push_decimal(data, compressed(v, 7, 1, 7, false), 1);
             data.push_str("m/s");
         }
         0x500D => {
-            sensor.push_str("AP Waypoint");
+            label = "AP Waypoint";
             kv(data, "num");
-            push_u64(data, field(v, 0, 11) as u64);
+            push_uint(data, field(v, 0, 11) as u64);
             kv(data, "dist");
             push_i64(data, compressed(v, 11, 2, 10, false));
             data.push('m');
             kv(data, "bearing");
-            push_u64(data, field(v, 23, 7) as u64 * 3);
+            push_uint(data, field(v, 23, 7) as u64 * 3);
             data.push_str("deg");
         }
-        _ => {
-            let _ = write!(sensor, "0x{app_id:04X}");
-            push_u64(data, v as u64);
-        }
+        _ => return None,
     }
-    ""
+    Some(label)
 }
 
 /// Status text: four 7-bit characters, first in bits 24-31. A zero character ends the message;
@@ -225,7 +238,7 @@ fn text(v: u32, data: &mut String) {
     if ended {
         let sev = (field(v, 23, 1) << 2) | (field(v, 15, 1) << 1) | field(v, 7, 1);
         data.push_str(" end severity=");
-        push_u64(data, sev as u64);
+        push_uint(data, sev as u64);
     }
 }
 

@@ -14,7 +14,7 @@
 use std::fmt::Write as _;
 
 use crate::fmt::{push_fixed, push_u64};
-use crate::numbers::Numbers;
+use crate::numbers::{Numbers, push_uint};
 
 /// The numbers one S.Port frame can carry (a servo frame has three).
 pub type SportNumbers = Numbers<4>;
@@ -183,16 +183,21 @@ fn hub_name(id: u8) -> Option<&'static str> {
     })
 }
 
-const HEX_DIGITS: &[u8; 16] = b"0123456789ABCDEF";
-
 /// An app ID in busnoop's one hex notation: `0x` and four upper-case digits, the wire's 16 bits
 /// (`0x0210`, `0xF101`). A spreadsheet keeps it as text, where `210` would become the decimal
 /// number 210 (docs/sport.md, "Hex numbers").
 pub fn push_hex_id(out: &mut String, app_id: u16) {
+    // Digits computed (not looked up) so that each is known to be ASCII: one byte per push.
+    let digit = |shift: u16| {
+        let d = (app_id >> shift) as u8 & 0xF;
+        char::from(if d < 10 { b'0' + d } else { b'A' - 10 + d })
+    };
+    out.reserve(6);
     out.push_str("0x");
-    for shift in [12, 8, 4, 0] {
-        out.push(HEX_DIGITS[(app_id >> shift) as usize & 0xF] as char);
-    }
+    out.push(digit(12));
+    out.push(digit(8));
+    out.push(digit(4));
+    out.push(digit(0));
 }
 
 /// The `Sensor #` column: the app ID as `0x0210` ([`push_hex_id`]; the S-Port_Snoop sample
@@ -224,9 +229,66 @@ pub fn decode_numbers(
     data: &mut String,
     nums: &mut SportNumbers,
 ) -> &'static str {
+    let d = decode_row(phys, app_id, value, sensor, data, nums);
+    if let Some(label) = d.sensor {
+        sensor.push_str(label);
+    }
+    if d.data_is_value {
+        data.push_str(nums.first_text());
+    }
+    d.unit
+}
+
+/// What [`decode_row`] did not write into the buffers.
+pub(crate) struct Decoded {
+    /// The unit of the first number (the `Value` column), or of the Data column.
+    pub unit: &'static str,
+    /// The Sensor column when it is a constant (then nothing was written into `sensor`).
+    pub sensor: Option<&'static str>,
+    /// The Data column is the first number's text (then nothing was written into `data`).
+    pub data_is_value: bool,
+}
+
+impl Decoded {
+    const fn new(unit: &'static str, sensor: &'static str) -> Self {
+        Decoded {
+            unit,
+            sensor: Some(sensor),
+            data_is_value: false,
+        }
+    }
+
+    /// A single number shown as it is in Data.
+    const fn value(unit: &'static str, sensor: &'static str) -> Self {
+        Decoded {
+            unit,
+            sensor: Some(sensor),
+            data_is_value: true,
+        }
+    }
+
+    /// The Sensor column was written into the buffer.
+    pub(crate) const fn built(unit: &'static str) -> Self {
+        Decoded {
+            unit,
+            sensor: None,
+            data_is_value: false,
+        }
+    }
+}
+
+/// [`decode_numbers`] without copying what is constant or already formatted: the row's Sensor
+/// and Data columns are the buffers unless [`Decoded`] says otherwise.
+pub(crate) fn decode_row(
+    phys: u8,
+    app_id: u16,
+    value: u32,
+    sensor: &mut String,
+    data: &mut String,
+    nums: &mut SportNumbers,
+) -> Decoded {
     let base = app_id & 0xFFF0;
     if let Some(s) = scalar(base) {
-        sensor.push_str(s.label);
         let raw = match s.sign {
             Sign::S32 => value as i32 as i64,
             Sign::U32 => value as i64,
@@ -237,11 +299,9 @@ pub fn decode_numbers(
             s.prec
         };
         nums.fixed(log_name(s.label), s.unit, raw, prec);
-        data.push_str(nums.first_text());
-        return s.unit;
+        return Decoded::value(s.unit, s.label);
     }
     if let Some(p) = pair(base) {
-        sensor.push_str(p.label);
         let half = |h: u16| {
             if p.signed { h as i16 as i64 } else { h as i64 }
         };
@@ -254,18 +314,17 @@ pub fn decode_numbers(
             }
             data.push_str(name);
             data.push('=');
-            push_fixed(data, v, prec);
-            data.push_str(unit);
             nums.fixed(name, unit, v, prec);
+            data.push_str(nums.last_text());
+            data.push_str(unit);
         }
-        return p.first.1;
+        return Decoded::new(p.first.1, p.label);
     }
-    let unit = other(app_id, value, sensor, data, nums);
-    if nums.is_empty() {
-        unit
-    } else {
-        nums.first_unit()
+    let mut d = other(app_id, value, sensor, data, nums);
+    if !nums.is_empty() {
+        d.unit = nums.first_unit();
     }
+    d
 }
 
 /// The app IDs that are neither plain scalars nor pairs.
@@ -275,53 +334,49 @@ fn other(
     sensor: &mut String,
     data: &mut String,
     nums: &mut SportNumbers,
-) -> &'static str {
+) -> Decoded {
     match app_id {
         0x0000..=0x00FF => hub(app_id as u8, value, sensor, data, nums),
         0x0300..=0x030F => {
-            sensor.push_str("Cels");
             cells(value, data, nums);
-            "V"
+            Decoded::new("V", "Cels")
         }
         0x0800..=0x080F => {
-            sensor.push_str("GPS");
             gps(value, data, nums);
-            "deg"
+            Decoded::new("deg", "GPS")
         }
-        0x0850..=0x085F => date_time(value, sensor, data),
+        0x0850..=0x085F => date_time(value, data),
         0x0B20..=0x0B2F => {
-            sensor.push_str("RBCS/RBS");
             rb_status(value, data);
-            ""
+            Decoded::new("", "RBCS/RBS")
         }
         0x0B70..=0x0B7F => {
-            sensor.push_str("EscT");
             nums.int("EscT", "degC", (value & 0xFF) as i64);
-            data.push_str(nums.first_text());
-            "degC"
+            Decoded::value("degC", "EscT")
         }
         0x0B80..=0x0B8F => {
-            sensor.push_str("RBES");
             rb_extra(value, data);
-            ""
+            Decoded::new("", "RBES")
         }
-        0x5000..=0x50FF => super::passthrough::decode(app_id, value, sensor, data),
+        0x5000..=0x50FF => match super::passthrough::decode_row(app_id, value, data) {
+            Some(label) => Decoded::new("", label),
+            None => {
+                let _ = write!(sensor, "0x{app_id:04X}");
+                push_u64(data, value as u64);
+                Decoded::built("")
+            }
+        },
         0x6800..=0x680F => {
-            sensor.push_str("Servo");
             servo(value, data, nums);
-            ""
+            Decoded::new("", "Servo")
         }
         0xF010 => {
-            sensor.push_str("VFR");
             nums.int("VFR", "%", 100 - (value & 0xFF) as i64);
-            data.push_str(nums.first_text());
-            "%"
+            Decoded::value("%", "VFR")
         }
         0xF101 => {
-            sensor.push_str("RSSI");
             nums.int("RSSI", "dB", (value & 0xFF) as i64);
-            data.push_str(nums.first_text());
-            "dB"
+            Decoded::value("dB", "RSSI")
         }
         0xF102..=0xF104 => {
             let name = match app_id {
@@ -329,43 +384,39 @@ fn other(
                 0xF103 => "A2",
                 _ => "RxBt",
             };
-            sensor.push_str(name);
             nums.fixed(name, "V", receiver_centivolts(value as u8), 2);
-            data.push_str(nums.first_text());
-            "V"
+            Decoded::value("V", name)
         }
         0xF105 => {
-            sensor.push_str("SWR");
             nums.int("SWR", "", (value & 0xFF) as i64);
-            data.push_str(nums.first_text());
-            ""
+            Decoded::value("", "SWR")
         }
         0xF106 => {
-            sensor.push_str("XJT version");
             nums.int("XJT version", "", (value & 0xFFFF) as i64);
-            data.push_str(nums.first_text());
-            ""
+            Decoded::value("", "XJT version")
         }
         0xF107 => {
-            sensor.push_str("R9PW");
             let dbm = value as u8;
             match r9_power_mw(dbm) {
                 Some(mw) => {
                     nums.int("R9PW", "mW", mw as i64);
-                    data.push_str(nums.first_text());
+                    Decoded::value("mW", "R9PW")
                 }
                 None => {
                     data.push_str("dBm=");
                     push_u64(data, dbm as u64);
+                    Decoded::new("mW", "R9PW")
                 }
             }
-            "mW"
         }
         _ => {
             push_hex_id(sensor, app_id);
             nums.int_with(|n| push_hex_id(n, app_id), "", value as i64);
-            data.push_str(nums.first_text());
-            ""
+            Decoded {
+                unit: "",
+                sensor: None,
+                data_is_value: true,
+            }
         }
     }
 }
@@ -379,10 +430,13 @@ fn receiver_centivolts(raw: u8) -> i64 {
     (raw as i64 * 1320 * 2 + 255) / (2 * 255)
 }
 
-/// `Cell1` … `Cell16` (1-based, as the radio's logs name them).
-fn cell_name(out: &mut String, index: u32) {
-    out.push_str("Cell");
-    push_u64(out, index as u64 + 1);
+/// `Cell1` … `Cell16` (1-based, as the radio's logs name them) for the 0-based index 0-15.
+fn cell_name(index: u32) -> &'static str {
+    const NAMES: [&str; 16] = [
+        "Cell1", "Cell2", "Cell3", "Cell4", "Cell5", "Cell6", "Cell7", "Cell8", "Cell9", "Cell10",
+        "Cell11", "Cell12", "Cell13", "Cell14", "Cell15", "Cell16",
+    ];
+    NAMES[(index & 0x0F) as usize]
 }
 
 fn r9_power_mw(dbm: u8) -> Option<u64> {
@@ -409,14 +463,14 @@ fn cells(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let c0 = (value >> 8) & 0x0FFF;
     let c1 = (value >> 20) & 0x0FFF;
     data.push_str("count=");
-    push_u64(data, count as u64);
+    push_uint(data, count as u64);
     for (i, c) in [(index, c0), (index + 1, c1)] {
         if i == index || i < count {
             data.push_str(" cell");
-            push_u64(data, i as u64);
+            push_uint(data, i as u64);
             data.push('=');
-            push_fixed(data, (c * 2) as i64, 3);
-            nums.fixed_with(|n| cell_name(n, i), "V", (c * 2) as i64, 3);
+            nums.fixed(cell_name(i), "V", (c * 2) as i64, 3);
+            data.push_str(nums.last_text());
         }
     }
 }
@@ -430,21 +484,36 @@ fn gps(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let e7 = ((value & 0x3FFF_FFFF) as i64 * 100 + 3) / 6;
     let v = if neg { -e7 } else { e7 };
     data.push_str(if lon { "lon=" } else { "lat=" });
-    push_fixed(data, v, 7);
     nums.fixed(if lon { "Lon" } else { "Lat" }, "deg", v, 7);
+    data.push_str(nums.last_text());
 }
 
 /// GPS date (low byte ≠ 0) or time (low byte = 0).
-fn date_time(value: u32, sensor: &mut String, data: &mut String) -> &'static str {
+fn date_time(value: u32, data: &mut String) -> Decoded {
     let [b0, b1, b2, b3] = value.to_le_bytes();
     if b0 != 0 {
-        sensor.push_str("Date");
-        let _ = write!(data, "{:04}-{:02}-{:02}", 2000 + b3 as u32, b2, b1);
+        push_uint(data, 2000 + b3 as u64);
+        data.push('-');
+        push_2(data, b2);
+        data.push('-');
+        push_2(data, b1);
+        Decoded::new("", "Date")
     } else {
-        sensor.push_str("Time");
-        let _ = write!(data, "{b3:02}:{b2:02}:{b1:02}");
+        push_2(data, b3);
+        data.push(':');
+        push_2(data, b2);
+        data.push(':');
+        push_2(data, b1);
+        Decoded::new("", "Time")
     }
-    ""
+}
+
+/// At least two digits (`{:02}`).
+fn push_2(data: &mut String, v: u8) {
+    if v < 10 {
+        data.push('0');
+    }
+    push_uint(data, v as u64);
 }
 
 /// Legacy hub data: cells (ID 0x06) are byte-swapped 16-bit values, the rest plain 16-bit.
@@ -454,19 +523,18 @@ fn hub(
     sensor: &mut String,
     data: &mut String,
     nums: &mut SportNumbers,
-) -> &'static str {
+) -> Decoded {
     if id == 0x06 {
-        sensor.push_str("Hub Cell");
         let lo = value as u8;
         let hi = (value >> 8) as u8;
         let idx = lo >> 4;
         let raw = ((lo as u32 & 0x0F) << 8) | hi as u32;
         data.push_str("idx");
-        push_u64(data, idx as u64);
+        push_uint(data, idx as u64);
         data.push('=');
-        push_fixed(data, (raw * 2) as i64, 3);
-        nums.fixed_with(|n| cell_name(n, idx as u32), "V", (raw * 2) as i64, 3);
-        return "V";
+        nums.fixed(cell_name(idx as u32), "V", (raw * 2) as i64, 3);
+        data.push_str(nums.last_text());
+        return Decoded::new("V", "Hub Cell");
     }
     sensor.push_str("Hub ");
     let start = sensor.len();
@@ -481,8 +549,11 @@ fn hub(
         "",
         (value & 0xFFFF) as i64,
     );
-    data.push_str(nums.first_text());
-    ""
+    Decoded {
+        unit: "",
+        sensor: None,
+        data_is_value: true,
+    }
 }
 
 const RB_STATUS: [&str; 15] = [
