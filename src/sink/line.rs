@@ -105,13 +105,53 @@ impl W<'_> {
         }
     }
 
+    /// Appends `s` as it is and returns `test` ORed over words that cover it (as [`scan`]),
+    /// from the same loads that copy it.
+    #[inline(always)]
+    pub fn put_scan(&mut self, s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
+        let n = s.len();
+        let end = self.pos + n;
+        let Some(room) = self.buf.get_mut(self.pos..end) else {
+            self.over = true;
+            return 0;
+        };
+        self.pos = end;
+        let load8 = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([b'A'; 8]));
+        let load4 = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([b'A'; 4]));
+        match n {
+            0 => 0,
+            1..=3 => {
+                let (a, b, c) = (s[0], s[n / 2], s[n - 1]);
+                room[0] = a;
+                room[n / 2] = b;
+                room[n - 1] = c;
+                test((rep(b'A') & !0xFF_FFFF) | a as u64 | (b as u64) << 8 | (c as u64) << 16)
+            }
+            4..=7 => {
+                let (a, b) = (load4(0), load4(n - 4));
+                room[..4].copy_from_slice(&a.to_le_bytes());
+                room[n - 4..].copy_from_slice(&b.to_le_bytes());
+                test(a as u64 | (b as u64) << 32)
+            }
+            8..=16 => {
+                let (a, b) = (load8(0), load8(n - 8));
+                room[..8].copy_from_slice(&a.to_le_bytes());
+                room[n - 8..].copy_from_slice(&b.to_le_bytes());
+                test(a) | test(b)
+            }
+            _ => {
+                copy(room, s);
+                scan(s, test)
+            }
+        }
+    }
+
     /// A TSV field: copied whole, control characters (tabs, newlines) that would break the
     /// row replaced with spaces.
     #[inline(always)]
     pub fn tsv(&mut self, field: &[u8]) {
         let at = self.pos;
-        self.put(field);
-        if scan(field, below_0x20) != 0 {
+        if self.put_scan(field, below_0x20) != 0 {
             for b in self.buf.get_mut(at..self.pos).unwrap_or_default() {
                 if *b < 0x20 {
                     *b = b' ';
@@ -124,17 +164,19 @@ impl W<'_> {
     /// holds a comma, a quote, CR or LF (what the csv crate's `QuoteStyle::Necessary` does).
     #[inline(always)]
     pub fn csv(&mut self, field: &[u8]) {
+        let at = self.pos;
         // Control characters are looked at exactly below; a comma or a quote always quotes.
-        if scan(field, |x| {
+        if self.put_scan(field, |x| {
             below_0x20(x) | zero_byte(x ^ rep(b',')) | zero_byte(x ^ rep(b'"'))
         }) == 0
             || !field
                 .iter()
                 .any(|&b| matches!(b, b',' | b'"' | b'\r' | b'\n'))
         {
-            self.put(field);
             return;
         }
+        // Written again, quoted.
+        self.pos = at;
         self.aside(|w| {
             w.byte(b'"');
             let mut rest = field;
@@ -177,12 +219,13 @@ impl W<'_> {
         }
         let bytes = s.as_bytes();
         self.byte(b'"');
-        if scan(bytes, |x| {
+        let at = self.pos;
+        if self.put_scan(bytes, |x| {
             below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\'))
-        }) == 0
+        }) != 0
         {
-            self.put(bytes);
-        } else {
+            // Written again, escaped.
+            self.pos = at;
             self.aside(|w| w.json_escaped(bytes));
         }
         self.byte(b'"');

@@ -609,13 +609,43 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     /// [`PRETTY_GROW_MAX`]) widens for this row and every later one.
     #[inline(always)]
     fn cell(&mut self, widths: &mut [usize], i: usize, cell: &str, grow: bool, last: bool) {
-        // Printable ASCII: one column per byte, copied whole. Otherwise control characters
-        // become spaces and every char is one column.
         let bytes = cell.as_bytes();
-        if line::scan(bytes, line::not_printable) == 0 {
-            self.text(widths, i, bytes, None, grow, last);
+        if i < 3 || bytes.is_empty() {
+            // Right-aligned: the padding goes first, so the length must be known first.
+            if line::scan(bytes, line::not_printable) == 0 {
+                self.text(widths, i, bytes, None, grow, last);
+            } else {
+                self.text(widths, i, bytes, Some(cell), grow, last);
+            }
+            return;
+        }
+        // Left-aligned, with text: written (after the blanks owed) and checked in one go;
+        // printable ASCII is one column per byte, anything else is written again char by char,
+        // control characters as spaces.
+        self.blanks += 2;
+        self.line.spaces(self.blanks);
+        self.blanks = 0;
+        let at = self.line.len();
+        let len = if self.line.put_scan(bytes, line::not_printable) == 0 {
+            bytes.len()
         } else {
-            self.text(widths, i, bytes, Some(cell), grow, last);
+            self.line.truncate(at);
+            self.line.aside(|w| {
+                for c in cell.chars() {
+                    let c = if c.is_control() { ' ' } else { c };
+                    let mut tmp = [0u8; 4];
+                    w.put(c.encode_utf8(&mut tmp).as_bytes());
+                }
+            });
+            cell.chars().count()
+        };
+        let mut spare = 4;
+        let width = widths.get_mut(i).unwrap_or(&mut spare);
+        if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
+            *width = len;
+        }
+        if !last {
+            self.blanks += width.saturating_sub(len);
         }
     }
 
