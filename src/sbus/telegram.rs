@@ -268,13 +268,30 @@ impl MediaSpans {
     }
 }
 
-/// The media whose element names are a medium letter and a decimal address (`R`, `F`, `I`,
-/// `O`, `T`, `C`): the ones a row's numbers are named after.
-fn names_a_medium(elem: Elem) -> bool {
-    matches!(
-        elem,
-        Elem::Register | Elem::Flag | Elem::Input | Elem::Output | Elem::Timer | Elem::Counter
-    )
+/// The letter of the media whose element names are that letter and a decimal address (`R`,
+/// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
+fn medium_letter(elem: Elem) -> Option<char> {
+    match elem {
+        Elem::Register => Some('R'),
+        Elem::Flag => Some('F'),
+        Elem::Input => Some('I'),
+        Elem::Output => Some('O'),
+        Elem::Timer => Some('T'),
+        Elem::Counter => Some('C'),
+        _ => None,
+    }
+}
+
+/// [`push_elem`] for an element of a list (`letter`: its [`medium_letter`]).
+#[inline]
+fn push_list_elem(out: &mut String, letter: Option<char>, elem: Elem, block: u16, addr: u32) {
+    match letter {
+        Some(c) => {
+            out.push(c);
+            push_u64(out, addr as u64);
+        }
+        None => push_elem(out, elem, block, addr),
+    }
 }
 
 fn push_words(
@@ -286,13 +303,14 @@ fn push_words(
     media: Option<&mut MediaSpans>,
 ) {
     let mut media = MediaSpans::begin(media, out);
-    let medium = names_a_medium(elem);
+    let letter = medium_letter(elem);
+    let medium = letter.is_some();
     for (i, w) in data.chunks_exact(4).enumerate() {
         if i > 0 {
             out.push(' ');
         }
         let start = out.len();
-        push_elem(out, elem, block, addr.wrapping_add(i as u32));
+        push_list_elem(out, letter, elem, block, addr.wrapping_add(i as u32));
         let eq = out.len();
         out.push('=');
         let v = be(w);
@@ -328,13 +346,14 @@ fn push_bits(
     media: Option<&mut MediaSpans>,
 ) {
     let mut media = MediaSpans::begin(media, out);
-    let medium = names_a_medium(elem);
+    let letter = medium_letter(elem);
+    let medium = letter.is_some();
     for i in 0..bits.min(data.len() as u32 * 8) {
         if i > 0 {
             out.push(' ');
         }
         let start = out.len();
-        push_elem(out, elem, 0, addr.wrapping_add(i));
+        push_list_elem(out, letter, elem, 0, addr.wrapping_add(i));
         let bit = data[(i / 8) as usize] >> (i % 8) & 1;
         let eq = out.len();
         out.push('=');
