@@ -11,7 +11,7 @@ use super::pairing::{
     Answer, MAX_CONVERSATIONS, MAX_OUTSTANDING, Outstanding, RequestKind, TimeoutWhy,
 };
 use super::stats::{StationStats, Totals, nak_slot};
-use super::telegram::{self, BROADCAST, ReqInfo};
+use super::telegram::{self, BROADCAST, MediaSpans, ReqInfo};
 use crate::fmt::{push_fixed, push_hex, push_u64};
 use crate::row::{Class, Part, Row, RowOut, RowResult, Unframed};
 
@@ -29,6 +29,8 @@ pub(super) struct Scratch {
     unframed: Vec<u8>,
     /// The CRC as received, when it failed.
     bad_check: Option<u16>,
+    /// Where the numbers of `data` stand, when it was written as a media list.
+    media: MediaSpans,
 }
 
 impl Scratch {
@@ -40,6 +42,7 @@ impl Scratch {
         self.note.clear();
         self.unframed.clear();
         self.bad_check = None;
+        self.media.clear();
     }
 
     /// The row's telegram, re-read: attribute `at`, then `parts` (see [`Unframed`]).
@@ -104,8 +107,37 @@ pub(super) fn put_row(
             )
         };
     }
+    if class == Class::Error {
+        return row!(&[]);
+    }
+    // A media list recorded while the Data cell was written: its numbers as they were
+    // formatted (the same parts as reading the text back, see `media_parts`).
+    if sc.media.len == Some(sc.data.len()) {
+        let spans = &sc.media.spans;
+        let part = |s: &telegram::MediaSpan| Part {
+            name: &sc.data[s.start as usize..s.eq as usize],
+            unit: "",
+            text: &sc.data[s.eq as usize + 1..s.end as usize],
+            value: s.value,
+        };
+        if spans.is_empty() || spans.len() > MAX_PARTS {
+            return row!(&[]);
+        }
+        if spans.len() <= FEW_PARTS {
+            let mut buf = [Part::EMPTY; FEW_PARTS];
+            for (b, s) in buf.iter_mut().zip(spans) {
+                *b = part(s);
+            }
+            return row!(&buf[..spans.len()]);
+        }
+        let mut buf = [Part::EMPTY; MAX_PARTS];
+        for (b, s) in buf.iter_mut().zip(spans) {
+            *b = part(s);
+        }
+        return row!(&buf[..spans.len()]);
+    }
     // Only rows that list values pay for the parts' buffer, and most need a small one.
-    if class != Class::Error && sc.data.as_bytes().contains(&b'=') {
+    if sc.data.as_bytes().contains(&b'=') {
         let tokens = 1 + sc.data.bytes().filter(|&b| b == b' ').count();
         if tokens <= FEW_PARTS {
             let mut buf = [Part::EMPTY; FEW_PARTS];
@@ -319,6 +351,91 @@ mod media_tests {
         assert_eq!(parts(&many(128)).len(), 128);
         assert!(parts(&many(129)).is_empty());
     }
+
+    /// The parts of a row whose Data cell was recorded as a media list, as `put_row` builds
+    /// them; `None` when nothing was recorded for this text.
+    fn recorded(data: &str, media: &MediaSpans) -> Option<Vec<(String, f64)>> {
+        if media.len != Some(data.len()) {
+            return None;
+        }
+        if media.spans.len() > MAX_PARTS {
+            return Some(Vec::new());
+        }
+        Some(
+            media
+                .spans
+                .iter()
+                .map(|s| {
+                    let name = &data[s.start as usize..s.eq as usize];
+                    let text = &data[s.eq as usize + 1..s.end as usize];
+                    (format!("{name}={text}"), s.value)
+                })
+                .collect(),
+        )
+    }
+
+    /// Every command with bodies of many lengths and values, and the responses to the
+    /// requests: the numbers recorded while the Data cell is written are the ones reading the
+    /// cell back gives.
+    #[test]
+    fn recorded_media_lists_give_the_parts_read_from_the_text() {
+        let mut seed = 0x2545_F491_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut lists = 0;
+        for cmd in 0..=255u8 {
+            for len in [0usize, 1, 2, 3, 4, 5, 7, 8, 11, 19, 35, 67, 131, 200, 300] {
+                for _ in 0..3 {
+                    let mut body: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+                    if len > 0 {
+                        body[0] = (next() % 40) as u8;
+                    }
+                    let (mut sensor, mut data, mut media) =
+                        (String::new(), String::new(), MediaSpans::default());
+                    let t = telegram::describe_request_media(
+                        1,
+                        cmd,
+                        &body,
+                        &mut sensor,
+                        &mut data,
+                        Some(&mut media),
+                    );
+                    if let Some(got) = recorded(&data, &media) {
+                        lists += 1;
+                        assert_eq!(got, parts(&data), "request {cmd:02X} {data}");
+                    }
+                    for plen in [0usize, 1, 4, 8, 16, 17, 64, 128] {
+                        let payload: Vec<u8> = (0..plen).map(|_| next() as u8).collect();
+                        let (mut sensor, mut data, mut media) =
+                            (String::new(), String::new(), MediaSpans::default());
+                        telegram::describe_response_media(
+                            &t.info,
+                            &payload,
+                            &mut sensor,
+                            &mut data,
+                            Some(&mut media),
+                        );
+                        if let Some(got) = recorded(&data, &media) {
+                            lists += 1;
+                            assert_eq!(got, parts(&data), "response to {cmd:02X} {data}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(lists > 300, "{lists}");
+        // Text that merely looks like a list is not recorded: it is read back.
+        let t = telegram::describe_request(1, 0x20, &[], &mut String::new(), &mut String::new());
+        let (mut data, mut media) = (String::new(), MediaSpans::default());
+        let sensor = &mut String::new();
+        telegram::describe_response_media(&t.info, b"R1=5", sensor, &mut data, Some(&mut media));
+        assert_eq!(recorded(&data, &media), None);
+        assert_eq!(parts(&data).len(), 1);
+    }
 }
 
 /// Notes for a request: layout problems, broadcast, security-relevant commands.
@@ -352,7 +469,13 @@ fn request_notes(sc: &mut Scratch, t: &telegram::RequestText) -> Class {
 /// Response text for a paired request; returns whether the length fits.
 fn response_text(sc: &mut Scratch, req: &ReqInfo, data: &[u8]) -> bool {
     let fits = req.expect.fits(data);
-    telegram::describe_response(req, data, &mut sc.sensor_no, &mut sc.data);
+    telegram::describe_response_media(
+        req,
+        data,
+        &mut sc.sensor_no,
+        &mut sc.data,
+        Some(&mut sc.media),
+    );
     if !fits {
         sc.note_with(|n| {
             n.push_str("length ");
@@ -494,12 +617,13 @@ impl Mapper {
         st: &mut StationStats,
         class: &mut Class,
     ) -> ReqInfo {
-        let text = telegram::describe_request(
+        let text = telegram::describe_request_media(
             station,
             cmd,
             body,
             &mut self.sc.sensor_no,
             &mut self.sc.data,
+            Some(&mut self.sc.media),
         );
         let c = request_notes(&mut self.sc, &text);
         if *class == Class::Plain {

@@ -231,27 +231,146 @@ fn push_value(out: &mut String, elem: Elem, v: u32) {
     }
 }
 
-fn push_words(out: &mut String, elem: Elem, block: u16, addr: u32, data: &[u8]) {
+/// Where the numbers of a Data cell that lists media values stand (`R0=1 R1=2`), recorded while
+/// the cell is written so that the row's numbers (`Row::parts`) need not be read back from
+/// the text. Only a list that is the whole cell is recorded.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct MediaSpans {
+    /// The cell's length when its list was written: the spans describe that text only.
+    /// `None`: nothing recorded.
+    pub len: Option<usize>,
+    /// Each number of the list; empty when the list names no medium (`DB4000[2]=5`): the
+    /// rule of the parts (`[RFIOTC][0-9]+=[+-]?[0-9]+` per token) then gives none.
+    pub spans: Vec<MediaSpan>,
+}
+
+/// One `name=number` of a media list: byte offsets in the Data cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct MediaSpan {
+    pub start: u32,
+    /// The `=` (the name ends here, the number starts after it).
+    pub eq: u32,
+    pub end: u32,
+    pub value: f64,
+}
+
+impl MediaSpans {
+    pub fn clear(&mut self) {
+        self.len = None;
+        self.spans.clear();
+    }
+
+    /// Recording for a list written into `out`: only when the list is the whole cell.
+    fn begin<'m>(media: Option<&'m mut MediaSpans>, out: &str) -> Option<&'m mut MediaSpans> {
+        let m = media.filter(|_| out.is_empty())?;
+        m.clear();
+        Some(m)
+    }
+}
+
+/// The letter of the media whose element names are that letter and a decimal address (`R`,
+/// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
+fn medium_letter(elem: Elem) -> Option<char> {
+    match elem {
+        Elem::Register => Some('R'),
+        Elem::Flag => Some('F'),
+        Elem::Input => Some('I'),
+        Elem::Output => Some('O'),
+        Elem::Timer => Some('T'),
+        Elem::Counter => Some('C'),
+        _ => None,
+    }
+}
+
+/// [`push_elem`] for an element of a list (`letter`: its [`medium_letter`]).
+#[inline]
+fn push_list_elem(out: &mut String, letter: Option<char>, elem: Elem, block: u16, addr: u32) {
+    match letter {
+        Some(c) => {
+            out.push(c);
+            push_u64(out, addr as u64);
+        }
+        None => push_elem(out, elem, block, addr),
+    }
+}
+
+fn push_words(
+    out: &mut String,
+    elem: Elem,
+    block: u16,
+    addr: u32,
+    data: &[u8],
+    media: Option<&mut MediaSpans>,
+) {
+    let mut media = MediaSpans::begin(media, out);
+    let letter = medium_letter(elem);
+    let medium = letter.is_some();
     for (i, w) in data.chunks_exact(4).enumerate() {
         if i > 0 {
             out.push(' ');
         }
-        push_elem(out, elem, block, addr.wrapping_add(i as u32));
+        let start = out.len();
+        push_list_elem(out, letter, elem, block, addr.wrapping_add(i as u32));
+        let eq = out.len();
         out.push('=');
-        push_value(out, elem, be(w));
+        let v = be(w);
+        push_value(out, elem, v);
+        if let Some(m) = media.as_deref_mut()
+            && medium
+        {
+            let value = if elem.is_unsigned() {
+                v as f64
+            } else {
+                v as i32 as f64
+            };
+            m.spans.push(MediaSpan {
+                start: start as u32,
+                eq: eq as u32,
+                end: out.len() as u32,
+                value,
+            });
+        }
+    }
+    if let Some(m) = media {
+        m.len = Some(out.len());
     }
 }
 
 /// `F0=1 F1=0 …`: element 0 is bit 0 of the first byte.
-fn push_bits(out: &mut String, elem: Elem, addr: u32, bits: u32, data: &[u8]) {
+fn push_bits(
+    out: &mut String,
+    elem: Elem,
+    addr: u32,
+    bits: u32,
+    data: &[u8],
+    media: Option<&mut MediaSpans>,
+) {
+    let mut media = MediaSpans::begin(media, out);
+    let letter = medium_letter(elem);
+    let medium = letter.is_some();
     for i in 0..bits.min(data.len() as u32 * 8) {
         if i > 0 {
             out.push(' ');
         }
-        push_elem(out, elem, 0, addr.wrapping_add(i));
+        let start = out.len();
+        push_list_elem(out, letter, elem, 0, addr.wrapping_add(i));
         let bit = data[(i / 8) as usize] >> (i % 8) & 1;
+        let eq = out.len();
         out.push('=');
         out.push(if bit == 1 { '1' } else { '0' });
+        if let Some(m) = media.as_deref_mut()
+            && medium
+        {
+            m.spans.push(MediaSpan {
+                start: start as u32,
+                eq: eq as u32,
+                end: out.len() as u32,
+                value: bit as f64,
+            });
+        }
+    }
+    if let Some(m) = media {
+        m.len = Some(out.len());
     }
 }
 
@@ -325,6 +444,19 @@ pub fn describe_request(
     sensor_no: &mut String,
     data: &mut String,
 ) -> RequestText {
+    describe_request_media(station, cmd, body, sensor_no, data, None)
+}
+
+/// [`describe_request`], recording the numbers of a media list in `media` (when `data` starts
+/// empty).
+pub(crate) fn describe_request_media(
+    station: u8,
+    cmd: u8,
+    body: &[u8],
+    sensor_no: &mut String,
+    data: &mut String,
+    media: Option<&mut MediaSpans>,
+) -> RequestText {
     let mut info = ReqInfo {
         station,
         cmd,
@@ -394,7 +526,7 @@ pub fn describe_request(
             if !values.len().is_multiple_of(4) || body[0] as usize + 1 != body.len() - 1 {
                 problem = problem.or(Some("w-count does not fit the values"));
             }
-            push_words(data, e, 0, info.addr, values);
+            push_words(data, e, 0, info.addr, values, media);
         }
         WriteBits(e) if body.len() >= 4 => {
             info.addr = be(&body[1..3]);
@@ -403,7 +535,7 @@ pub fn describe_request(
             if bytes.len() < (info.count as usize).div_ceil(8) {
                 problem = problem.or(Some("fio-count needs more data bytes"));
             }
-            push_bits(data, e, info.addr, info.count, bytes);
+            push_bits(data, e, info.addr, info.count, bytes, media);
         }
         WriteDb if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -413,7 +545,7 @@ pub fn describe_request(
             if !values.len().is_multiple_of(4) {
                 problem = problem.or(Some("w-count does not fit the values"));
             }
-            push_words(data, Elem::DataBlock, info.block, info.addr, values);
+            push_words(data, Elem::DataBlock, info.block, info.addr, values, media);
         }
         WriteProg(e) if body.len() >= 4 => {
             info.addr = be(&body[1..4]);
@@ -465,15 +597,29 @@ pub fn describe_request(
 /// Decodes response `data` for the request it answers into `data_out`. Returns whether the
 /// length fits the request.
 pub fn describe_response(req: &ReqInfo, payload: &[u8], sensor_no: &mut String, out: &mut String) {
+    describe_response_media(req, payload, sensor_no, out, None)
+}
+
+/// [`describe_response`], recording the numbers of a media list in `media` (when `out` starts
+/// empty).
+pub(crate) fn describe_response_media(
+    req: &ReqInfo,
+    payload: &[u8],
+    sensor_no: &mut String,
+    out: &mut String,
+    media: Option<&mut MediaSpans>,
+) {
     if let Some(e) = req.elem {
         push_elem(sensor_no, e, req.block, req.addr);
     }
     let fits = req.expect.fits(payload);
     match (req.cmd, req.elem) {
         (0x00 | 0x06 | 0x07 | 0x96 | 0xA1, Some(e)) if fits => {
-            push_words(out, e, req.block, req.addr, payload)
+            push_words(out, e, req.block, req.addr, payload, media)
         }
-        (0x02 | 0x03 | 0x05, Some(e)) if fits => push_bits(out, e, req.addr, req.count, payload),
+        (0x02 | 0x03 | 0x05, Some(e)) if fits => {
+            push_bits(out, e, req.addr, req.count, payload, media)
+        }
         (0x01, _) if fits => {
             out.push_str("display=");
             push_i64(out, be(payload) as i32 as i64);

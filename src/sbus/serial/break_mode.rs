@@ -171,41 +171,7 @@ impl BreakFramer {
 
     fn decide(&self, at_end: bool) -> Cand<Found> {
         let b = self.avail();
-        let mut order: [Option<Step>; 8] = [None; 8];
         use Step::*;
-        // After the master timeout a new request (with its break) is read first; without
-        // breaks (parity mode) a request and a late response cannot be told apart by their
-        // CRC, so the answer reading stays first (docs/sbus.md).
-        let expired = self.breaks_seen
-            && matches!(
-                (self.timeout, self.req_time, self.times.get(self.head)),
-                (Some(to), Some(rt), Some(Some(t))) if *t > rt.saturating_add(to)
-            );
-        let answer = |n| {
-            if expired {
-                [
-                    Some(ReqBreak),
-                    Some(Resp(n)),
-                    Some(AckStrict),
-                    self.fresh.then_some(OtherResp(n)),
-                    Some(BadReq),
-                    Some(AckBreak),
-                    Some(BadResp(n)),
-                    Some(AckRelaxed),
-                ]
-            } else {
-                [
-                    Some(Resp(n)),
-                    Some(AckStrict),
-                    Some(Req),
-                    self.fresh.then_some(OtherResp(n)),
-                    Some(AckBreak),
-                    Some(BadResp(n)),
-                    Some(AckRelaxed),
-                    Some(BadReq),
-                ]
-            }
-        };
         // Long after the timeout (3×) nothing is awaited any more.
         let lapsed = matches!(
             (self.timeout, self.req_time, self.times.get(self.head)),
@@ -216,31 +182,21 @@ impl BreakFramer {
         } else {
             self.awaiting
         };
-        match awaiting {
-            Await::Request | Await::Answer(Expect::Nothing) => {
-                order[..3].copy_from_slice(&[Some(Req), Some(BadReq), Some(StrayAck)]);
-            }
-            Await::Answer(Expect::AckNak) => {
-                order[..3].copy_from_slice(&[Some(AckRelaxed), Some(Req), Some(BadReq)]);
-            }
-            Await::Answer(Expect::Data(n)) => order = answer(n),
+        // The readings in order of preference (`n`: the answer's length, for `Resp`,
+        // `OtherResp` and `BadResp`); `OtherResp` and `AnyResp` only right after the request.
+        let (order, n): (&[Step], usize) = match awaiting {
+            Await::Request | Await::Answer(Expect::Nothing) => (&[Req, BadReq, StrayAck], 0),
+            Await::Answer(Expect::AckNak) => (&[AckRelaxed, Req, BadReq], 0),
+            Await::Answer(Expect::Data(n)) => (self.answer_order(), n),
             Await::Answer(Expect::LengthPrefixed) => {
                 let Some(&n) = b.first() else {
                     return Cand::More;
                 };
-                order = answer(1 + n as usize);
+                (self.answer_order(), 1 + n as usize)
             }
-            Await::Answer(Expect::Unknown) => {
-                order[..5].copy_from_slice(&[
-                    Some(AckStrict),
-                    Some(Req),
-                    self.fresh.then_some(AnyResp),
-                    Some(AckRelaxed),
-                    Some(BadReq),
-                ]);
-            }
-        }
-        for step in order.into_iter().flatten() {
+            Await::Answer(Expect::Unknown) => (&[AckStrict, Req, AnyResp, AckRelaxed, BadReq], 0),
+        };
+        for &step in order {
             let r = match step {
                 Req => map(self.req_at(b, 0, at_end, true), Found::Request),
                 ReqBreak => match self.req_at(b, 0, at_end, true) {
@@ -261,7 +217,8 @@ impl BreakFramer {
                     })
                 }
                 AckBreak => Cand::No,
-                Resp(n) => match resp_at(b, 0, n, at_end) {
+                OtherResp | AnyResp if !self.fresh => Cand::No,
+                Resp => match resp_at(b, 0, n, at_end) {
                     // (parity mode: a 00 after a telegram is no break, see tail_dominated)
                     Cand::Match(()) if !self.parity => Cand::Match(Found::Response {
                         len: n,
@@ -283,7 +240,7 @@ impl BreakFramer {
                         mismatch: false,
                     }),
                 },
-                OtherResp(n) => map(self.clean_search(b, at_end, Some(n)), |len| {
+                OtherResp => map(self.clean_search(b, at_end, Some(n)), |len| {
                     Found::Response {
                         len,
                         crc_ok: true,
@@ -295,7 +252,7 @@ impl BreakFramer {
                     crc_ok: true,
                     mismatch: false,
                 }),
-                BadResp(n) => {
+                BadResp => {
                     if b.len() < n + 2 {
                         if at_end { Cand::No } else { Cand::More }
                     } else {
@@ -317,6 +274,28 @@ impl BreakFramer {
             }
         }
         Cand::No
+    }
+
+    /// The readings while an answer of known length is awaited. After the master timeout a
+    /// new request (with its break) is read first; without breaks (parity mode) a request and
+    /// a late response cannot be told apart by their CRC, so the answer reading stays first
+    /// (docs/sbus.md).
+    fn answer_order(&self) -> &'static [Step] {
+        use Step::*;
+        let expired = self.breaks_seen
+            && matches!(
+                (self.timeout, self.req_time, self.times.get(self.head)),
+                (Some(to), Some(rt), Some(Some(t))) if *t > rt.saturating_add(to)
+            );
+        if expired {
+            &[
+                ReqBreak, Resp, AckStrict, OtherResp, BadReq, AckBreak, BadResp, AckRelaxed,
+            ]
+        } else {
+            &[
+                Resp, AckStrict, Req, OtherResp, AckBreak, BadResp, AckRelaxed, BadReq,
+            ]
+        }
     }
 
     /// Break characters tried before a request, in order of preference. In SM0 a request
@@ -669,10 +648,10 @@ enum Step {
     AckStrict,
     AckRelaxed,
     AckBreak,
-    Resp(usize),
-    OtherResp(usize),
+    Resp,
+    OtherResp,
     AnyResp,
-    BadResp(usize),
+    BadResp,
 }
 
 /// How an ACK/NAK character's end is confirmed.

@@ -47,8 +47,9 @@ pub struct DataFramer {
     wire: Vec<u8>,
     /// Logical bytes of the standard telegram after its FS: AT, payload, CRC.
     tele: Vec<u8>,
-    /// Offset in `wire` where each logical byte of `tele` starts.
-    tele_at: Vec<u16>,
+    /// Offsets in `wire` where the last two logical bytes of `tele` start (the one before
+    /// last, the last): the CRC check needs where the CRC field starts on the wire.
+    tele_at: [usize; 2],
     /// Offset in `wire` of the standard telegram's FS (0, or after the secure header).
     tele_fs: usize,
     secure: Option<Secure>,
@@ -74,7 +75,7 @@ impl DataFramer {
             dle: false,
             wire: Vec::with_capacity(MAX_WIRE),
             tele: Vec::with_capacity(MAX_WIRE),
-            tele_at: Vec::with_capacity(MAX_WIRE),
+            tele_at: [0; 2],
             tele_fs: 0,
             secure: None,
             problem: None,
@@ -91,14 +92,60 @@ impl DataFramer {
 
     /// Feeds `data` that arrived at `time`.
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        for &b in data {
+        let mut i = 0;
+        while i < data.len() {
             if self.clock.gap_before(time) {
                 self.close(emit);
                 self.garbage.flush(emit);
             }
-            self.byte(b, time, emit);
+            // Inside a telegram, a run of bytes that are neither B5 nor C5 is taken whole (the
+            // gap rule cannot end it: every byte of `data` arrived at the same time).
+            let n = self.plain_run(&data[i..]);
+            if n > 0 {
+                self.take_run(&data[i..i + n], emit);
+                i += n;
+                self.pos += n as u64;
+                continue;
+            }
+            self.byte(data[i], time, emit);
             self.pos += 1;
+            i += 1;
         }
+    }
+
+    /// How many of the first bytes of `data` can be taken as one run of logical bytes: inside a
+    /// standard telegram's body, no DLE pending, whose length is settled (known or known never
+    /// to be); neither B5 nor C5; within [`MAX_WIRE`]; and not past the byte that completes
+    /// the known length (its CRC is checked then). 0: take the next byte alone.
+    fn plain_run(&self, data: &[u8]) -> usize {
+        if self.phase != Phase::Body || self.dle {
+            return 0;
+        }
+        let mut limit = MAX_WIRE.saturating_sub(self.wire.len()).min(data.len());
+        match self.known {
+            Known::NotYet => return 0,
+            Known::Len(k) if k > self.tele.len() => limit = limit.min(k - self.tele.len()),
+            _ => {}
+        }
+        let data = &data[..limit];
+        data.iter()
+            .position(|&b| b == FS || b == DLE)
+            .unwrap_or(data.len())
+    }
+
+    /// Takes a run found by [`Self::plain_run`]: what [`Self::byte`] does for each of its
+    /// bytes.
+    fn take_run(&mut self, run: &[u8], emit: &mut impl FnMut(&Event<'_>)) {
+        let at = self.wire.len();
+        self.wire.extend_from_slice(run);
+        self.tele.extend_from_slice(run);
+        let end = at + run.len();
+        self.tele_at = if run.len() >= 2 {
+            [end - 2, end - 1]
+        } else {
+            [self.tele_at[1], at]
+        };
+        self.check_known(emit);
     }
 
     /// Time passed without data: a silence longer than the gap ends an open telegram.
@@ -121,7 +168,7 @@ impl DataFramer {
         self.wire.clear();
         self.wire.push(FS);
         self.tele.clear();
-        self.tele_at.clear();
+        self.tele_at = [0; 2];
         self.tele_fs = 0;
         self.secure = None;
         self.problem = None;
@@ -200,7 +247,7 @@ impl DataFramer {
         self.phase = Phase::Body;
         // The inner AT follows; `tele` starts with it.
         self.tele.clear();
-        self.tele_at.clear();
+        self.tele_at = [0; 2];
         self.known = Known::NotYet;
     }
 
@@ -249,10 +296,16 @@ impl DataFramer {
 
     fn push_tele(&mut self, v: u8, wire_at: usize, emit: &mut impl FnMut(&Event<'_>)) {
         self.tele.push(v);
-        self.tele_at.push(wire_at as u16);
+        self.tele_at = [self.tele_at[1], wire_at];
         if self.known == Known::NotYet {
             self.known = self.complete_len();
         }
+        self.check_known(emit);
+    }
+
+    /// Closes the telegram when its known length is reached (a standard one only if its CRC
+    /// checks).
+    fn check_known(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         if self.known == Known::Len(self.tele.len()) {
             if self.secure.is_some() {
                 self.close(emit);
@@ -317,7 +370,7 @@ impl DataFramer {
         d.update(&[FS]);
         d.update(&self.tele[..n - 2]);
         let unescaped = d.finalize();
-        let crc_wire = self.tele_at[n - 2] as usize;
+        let crc_wire = self.tele_at[0];
         // Both readings in one pass when no DLE pair was undone before the CRC (the usual
         // case): the wire then holds the same bytes as the logical telegram.
         let escaped = if self.wire[self.tele_fs] == FS && crc_wire - self.tele_fs == n - 1 {
