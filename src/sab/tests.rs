@@ -1346,7 +1346,11 @@ fn shadow_blocks_switch_at_the_same_byte_in_long_captures() {
     // Longer than a block of the background framing, switching back and forth.
     let mut w = Vec::new();
     for round in 0..6u8 {
-        let framing = if round % 2 == 0 { Framing::Hdlc } else { Framing::Sync };
+        let framing = if round % 2 == 0 {
+            Framing::Hdlc
+        } else {
+            Framing::Sync
+        };
         for i in 0..400u32 {
             let p = i.to_le_bytes();
             match framing {
@@ -1360,5 +1364,9 @@ fn shadow_blocks_switch_at_the_same_byte_in_long_captures() {
     let bytes: Vec<(&[u8], Option<u64>)> = w.chunks(1).map(|c| (c, None)).collect();
     let (by_byte, d) = decode_chunks(&o, &bytes);
     assert_eq!(by_byte, whole);
-    assert!(d.counters().framings.len() >= 6, "{:?}", d.counters().framings);
+    assert!(
+        d.counters().framings.len() >= 6,
+        "{:?}",
+        d.counters().framings
+    );
 }
