@@ -9,6 +9,42 @@ pub fn push_hex_u8(out: &mut String, b: u8) {
     out.push(HEX[(b & 0x0F) as usize] as char);
 }
 
+/// `0x00` … `0xFF`, four bytes each (see [`hex_0x`]).
+const HEX_0X_TEXT: [u8; 1024] = {
+    let mut t = [0u8; 1024];
+    let mut i = 0;
+    while i < 256 {
+        t[4 * i] = b'0';
+        t[4 * i + 1] = b'x';
+        t[4 * i + 2] = HEX[i >> 4];
+        t[4 * i + 3] = HEX[i & 0x0F];
+        i += 1;
+    }
+    t
+};
+
+/// `0xNN` for every byte, as static strings (see [`hex_0x`]).
+static HEX_0X: [&str; 256] = {
+    let mut t = [""; 256];
+    let mut i = 0;
+    while i < 256 {
+        let (_, rest) = HEX_0X_TEXT.split_at(4 * i);
+        let (digits, _) = rest.split_at(4);
+        t[i] = match std::str::from_utf8(digits) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        i += 1;
+    }
+    t
+};
+
+/// `0xNN` as a static string (what [`push_0x`] appends), for columns that need no copy.
+#[inline]
+pub fn hex_0x(b: u8) -> &'static str {
+    HEX_0X[b as usize]
+}
+
 /// Appends `0xNN`.
 pub fn push_0x(out: &mut String, b: u8) {
     out.push_str("0x");
@@ -120,6 +156,15 @@ pub fn push_ms_short(out: &mut String, micros: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn static_0x_texts() {
+        for b in 0..=255u8 {
+            let mut s = String::new();
+            push_0x(&mut s, b);
+            assert_eq!(hex_0x(b), s);
+        }
+    }
 
     #[test]
     fn fixed_point() {

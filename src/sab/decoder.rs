@@ -11,15 +11,20 @@ use crate::protocol::Decoder;
 use crate::row::{Latch, RowOut, RowResult};
 use crate::stats::{Problems, Report};
 
-/// One byte into a reassembler (lets the detection loops be monomorphised per framing pair).
-trait Stepper {
+/// Bytes into a reassembler (lets the detection loops be monomorphised per framing pair).
+trait Stepper: Clone {
     fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>));
+    fn push_bytes(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>));
 }
 
 impl Stepper for sync::Reassembler {
     #[inline]
     fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         self.step(b, time, emit);
+    }
+    #[inline]
+    fn push_bytes(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.push(data, time, emit);
     }
 }
 
@@ -28,6 +33,10 @@ impl Stepper for hdlc::Reassembler {
     fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         self.step(b, time, emit);
     }
+    #[inline]
+    fn push_bytes(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.push(data, time, emit);
+    }
 }
 
 impl Stepper for Reasm {
@@ -35,13 +44,65 @@ impl Stepper for Reasm {
     fn step_byte(&mut self, b: u8, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         self.step(b, time, emit);
     }
+    #[inline]
+    fn push_bytes(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.push(data, time, emit);
+    }
 }
+
+/// Bytes the background framing reads ahead of the chosen one at a time (see [`shadowed`]).
+const SHADOW_BLOCK: usize = 4096;
 
 /// Feeds `data` to the active reassembler (rows) and the background one (counting its valid
 /// frames since the active one's last). Returns the number of bytes consumed when a byte makes
 /// the background framing win (busnoop switches after that byte), `None` when all were fed.
+///
+/// The outcome is that of feeding both one byte at a time, the active one first
+/// ([`shadowed_bytes`]), but block by block: the background reassembler reads a block first
+/// (from a copy of its state). When it finds no valid frame there, which is the usual case,
+/// nothing in the block can change the count or make busnoop switch, so the active one reads
+/// the block whole. Otherwise the background state goes back to the copy and the block is
+/// read byte by byte.
 #[allow(clippy::too_many_arguments)]
 fn shadowed<A: Stepper, S: Stepper>(
+    active: &mut A,
+    shadow: &mut S,
+    since: &mut u64,
+    last: &mut Option<frame::OwnedEvent>,
+    map: &mut Mapper,
+    data: &[u8],
+    time: Option<u64>,
+    out: &mut dyn RowOut,
+) -> Option<usize> {
+    let mut done = 0;
+    for block in data.chunks(SHADOW_BLOCK) {
+        let before = shadow.clone();
+        let mut found = false;
+        shadow.push_bytes(block, time, &mut |e| found |= e.is_valid());
+        if found {
+            *shadow = before;
+            if let Some(n) = shadowed_bytes(active, shadow, since, last, map, block, time, out) {
+                return Some(done + n);
+            }
+        } else {
+            let mut active_valid = false;
+            active.push_bytes(block, time, &mut |e| {
+                active_valid |= e.is_valid();
+                map.event(e, out);
+            });
+            if active_valid {
+                *since = 0;
+            }
+        }
+        done += block.len();
+    }
+    None
+}
+
+/// [`shadowed`] one byte at a time: each byte goes to the active reassembler, then to the
+/// background one.
+#[allow(clippy::too_many_arguments)]
+fn shadowed_bytes<A: Stepper, S: Stepper>(
     active: &mut A,
     shadow: &mut S,
     since: &mut u64,

@@ -13,7 +13,7 @@
 //! runts, aborts and overlong frames instead of dropping them silently, and it decodes a frame
 //! longer than the configured maximum when its CRC is valid (a device built with a larger `N`).
 
-use crc::{CRC_16_MODBUS, Crc};
+use crc::{CRC_16_MODBUS, Crc, Table};
 
 use super::frame::{Event, EventKind, Framing};
 
@@ -32,7 +32,9 @@ pub const STORE_MAX: usize = OVERHEAD + 255;
 pub const WIRE_MAX: usize = 2 + 2 * STORE_MAX;
 use crate::row::GARBAGE_ROW_MAX;
 
-const CRC16: Crc<u16> = Crc::<u16>::new(&CRC_16_MODBUS);
+/// Slice-by-16 tables: every byte between two flags of either framing's traffic goes through
+/// this CRC (the background framing of the detection checks SAB v1 data with it too).
+static CRC16: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_MODBUS);
 
 /// CRC-16/MODBUS of `bytes` (HEADER … DATA of a frame).
 pub fn crc16(bytes: &[u8]) -> u16 {
@@ -126,9 +128,92 @@ impl Reassembler {
     }
 
     /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
+    ///
+    /// The same as [`Self::step`] for every byte, a run at a time: the bytes up to the next
+    /// flag are copied whole into the garbage run, or into the frame's wire and body buffers.
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        for &b in data {
-            self.step(b, time, emit);
+        let mut rest = data;
+        while !rest.is_empty() {
+            let n = rest.iter().position(|&b| b == FLAG).unwrap_or(rest.len());
+            if n > 0 {
+                let run = &rest[..n];
+                if self.in_frame {
+                    self.frame_run(run);
+                } else {
+                    self.garbage_run(run, time, emit);
+                }
+                self.pos += n as u64;
+                self.last_time = time;
+            }
+            if n < rest.len() {
+                self.step(FLAG, time, emit);
+                rest = &rest[n + 1..];
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// Bytes of an open frame, none of them a flag (what [`Self::step`] does with each).
+    fn frame_run(&mut self, run: &[u8]) {
+        self.keep_wire_run(run);
+        let mut rest = run;
+        while let Some((&first, tail)) = rest.split_first() {
+            if self.escaped {
+                // `step`'s escape rules, one byte at a time.
+                self.step_body(first);
+                rest = tail;
+                continue;
+            }
+            let n = rest.iter().position(|&b| b == ESCAPE).unwrap_or(rest.len());
+            self.keep_body_run(&rest[..n]);
+            if n < rest.len() {
+                self.escaped = true;
+                rest = &rest[n + 1..];
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// One byte of an open frame that is not a flag: escapes and the body.
+    #[inline]
+    fn step_body(&mut self, b: u8) {
+        if b == ESCAPE {
+            // modm: an escape after an escape only re-arms the escape.
+            if self.escaped {
+                self.odd_escapes += 1;
+            }
+            self.escaped = true;
+        } else if self.escaped {
+            self.escaped = false;
+            if b != 0x5E && b != 0x5D {
+                self.odd_escapes += 1;
+            }
+            self.keep_body(b ^ 0x20);
+        } else {
+            self.keep_body(b);
+        }
+    }
+
+    /// Garbage bytes (no flag among them), in rows of at most [`GARBAGE_ROW_MAX`].
+    fn garbage_run(&mut self, run: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        let mut rest = run;
+        let mut pos = self.pos;
+        while !rest.is_empty() {
+            if self.garbage_len == 0 {
+                self.garbage_pos = pos;
+                self.garbage_start = time;
+            }
+            let k = rest.len().min(GARBAGE_ROW_MAX - self.garbage_len);
+            self.garbage[self.garbage_len..self.garbage_len + k].copy_from_slice(&rest[..k]);
+            self.garbage_len += k;
+            self.garbage_end = time;
+            pos += k as u64;
+            rest = &rest[k..];
+            if self.garbage_len == GARBAGE_ROW_MAX {
+                self.flush_garbage(emit);
+            }
         }
     }
 
@@ -146,21 +231,7 @@ impl Reassembler {
             self.garbage_byte(b, time, emit);
         } else {
             self.keep_wire(b);
-            if b == ESCAPE {
-                // modm: an escape after an escape only re-arms the escape.
-                if self.escaped {
-                    self.odd_escapes += 1;
-                }
-                self.escaped = true;
-            } else if self.escaped {
-                self.escaped = false;
-                if b != 0x5E && b != 0x5D {
-                    self.odd_escapes += 1;
-                }
-                self.keep_body(b ^ 0x20);
-            } else {
-                self.keep_body(b);
-            }
+            self.step_body(b);
         }
         self.pos += 1;
         self.last_time = time;
@@ -222,6 +293,20 @@ impl Reassembler {
         self.wire_len += 1;
     }
 
+    fn keep_wire_run(&mut self, run: &[u8]) {
+        let at = (self.wire_len as usize).min(WIRE_MAX);
+        let k = run.len().min(WIRE_MAX - at);
+        self.wire[at..at + k].copy_from_slice(&run[..k]);
+        self.wire_len += run.len() as u64;
+    }
+
+    fn keep_body_run(&mut self, run: &[u8]) {
+        let at = (self.body_len as usize).min(STORE_MAX);
+        let k = run.len().min(STORE_MAX - at);
+        self.body[at..at + k].copy_from_slice(&run[..k]);
+        self.body_len += run.len() as u64;
+    }
+
     #[inline]
     fn keep_body(&mut self, b: u8) {
         if let Some(slot) = self.body.get_mut(self.body_len as usize) {
@@ -235,6 +320,8 @@ impl Reassembler {
     fn close(&mut self, closed: bool, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         let n = self.body_len;
         let stored = (n as usize).min(STORE_MAX);
+        // The check of a run that can be a frame, computed once.
+        let mut check = None;
         let kind = if !closed {
             if n == 0 && !self.escaped {
                 // Only the closing flag of the last frame.
@@ -250,8 +337,7 @@ impl Reassembler {
             EventKind::Runt
         } else if n > STORE_MAX as u64 {
             EventKind::Overlong
-        } else if Self::crc_of(&self.body[..stored]).0 {
-            // (the CRC over body and CRC field is 0 exactly when the field holds the body's CRC)
+        } else if check.insert(Self::crc_of(&self.body[..stored])).0 {
             EventKind::Frame
         } else if n > (self.max_payload + OVERHEAD) as u64 {
             EventKind::Overlong
@@ -267,9 +353,8 @@ impl Reassembler {
         ev.end_time = if closed { time } else { self.last_time };
         ev.odd_escapes = self.odd_escapes;
         ev.body_len = n;
-        match kind {
-            EventKind::Frame | EventKind::BadCrc => {
-                let (_, received, computed) = Self::crc_of(&self.body[..stored]);
+        match (kind, check) {
+            (EventKind::Frame | EventKind::BadCrc, Some((_, received, computed))) => {
                 ev.body = &self.body[..stored - 2];
                 ev.crc = Some((received, computed));
             }

@@ -10,7 +10,9 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64};
+use crate::fmt::{
+    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
+};
 use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
 
@@ -42,12 +44,21 @@ pub fn push_payload(out: &mut String, payload: &[u8]) {
     out.push(')');
 }
 
+/// [`push_ms`] for a response time: µs as milliseconds with three decimals.
+fn push_ms3(out: &mut String, micros: u64) {
+    let micros = micros.min(i64::MAX as u64);
+    out.push_str(itoa::Buffer::new().format(micros / 1000));
+    let f = (micros % 1000) as u32;
+    out.push('.');
+    out.push(char::from(b'0' + (f / 100) as u8));
+    out.push(char::from(b'0' + (f / 10 % 10) as u8));
+    out.push(char::from(b'0' + (f % 10) as u8));
+}
+
 /// Scratch buffers reused for every row.
 #[derive(Default)]
 struct Scratch {
-    sensor_no: String,
     data: String,
-    addr: String,
     resp: String,
     note: String,
     /// The row's number: its name (`distance`, `0x10`, `speed.req`), text and unit.
@@ -60,9 +71,7 @@ struct Scratch {
 
 impl Scratch {
     fn clear(&mut self) {
-        self.sensor_no.clear();
         self.data.clear();
-        self.addr.clear();
         self.resp.clear();
         self.note.clear();
         self.part_name.clear();
@@ -158,21 +167,13 @@ impl Mapper {
                 sc.note.insert_str(0, &n);
             }
         }
-        let device = match p.id {
-            Some(a) => {
-                sc.addr.clear();
-                push_0x(&mut sc.addr, a);
-                self.names.device(a)
-            }
-            None => "",
+        let (addr, device) = match p.id {
+            Some(a) => (hex_0x(a), self.names.device(a)),
+            None => ("", ""),
         };
-        sc.sensor_no.clear();
-        let sensor = match p.command {
-            Some(c) => {
-                push_0x(&mut sc.sensor_no, c);
-                self.names.command(c)
-            }
-            None => "",
+        let (sensor_no, sensor) = match p.command {
+            Some(c) => (hex_0x(c), self.names.command(c)),
+            None => ("", ""),
         };
         let part;
         let parts: &[Part<'_>] = match sc.number {
@@ -189,7 +190,7 @@ impl Mapper {
         };
         let extra = [
             sc.unit.as_str(),
-            sc.addr.as_str(),
+            addr,
             sc.resp.as_str(),
             p.framing.name(),
             sc.note.as_str(),
@@ -200,7 +201,7 @@ impl Mapper {
             device,
             kind: p.kind,
             class: p.class,
-            sensor_no: &sc.sensor_no,
+            sensor_no,
             sensor,
             data: &sc.data,
             extra: &extra,
@@ -400,7 +401,7 @@ impl Mapper {
                 ..
             }) => {
                 let micros = micros / 1000;
-                push_ms(&mut sc.resp, micros);
+                push_ms3(&mut sc.resp, micros);
                 if repeat {
                     st.repeats += 1;
                     per.repeats += 1;

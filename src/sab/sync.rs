@@ -67,6 +67,21 @@ pub fn encode(out: &mut Vec<u8>, header: u8, command: u8, payload: &[u8]) {
     out.push(crc);
 }
 
+/// The end of the frame at the start of `bytes` when it is complete there and valid.
+#[inline]
+fn valid_frame(bytes: &[u8]) -> Option<usize> {
+    let (&SYNC, rest) = bytes.split_first()? else {
+        return None;
+    };
+    let length = *rest.first()? as usize;
+    if length > MAX_PAYLOAD {
+        return None;
+    }
+    let end = length + OVERHEAD;
+    let frame = bytes.get(..end)?;
+    (crc8(&frame[1..end - 1]) == frame[end - 1]).then_some(end)
+}
+
 enum Check {
     /// The candidate is complete and valid; the frame ends here (exclusive).
     Valid(usize),
@@ -136,9 +151,73 @@ impl Reassembler {
     }
 
     /// Feeds `data` that arrived at `time`; calls `emit` for every completed event.
+    ///
+    /// The same as [`Self::step`] for every byte. While nothing is held (the usual case), the
+    /// input is read in place: the bytes up to the next 0x54 go to the garbage run whole, and
+    /// a frame that is complete and valid in `data` is emitted from `data` without passing
+    /// through the buffer. Only a candidate that fails or is cut by the end of `data` is
+    /// handled byte by byte (the backtracking needs its bytes held).
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        for &b in data {
-            self.step(b, time, emit);
+        let mut i = 0;
+        while i < data.len() {
+            if self.len == 0 {
+                let rest = &data[i..];
+                let n = rest.iter().position(|&b| b == SYNC).unwrap_or(rest.len());
+                if n > 0 {
+                    self.garbage_run(&rest[..n], time, emit);
+                    i += n;
+                    continue;
+                }
+                if let Some(end) = valid_frame(rest) {
+                    self.emit_in_place(&rest[..end], time, emit);
+                    i += end;
+                    continue;
+                }
+            }
+            self.step(data[i], time, emit);
+            i += 1;
+        }
+    }
+
+    /// A valid frame read in place with nothing held: what [`Self::step`] would emit for its
+    /// bytes.
+    fn emit_in_place(&mut self, wire: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        let n = wire.len();
+        let mut ev = Event::new(EventKind::Frame, Framing::Sync, wire);
+        ev.start_pos = self.base;
+        ev.end_pos = self.base + n as u64;
+        ev.start_time = time;
+        ev.end_time = time;
+        ev.length_byte = Some(wire[1]);
+        ev.body = &wire[2..n - 1];
+        let crc = wire[n - 1] as u16;
+        ev.crc = Some((crc, crc));
+        emit(&ev);
+        self.frames += 1;
+        self.base += n as u64;
+    }
+
+    /// Garbage bytes with nothing held (none of them 0x54), in rows of at most
+    /// [`GARBAGE_ROW_MAX`]: [`Self::garbage_byte`] for each.
+    fn garbage_run(&mut self, run: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        let mut rest = run;
+        while !rest.is_empty() {
+            let r = &mut self.run;
+            if r.len == 0 {
+                r.start_pos = self.base;
+                r.start_time = time;
+                r.before_first = self.frames == 0;
+            }
+            let k = rest.len().min(GARBAGE_ROW_MAX - r.len);
+            r.bytes[r.len..r.len + k].copy_from_slice(&rest[..k]);
+            r.end_time = time;
+            r.len += k;
+            self.base += k as u64;
+            rest = &rest[k..];
+            if r.len == GARBAGE_ROW_MAX {
+                self.flush_garbage(emit);
+            }
         }
     }
 

@@ -1261,3 +1261,112 @@ fn declared_values_are_typed_scaled_and_have_units() {
     assert_eq!(v[8], s("Request", "0x02.req", "-30.0", "mm/s"));
     assert_eq!(rows[8].data, "D4 FE (-30.0 mm/s)");
 }
+
+/// Events of one framing fed byte by byte with [`sync::Reassembler::step`] /
+/// [`hdlc::Reassembler::step`] (the reference for the slice paths of `push`).
+fn stepped(framing: Framing, chunks: &[(&[u8], Option<u64>)]) -> Vec<OwnedEvent> {
+    let mut out = Vec::new();
+    let mut emit = |e: &frame::Event<'_>| out.push(OwnedEvent::from(e));
+    match framing {
+        Framing::Sync => {
+            let mut r = sync::Reassembler::new();
+            for (c, t) in chunks {
+                for &b in *c {
+                    r.step(b, *t, &mut emit);
+                }
+            }
+            r.finish(&mut emit);
+        }
+        Framing::Hdlc => {
+            let mut r = hdlc::Reassembler::new(hdlc::DEFAULT_MAX_PAYLOAD);
+            for (c, t) in chunks {
+                for &b in *c {
+                    r.step(b, *t, &mut emit);
+                }
+            }
+            r.finish(&mut emit);
+        }
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// `push` reads runs and frames in place; its events (times included) are those of
+    /// feeding the same bytes one at a time.
+    #[test]
+    fn slice_push_equals_byte_steps(
+        framing in framing(),
+        frames in prop::collection::vec(frame_parts(32), 0..10),
+        noise in prop::collection::vec(prop::collection::vec(payload_byte(), 0..90), 0..11),
+        cuts in prop::collection::vec(any::<usize>(), 0..12),
+    ) {
+        let (w, _) = encode_all(framing, &frames, &noise);
+        let parts: Vec<(&[u8], Option<u64>)> = chunks(&w, &cuts)
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| (c, (i % 3 != 2).then_some(i as u64 * 7)))
+            .collect();
+        for f in [Framing::Sync, Framing::Hdlc] {
+            let mut pushed = Vec::new();
+            let mut r = Reasm::new(f, hdlc::DEFAULT_MAX_PAYLOAD);
+            for (c, t) in &parts {
+                r.push(c, *t, &mut |e| pushed.push(OwnedEvent::from(e)));
+            }
+            r.finish(&mut |e| pushed.push(OwnedEvent::from(e)));
+            prop_assert_eq!(&pushed, &stepped(f, &parts), "{:?}", f);
+        }
+    }
+
+    /// The background framing reads blocks ahead of the chosen one; busnoop still switches at
+    /// the same byte and writes the same rows as when every byte comes alone (one-byte pushes
+    /// are the byte-by-byte order: chosen framing first, then the background one).
+    #[test]
+    fn shadow_blocks_equal_byte_order(
+        first in prop::collection::vec(frame_parts(12), 3..8),
+        second in prop::collection::vec(frame_parts(12), 0..12),
+        noise in prop::collection::vec(prop::collection::vec(payload_byte(), 0..6), 0..6),
+        framing in framing(),
+    ) {
+        let (mut w, _) = encode_all(framing, &first, &noise);
+        let (w2, _) = encode_all(framing.other(), &second, &noise);
+        w.extend_from_slice(&w2);
+        let (w3, _) = encode_all(framing, &second, &[]);
+        w.extend_from_slice(&w3);
+        let o = opts(FramingChoice::Auto);
+        let whole = decode(&o, &w).0;
+        let bytes: Vec<(&[u8], Option<u64>)> = w.chunks(1).map(|c| (c, None)).collect();
+        prop_assert_eq!(&decode_chunks(&o, &bytes).0, &whole);
+    }
+}
+
+#[test]
+fn shadow_blocks_switch_at_the_same_byte_in_long_captures() {
+    // Longer than a block of the background framing, switching back and forth.
+    let mut w = Vec::new();
+    for round in 0..6u8 {
+        let framing = if round % 2 == 0 {
+            Framing::Hdlc
+        } else {
+            Framing::Sync
+        };
+        for i in 0..400u32 {
+            let p = i.to_le_bytes();
+            match framing {
+                Framing::Sync => sync::encode(&mut w, 0x05 + round, 0x10, &p),
+                Framing::Hdlc => hdlc::encode(&mut w, 0xC5, 0x7E, &p),
+            }
+        }
+    }
+    let o = opts(FramingChoice::Auto);
+    let whole = decode(&o, &w).0;
+    let bytes: Vec<(&[u8], Option<u64>)> = w.chunks(1).map(|c| (c, None)).collect();
+    let (by_byte, d) = decode_chunks(&o, &bytes);
+    assert_eq!(by_byte, whole);
+    assert!(
+        d.counters().framings.len() >= 6,
+        "{:?}",
+        d.counters().framings
+    );
+}
