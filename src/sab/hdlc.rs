@@ -145,12 +145,16 @@ impl Reassembler {
                 self.pos += n as u64;
                 self.last_time = time;
             }
-            if n < rest.len() {
-                self.step(FLAG, time, emit);
-                rest = &rest[n + 1..];
-            } else {
+            if n == rest.len() {
                 break;
             }
+            self.step(FLAG, time, emit);
+            // Frames that open and close in `data` without an escape are read in place.
+            let mut open = data.len() - rest.len() + n;
+            while let Some(close) = self.close_in_place(data, open, time, emit) {
+                open = close;
+            }
+            rest = &data[open + 1..];
         }
     }
 
@@ -318,53 +322,69 @@ impl Reassembler {
     /// Ends the open frame. `closed` = at a flag (already in `wire`), otherwise at the end of
     /// the input.
     fn close(&mut self, closed: bool, time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        let n = self.body_len;
-        let stored = (n as usize).min(STORE_MAX);
-        // The check of a run that can be a frame, computed once.
-        let mut check = None;
-        let kind = if !closed {
-            if n == 0 && !self.escaped {
-                // Only the closing flag of the last frame.
-                return;
-            }
-            EventKind::Truncated
-        } else if self.escaped {
-            EventKind::Abort
-        } else if n == 0 {
-            // Back-to-back flags: normal.
-            return;
-        } else if n < OVERHEAD as u64 {
-            EventKind::Runt
-        } else if n > STORE_MAX as u64 {
-            EventKind::Overlong
-        } else if check.insert(Self::crc_of(&self.body[..stored])).0 {
-            EventKind::Frame
-        } else if n > (self.max_payload + OVERHEAD) as u64 {
-            EventKind::Overlong
-        } else {
-            EventKind::BadCrc
-        };
+        let stored = (self.body_len as usize).min(STORE_MAX);
         let wire_kept = (self.wire_len as usize).min(WIRE_MAX);
-        let mut ev = Event::new(kind, Framing::Hdlc, &self.wire[..wire_kept]);
-        ev.wire_len = self.wire_len;
-        ev.start_pos = self.start_pos;
-        ev.end_pos = if closed { self.pos + 1 } else { self.pos };
-        ev.start_time = self.start_time;
-        ev.end_time = if closed { time } else { self.last_time };
-        ev.odd_escapes = self.odd_escapes;
-        ev.body_len = n;
-        match (kind, check) {
-            (EventKind::Frame | EventKind::BadCrc, Some((_, received, computed))) => {
-                ev.body = &self.body[..stored - 2];
-                ev.crc = Some((received, computed));
-            }
-            _ => ev.body = &self.body[..stored],
-        }
-        emit(&ev);
-        if kind == EventKind::Frame {
+        let run = Run {
+            closed,
+            escaped: self.escaped,
+            max_payload: self.max_payload,
+            body: &self.body[..stored],
+            body_len: self.body_len,
+            wire: &self.wire[..wire_kept],
+            wire_len: self.wire_len,
+            odd_escapes: self.odd_escapes,
+            start_pos: self.start_pos,
+            end_pos: if closed { self.pos + 1 } else { self.pos },
+            start_time: self.start_time,
+            end_time: if closed { time } else { self.last_time },
+        };
+        if run.emit(emit) {
             self.frames += 1;
         }
         self.in_frame = false;
+    }
+
+    /// The frame just opened by the flag at `data[open]`, when the next flag of `data` closes
+    /// it with no escape in between: emitted from `data` in place (no copy into the wire and
+    /// body buffers), and the frame after it opened, as [`Self::step`] would do for each byte.
+    /// Returns the closing flag's index.
+    fn close_in_place(
+        &mut self,
+        data: &[u8],
+        open: usize,
+        time: Option<u64>,
+        emit: &mut impl FnMut(&Event<'_>),
+    ) -> Option<usize> {
+        let after = &data[open + 1..];
+        let j = after.iter().position(|&b| b == FLAG || b == ESCAPE)?;
+        if after[j] != FLAG {
+            return None;
+        }
+        let body = &after[..j];
+        let wire = &data[open..open + j + 2];
+        // The closing flag's position.
+        self.pos += j as u64;
+        let run = Run {
+            closed: true,
+            escaped: false,
+            max_payload: self.max_payload,
+            body: &body[..j.min(STORE_MAX)],
+            body_len: j as u64,
+            wire: &wire[..wire.len().min(WIRE_MAX)],
+            wire_len: wire.len() as u64,
+            odd_escapes: 0,
+            start_pos: self.start_pos,
+            end_pos: self.pos + 1,
+            start_time: self.start_time,
+            end_time: time,
+        };
+        if run.emit(emit) {
+            self.frames += 1;
+        }
+        self.open(time);
+        self.pos += 1;
+        self.last_time = time;
+        Some(open + j + 1)
     }
 
     /// A body with its CRC field (at least 2 bytes): whether the CRC checks, the received CRC
@@ -389,6 +409,75 @@ impl Reassembler {
         if self.garbage_len == GARBAGE_ROW_MAX {
             self.flush_garbage(emit);
         }
+    }
+}
+
+/// The bytes of a run between flags that ended, and what [`Reassembler::close`] needs to
+/// report it.
+struct Run<'a> {
+    /// Ended at a flag (otherwise at the end of the input).
+    closed: bool,
+    escaped: bool,
+    max_payload: usize,
+    /// The unescaped bytes kept (at most [`STORE_MAX`]) and how many there were.
+    body: &'a [u8],
+    body_len: u64,
+    /// The wire bytes kept (at most [`WIRE_MAX`]) and how many there were.
+    wire: &'a [u8],
+    wire_len: u64,
+    odd_escapes: u32,
+    start_pos: u64,
+    end_pos: u64,
+    start_time: Option<u64>,
+    end_time: Option<u64>,
+}
+
+impl Run<'_> {
+    /// Emits the run's event, if it is one; true for a valid frame.
+    fn emit(&self, emit: &mut impl FnMut(&Event<'_>)) -> bool {
+        let n = self.body_len;
+        let stored = self.body.len();
+        // The check of a run that can be a frame, computed once.
+        let mut check = None;
+        let kind = if !self.closed {
+            if n == 0 && !self.escaped {
+                // Only the closing flag of the last frame.
+                return false;
+            }
+            EventKind::Truncated
+        } else if self.escaped {
+            EventKind::Abort
+        } else if n == 0 {
+            // Back-to-back flags: normal.
+            return false;
+        } else if n < OVERHEAD as u64 {
+            EventKind::Runt
+        } else if n > STORE_MAX as u64 {
+            EventKind::Overlong
+        } else if check.insert(Reassembler::crc_of(self.body)).0 {
+            EventKind::Frame
+        } else if n > (self.max_payload + OVERHEAD) as u64 {
+            EventKind::Overlong
+        } else {
+            EventKind::BadCrc
+        };
+        let mut ev = Event::new(kind, Framing::Hdlc, self.wire);
+        ev.wire_len = self.wire_len;
+        ev.start_pos = self.start_pos;
+        ev.end_pos = self.end_pos;
+        ev.start_time = self.start_time;
+        ev.end_time = self.end_time;
+        ev.odd_escapes = self.odd_escapes;
+        ev.body_len = n;
+        match (kind, check) {
+            (EventKind::Frame | EventKind::BadCrc, Some((_, received, computed))) => {
+                ev.body = &self.body[..stored - 2];
+                ev.crc = Some((received, computed));
+            }
+            _ => ev.body = self.body,
+        }
+        emit(&ev);
+        kind == EventKind::Frame
     }
 }
 
