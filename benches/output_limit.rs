@@ -17,6 +17,12 @@
 //! (3) runs after a warm-up. The ratio is
 //! busnoop's throughput over the reference's (1.0 = as fast as the machine allows).
 //! `BUSNOOP_BENCH_BIN=path` measures another busnoop binary (an earlier build).
+//!
+//! `BUSNOOP_BENCH_COUNT=1` counts instructions instead of timing (deterministic, whatever else
+//! the machine runs): busnoop and the reference writer (this benchmark run again as
+//! `output_limit --reference …`) each under `valgrind --tool=cachegrind --cache-sim=no`, for
+//! tsv, csv, jsonl and pretty; the ratio is the reference's instructions over busnoop's. Slow
+//! (valgrind): about 15 minutes for the six 8 MiB captures.
 // The other benchmarks' generators are loaded as modules, and each of them loads `common`.
 #![allow(clippy::duplicate_mod)]
 
@@ -252,12 +258,111 @@ fn reference(capture: &Path, start: u8, lines: &[&[u8]], total: u64, dest: &Path
     cpu_time(libc::RUSAGE_SELF) - t0
 }
 
+/// Instructions a command executes (valgrind's `I refs`), or `None` when valgrind fails.
+fn instructions(cmd: &std::process::Command) -> Option<u64> {
+    let mut v = std::process::Command::new("valgrind");
+    v.args([
+        "--tool=cachegrind",
+        "--cache-sim=no",
+        "--cachegrind-out-file=/dev/null",
+    ])
+    .arg(cmd.get_program())
+    .args(cmd.get_args())
+    .stdout(std::process::Stdio::null());
+    let out = v.output().ok()?;
+    let text = String::from_utf8_lossy(&out.stderr);
+    let line = text
+        .lines()
+        .find(|l| l.contains("I") && l.contains("refs:"))?;
+    line.rsplit(':')
+        .next()?
+        .trim()
+        .replace(',', "")
+        .parse()
+        .ok()
+}
+
+/// `BUSNOOP_BENCH_COUNT=1`: the table in instructions (see the module comment).
+fn count(cases: &[Case]) {
+    let dir = common::data_dir();
+    let template = dir.join("output-limit.template");
+    let exe = std::env::current_exe().expect("the benchmark's own path");
+    println!("output at the limit, in instructions: reference writer / busnoop (valgrind)");
+    println!("| protocol | tsv | csv | jsonl | pretty |");
+    println!("|---|---|---|---|---|");
+    for case in cases {
+        let mut cells = Vec::new();
+        for (label, fmt) in FORMATS.iter().take(4) {
+            let output = busnoop_output(case, fmt, &dir.join("output-limit.out"));
+            let lines: Vec<&[u8]> = output
+                .split_inclusive(|&b| b == b'\n')
+                .skip(1)
+                .take(1000)
+                .collect();
+            std::fs::write(&template, lines.concat()).unwrap();
+            let mut reference = std::process::Command::new(&exe);
+            reference
+                .arg("--reference")
+                .arg(&case.file)
+                .arg(case.start.to_string())
+                .arg(&template)
+                .arg(output.len().to_string());
+            let mut ours = busnoop();
+            ours.args(case.args)
+                .arg("--no-config")
+                .args(*fmt)
+                .arg(&case.file);
+            let (Some(r), Some(b)) = (instructions(&reference), instructions(&ours)) else {
+                eprintln!("valgrind failed (is it installed?)");
+                std::process::exit(1);
+            };
+            eprintln!(
+                "  {} {label}: busnoop {b} instructions, reference {r}: {:.2}",
+                case.name,
+                r as f64 / b as f64
+            );
+            cells.push(format!(
+                "{:.0} % ({:.2} / {:.2} G)",
+                r as f64 / b as f64 * 100.0,
+                r as f64 / 1e9,
+                b as f64 / 1e9
+            ));
+        }
+        println!("| {} | {} |", case.name, cells.join(" | "));
+    }
+    let _ = std::fs::remove_file(&template);
+}
+
 fn main() {
-    // `cargo bench` passes `--bench`; ignore arguments.
+    // `output_limit --reference CAPTURE START TEMPLATE TOTAL`: the reference writer alone, to
+    // /dev/null (what `BUSNOOP_BENCH_COUNT` runs under valgrind).
+    let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("--reference") && args.len() == 6 {
+        let template = std::fs::read(&args[4]).unwrap();
+        let lines: Vec<&[u8]> = template.split_inclusive(|&b| b == b'\n').collect();
+        let lines = if lines.is_empty() {
+            vec![&b"0\n"[..]]
+        } else {
+            lines
+        };
+        reference(
+            Path::new(&args[2]),
+            args[3].parse().unwrap(),
+            &lines,
+            args[5].parse().unwrap(),
+            Path::new("/dev/null"),
+        );
+        return;
+    }
+    // `cargo bench` passes `--bench`; ignore other arguments.
     let mb = common::env_u64("BUSNOOP_BENCH_MB", 8);
     let packets = common::env_u64("BUSNOOP_BENCH_PACKETS", 100_000);
     let runs = common::env_u64("BUSNOOP_BENCH_RUNS", 3).max(1);
     let cases = cases(mb, packets);
+    if common::env_u64("BUSNOOP_BENCH_COUNT", 0) == 1 {
+        count(&cases);
+        return;
+    }
     pin_to_core0();
     let dir = common::data_dir();
     let file_out = dir.join("output-limit.out");

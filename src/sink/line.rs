@@ -374,7 +374,9 @@ mod tests {
     /// the byte tests.
     #[test]
     fn scans_agree_with_byte_tests() {
-        let tests: [(&dyn Fn(u64) -> u64, &dyn Fn(u8) -> bool); 4] = [
+        type WordTest<'a> = &'a dyn Fn(u64) -> u64;
+        type ByteTest<'a> = &'a dyn Fn(u8) -> bool;
+        let tests: [(WordTest<'_>, ByteTest<'_>); 4] = [
             (&below_0x20, &|b| b < 0x20),
             (&not_printable, &|b| !(0x20..0x7F).contains(&b)),
             (&|x| zero_byte(x ^ rep(b'"')), &|b| b == b'"'),

@@ -410,3 +410,83 @@ fn a_tap_sees_everything_first_and_the_sink_gets_the_rest() {
         ]
     );
 }
+
+/// Blanks are held back until text follows; a line's end is trimmed as `str::trim_end` trims
+/// it, also when the last text itself ends in whitespace (ASCII, Unicode, or a control
+/// character shown as a blank), with or without colour.
+#[test]
+fn pretty_lines_end_as_trim_end_leaves_them() {
+    for color in [false, true] {
+        for (data, note, end) in [
+            ("abc", "", "abc"),
+            ("abc  ", "", "abc"),
+            ("abc", "n\u{a0}", "n"),
+            ("abc", "n\u{2003} \t", "n"),
+            ("abc", "x\u{85}", "x"),
+            ("", "", "Data"),
+            ("ü ", "", "ü"),
+        ] {
+            let opts = TableOptions {
+                format: Format::Pretty,
+                color,
+                raw: false,
+                time_abs: false,
+                utc: false,
+            };
+            let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
+            let extra = ["", note];
+            let row = Row {
+                micros: Some(1000),
+                id: Some(1),
+                device: "Dev",
+                kind: "Data",
+                class: Class::Warning,
+                sensor_no: "",
+                sensor: "",
+                data,
+                extra: &extra,
+                parts: &[],
+                raw: &[],
+            };
+            t.write(&row).unwrap();
+            t.flush().unwrap();
+            let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+            let line = text.lines().nth(1).unwrap();
+            let line = if color {
+                line.strip_prefix("\x1b[33m")
+                    .and_then(|l| l.strip_suffix("\x1b[0m"))
+                    .unwrap()
+            } else {
+                line
+            };
+            assert!(line.ends_with(end), "{data:?} {note:?}: {line:?}");
+            assert_eq!(line, line.trim_end(), "{data:?} {note:?}");
+        }
+    }
+}
+
+/// A row longer than the output buffer's room is written whole, in every format.
+#[test]
+fn rows_longer_than_the_room_are_whole() {
+    let long = "x".repeat(300_000);
+    for format in [Format::Tsv, Format::Csv, Format::Jsonl, Format::Pretty] {
+        let opts = TableOptions {
+            format,
+            color: false,
+            raw: false,
+            time_abs: false,
+            utc: false,
+        };
+        let mut t = Table::new(Output::memory(), opts, &["Note"]);
+        let extra = [long.as_str()];
+        let mut row = sample_row();
+        row.extra = &extra;
+        for _ in 0..3 {
+            t.write(&row).unwrap();
+        }
+        t.flush().unwrap();
+        let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+        let rows: Vec<&str> = text.lines().filter(|l| l.contains(&long)).collect();
+        assert_eq!(rows.len(), 3, "{format:?}");
+    }
+}
