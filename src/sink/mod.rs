@@ -370,7 +370,14 @@ impl Table {
         &self.scratch
     }
 
-    fn tsv(&mut self, row: &Row<'_>) {
+    /// A TSV row (`CSV` false: tabs between the cells, control characters blanked) or a CSV
+    /// row (`CSV` true: commas, RFC 4180 quoting, CRLF).
+    #[inline(always)]
+    fn delimited<const CSV: bool>(&mut self, row: &Row<'_>) {
+        let (sep, end): (u8, &[u8]) = if CSV { (b',', b"\r\n") } else { (b'\t', b"\n") };
+        let cell = |w: &mut W<'_>, field: &[u8]| {
+            if CSV { w.csv(field) } else { w.tsv(field) }
+        };
         if self.opts.time_abs {
             self.wall_time(row.micros);
         }
@@ -378,73 +385,44 @@ impl Table {
         let time = &self.scratch;
         self.out.line(|w| {
             w.put(digits.as_bytes());
-            w.byte(b'\t');
+            w.byte(sep);
             if let Some(us) = row.micros {
                 w.dec(us / 1000);
             }
-            w.byte(b'\t');
+            w.byte(sep);
             if let Some(id) = row.id {
                 w.dec(id.into());
             }
-            for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-                w.byte(b'\t');
-                w.tsv(field.as_bytes());
+            let base = [row.device, row.kind, row.sensor_no, row.sensor, row.data];
+            for field in base {
+                w.byte(sep);
+                cell(w, field.as_bytes());
             }
-            w.byte(b'\t');
-            w.put(row.value().as_bytes());
+            w.byte(sep);
+            cell(w, row.value().as_bytes());
             for i in 0..n_extra {
-                w.byte(b'\t');
-                w.tsv(row.extra.get(i).copied().unwrap_or("").as_bytes());
+                w.byte(sep);
+                cell(w, row.extra.get(i).copied().unwrap_or("").as_bytes());
             }
             if opts.raw {
-                w.byte(b'\t');
+                // Hex digits and spaces: nothing to escape.
+                w.byte(sep);
                 w.hex(row.raw);
             }
             if opts.time_abs {
-                w.byte(b'\t');
-                w.put(time.as_bytes());
+                w.byte(sep);
+                cell(w, time.as_bytes());
             }
-            w.byte(b'\n');
+            w.put(end);
         });
     }
 
+    fn tsv(&mut self, row: &Row<'_>) {
+        self.delimited::<false>(row);
+    }
+
     fn csv_row(&mut self, row: &Row<'_>) {
-        if self.opts.time_abs {
-            self.wall_time(row.micros);
-        }
-        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let time = &self.scratch;
-        self.out.line(|w| {
-            w.put(digits.as_bytes());
-            w.byte(b',');
-            if let Some(us) = row.micros {
-                w.dec(us / 1000);
-            }
-            w.byte(b',');
-            if let Some(id) = row.id {
-                w.dec(id.into());
-            }
-            for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
-                w.byte(b',');
-                w.csv(field.as_bytes());
-            }
-            w.byte(b',');
-            w.csv(row.value().as_bytes());
-            for i in 0..n_extra {
-                w.byte(b',');
-                w.csv(row.extra.get(i).copied().unwrap_or("").as_bytes());
-            }
-            if opts.raw {
-                // Hex digits and spaces: never quoted.
-                w.byte(b',');
-                w.hex(row.raw);
-            }
-            if opts.time_abs {
-                w.byte(b',');
-                w.csv(time.as_bytes());
-            }
-            w.put(b"\r\n");
-        });
+        self.delimited::<true>(row);
     }
 
     fn jsonl(&mut self, row: &Row<'_>) {
