@@ -58,6 +58,8 @@ pub mod sport;
 mod stats;
 mod stats_json;
 mod summary;
+#[cfg(test)]
+mod testing;
 pub mod time;
 mod top;
 

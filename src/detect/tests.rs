@@ -1,6 +1,7 @@
 use super::advise::Kept;
 use super::live::{Listen, judge_live};
 use super::*;
+use crate::testing::noise;
 
 fn fixture(name: &str) -> Vec<u8> {
     std::fs::read(
@@ -22,19 +23,6 @@ fn winner(bytes: &[u8]) -> (Option<&'static str>, Option<&'static str>) {
         Verdict::Found(i, mixed) => (Some(ranked[i].label), mixed.map(|j| ranked[j].label)),
         _ => (None, None),
     }
-}
-
-/// Deterministic pseudo-random bytes (xorshift).
-fn noise(n: usize, seed: u64) -> Vec<u8> {
-    let mut x = seed;
-    (0..n)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 24) as u8
-        })
-        .collect()
 }
 
 /// An S-Bus data-mode session: requests and responses of the SBC examples.

@@ -268,25 +268,13 @@ impl<'a> Memo<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::noise;
 
     /// A command code whose request length the table does not know (searched by CRC).
     fn searched_cmd() -> u8 {
         (0..=255u8)
             .find(|&c| searched(&[0, c], 0))
             .expect("the table has commands of unknown length")
-    }
-
-    /// Deterministic noise.
-    fn noise(n: usize, seed: u64) -> Vec<u8> {
-        let mut x = seed;
-        (0..n)
-            .map(|_| {
-                x ^= x << 13;
-                x ^= x >> 7;
-                x ^= x << 17;
-                x as u8
-            })
-            .collect()
     }
 
     #[test]
