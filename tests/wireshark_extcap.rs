@@ -11,7 +11,6 @@
 mod common;
 
 use std::os::unix::fs::PermissionsExt;
-use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -85,17 +84,7 @@ impl Tshark {
             .env("WIRESHARK_EXTCAP_DIR", self.extcap_dir())
             .current_dir(self.home());
         if root() {
-            unsafe {
-                c.pre_exec(|| {
-                    if libc::setgroups(0, std::ptr::null()) != 0
-                        || libc::setgid(65534) != 0
-                        || libc::setuid(65534) != 0
-                    {
-                        return Err(std::io::Error::last_os_error());
-                    }
-                    Ok(())
-                });
-            }
+            common::as_nobody(&mut c);
         }
         c
     }

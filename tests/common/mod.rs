@@ -90,7 +90,6 @@ pub fn sport_rows(bytes: &[u8]) -> Vec<OwnedRow> {
 /// Keep the returned directory alive while the command runs.
 pub fn unprivileged_busnoop() -> (Option<tempfile::TempDir>, std::process::Command) {
     use std::os::unix::fs::PermissionsExt;
-    use std::os::unix::process::CommandExt;
     let bin = assert_cmd::cargo::cargo_bin("busnoop");
     if unsafe { libc::geteuid() } != 0 {
         return (None, std::process::Command::new(bin));
@@ -101,6 +100,13 @@ pub fn unprivileged_busnoop() -> (Option<tempfile::TempDir>, std::process::Comma
     std::fs::copy(&bin, &copy).unwrap();
     std::fs::set_permissions(&copy, std::fs::Permissions::from_mode(0o755)).unwrap();
     let mut cmd = std::process::Command::new(&copy);
+    as_nobody(&mut cmd);
+    (Some(dir), cmd)
+}
+
+/// Makes `cmd` run as user and group 65534 (nobody), without supplementary groups.
+pub fn as_nobody(cmd: &mut std::process::Command) {
+    use std::os::unix::process::CommandExt;
     unsafe {
         cmd.pre_exec(|| {
             if libc::setgroups(0, std::ptr::null()) != 0
@@ -112,5 +118,4 @@ pub fn unprivileged_busnoop() -> (Option<tempfile::TempDir>, std::process::Comma
             Ok(())
         });
     }
-    (Some(dir), cmd)
 }
