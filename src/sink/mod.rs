@@ -584,58 +584,50 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     }
 
     /// Cell `i`; with `grow`, a column whose value is longer than its width (up to
-    /// [`PRETTY_GROW_MAX`]) widens for this row and every later one.
+    /// [`PRETTY_GROW_MAX`]) widens for this row and every later one. Printable ASCII is one
+    /// column per byte; any other text is written char by char, control characters as blanks.
     #[inline(always)]
     fn cell(&mut self, widths: &mut [usize], i: usize, cell: &str, grow: bool, last: bool) {
         let bytes = cell.as_bytes();
-        if i < 3 || bytes.is_empty() {
+        if i < 3 {
             // Right-aligned: the padding goes first, so the length must be known first.
             if line::scan(bytes, line::not_printable) == 0 {
-                self.text(widths, i, bytes, None, grow, last);
+                self.right(widths, i, bytes, None, grow, last);
             } else {
-                self.text(widths, i, bytes, Some(cell), grow, last);
+                self.right(widths, i, bytes, Some(cell), grow, last);
             }
             return;
         }
-        // Left-aligned, with text: written (after the blanks owed) and checked in one go;
-        // printable ASCII is one column per byte, anything else is written again char by char,
-        // control characters as spaces.
+        // Left-aligned: written after the blanks owed and checked in one go (a cell that is not
+        // printable ASCII is written again).
         self.blanks += 2;
-        self.line.spaces(self.blanks);
-        self.blanks = 0;
-        let at = self.line.len();
-        let len = if self.line.put_scan(bytes, line::not_printable) == 0 {
-            bytes.len()
+        let len = if bytes.is_empty() {
+            0
         } else {
-            self.line.truncate(at);
-            self.line.aside(|w| {
-                for c in cell.chars() {
-                    let c = if c.is_control() { ' ' } else { c };
-                    let mut tmp = [0u8; 4];
-                    w.put(c.encode_utf8(&mut tmp).as_bytes());
-                }
-            });
-            cell.chars().count()
+            self.pay_blanks();
+            let at = self.line.len();
+            if self.line.put_scan(bytes, line::not_printable) == 0 {
+                bytes.len()
+            } else {
+                self.line.truncate(at);
+                self.chars(cell)
+            }
         };
-        let mut spare = 4;
-        let width = widths.get_mut(i).unwrap_or(&mut spare);
-        if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
-            *width = len;
-        }
+        let pad = fit(widths, i, len, grow, last);
         if !last {
-            self.blanks += width.saturating_sub(len);
+            self.blanks += pad;
         }
     }
 
     /// A cell of ASCII digits (Counter, Millis, ID).
     #[inline(always)]
     fn digits(&mut self, widths: &mut [usize], i: usize, digits: &[u8]) {
-        self.text(widths, i, digits, None, true, false);
+        self.right(widths, i, digits, None, true, false);
     }
 
-    /// A cell: `bytes`, printable ASCII, or the `chars` of a cell that is not.
+    /// A right-aligned cell: `bytes`, printable ASCII, or the `chars` of a cell that is not.
     #[inline(always)]
-    fn text(
+    fn right(
         &mut self,
         widths: &mut [usize],
         i: usize,
@@ -647,37 +639,37 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
         if i > 0 {
             self.blanks += 2;
         }
-        let mut spare = 4;
-        let width = widths.get_mut(i).unwrap_or(&mut spare);
-        let len = match chars {
-            None => bytes.len(),
-            Some(cell) => cell.chars().count(),
-        };
-        if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
-            *width = len;
-        }
-        let pad = width.saturating_sub(len);
-        let right = i < 3;
-        if right {
-            self.blanks += pad;
-        }
+        let len = chars.map_or(bytes.len(), |c| c.chars().count());
+        self.blanks += fit(widths, i, len, grow, last);
         if !bytes.is_empty() {
-            self.line.spaces(self.blanks);
-            self.blanks = 0;
+            self.pay_blanks();
             match chars {
                 None => self.line.put(bytes),
-                Some(cell) => self.line.aside(|w| {
-                    for c in cell.chars() {
-                        let c = if c.is_control() { ' ' } else { c };
-                        let mut tmp = [0u8; 4];
-                        w.put(c.encode_utf8(&mut tmp).as_bytes());
-                    }
-                }),
+                Some(cell) => {
+                    self.chars(cell);
+                }
             }
         }
-        if !right && !last {
-            self.blanks += pad;
-        }
+    }
+
+    /// Writes the blanks owed.
+    #[inline(always)]
+    fn pay_blanks(&mut self) {
+        self.line.spaces(self.blanks);
+        self.blanks = 0;
+    }
+
+    /// Writes a cell that is not printable ASCII char by char, control characters as blanks;
+    /// returns its width (one column per char).
+    fn chars(&mut self, cell: &str) -> usize {
+        self.line.aside(|w| {
+            for c in cell.chars() {
+                let c = if c.is_control() { ' ' } else { c };
+                let mut tmp = [0u8; 4];
+                w.put(c.encode_utf8(&mut tmp).as_bytes());
+            }
+        });
+        cell.chars().count()
     }
 
     /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
@@ -699,6 +691,19 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
         }
         self.line.byte(b'\n');
     }
+}
+
+/// Column `i`'s width for a cell `len` columns wide: with `grow` (and not the last column), a
+/// longer cell up to [`PRETTY_GROW_MAX`] widens the column for this row and every later one.
+/// Returns the padding the cell needs.
+#[inline(always)]
+fn fit(widths: &mut [usize], i: usize, len: usize, grow: bool, last: bool) -> usize {
+    let mut spare = 4;
+    let width = widths.get_mut(i).unwrap_or(&mut spare);
+    if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
+        *width = len;
+    }
+    width.saturating_sub(len)
 }
 
 impl RowOut for Table {
