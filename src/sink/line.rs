@@ -191,7 +191,7 @@ impl W<'_> {
     }
 
     /// Writes with `write` in a function of its own (for what is seldom written: quoting,
-    /// escaping, hex), so that the writer of a row keeps its position in a register instead of
+    /// escaping, non-ASCII pretty cells), so that the writer of a row keeps its position in a register instead of
     /// handing its address to that function.
     #[inline(always)]
     pub fn aside(&mut self, write: impl FnOnce(&mut W<'_>)) {
@@ -251,20 +251,6 @@ impl W<'_> {
                 _ => self.byte(b),
             }
         }
-    }
-
-    /// Bytes as spaced hex (`7E A1 10`).
-    #[inline(always)]
-    pub fn hex(&mut self, bytes: &[u8]) {
-        const HEX: &[u8; 16] = b"0123456789ABCDEF";
-        self.aside(|w| {
-            for (i, &b) in bytes.iter().enumerate() {
-                if i > 0 {
-                    w.byte(b' ');
-                }
-                w.put(&[HEX[(b >> 4) as usize], HEX[(b & 0x0F) as usize]]);
-            }
-        });
     }
 
     /// A number in decimal.
@@ -456,15 +442,13 @@ mod tests {
             w.byte(b'|');
             w.json_str("");
             w.byte(b'|');
-            w.hex(&[0x7E, 0xA1, 0x00]);
-            w.byte(b'|');
             w.dec(0);
             w.byte(b' ');
             w.dec(u64::MAX);
         });
         assert_eq!(
             std::str::from_utf8(&buf[..len]).unwrap(),
-            "a b c|plain|\"a,\"\"b\"\"\"|tab\tonly|\"q\\\"\\\\\\n\\u0001 \u{e9}\"|null|7E A1 00|0 18446744073709551615"
+            "a b c|plain|\"a,\"\"b\"\"\"|tab\tonly|\"q\\\"\\\\\\n\\u0001 \u{e9}\"|null|0 18446744073709551615"
         );
     }
 }

@@ -296,6 +296,14 @@ impl Table {
             self.out.append(|buf| w.row(row, anchor, buf));
             return self.out.row_done();
         }
+        // The cells every format writes alike: the wall-clock time and the raw bytes.
+        if self.opts.time_abs {
+            self.wall_time(row.micros);
+        }
+        if self.opts.raw {
+            self.hex.clear();
+            push_hex_bytes(&mut self.hex, row.raw);
+        }
         match self.opts.format {
             Format::Tsv => self.tsv(row),
             Format::Csv => self.csv_row(row),
@@ -378,11 +386,8 @@ impl Table {
         let cell = |w: &mut W<'_>, field: &[u8]| {
             if CSV { w.csv(field) } else { w.tsv(field) }
         };
-        if self.opts.time_abs {
-            self.wall_time(row.micros);
-        }
         let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let time = &self.scratch;
+        let (time, hex) = (&self.scratch, &self.hex);
         self.out.line(|w| {
             w.put(digits.as_bytes());
             w.byte(sep);
@@ -407,7 +412,7 @@ impl Table {
             if opts.raw {
                 // Hex digits and spaces: nothing to escape.
                 w.byte(sep);
-                w.hex(row.raw);
+                w.put(hex);
             }
             if opts.time_abs {
                 w.byte(sep);
@@ -426,11 +431,8 @@ impl Table {
     }
 
     fn jsonl(&mut self, row: &Row<'_>) {
-        if self.opts.time_abs {
-            self.wall_time(row.micros);
-        }
         let (digits, opts, keys) = (&self.digits, &self.opts, &self.json_keys);
-        let time = &self.scratch;
+        let (time, hex) = (&self.scratch, &self.hex);
         self.out.line(|w| {
             w.put(b"{\"counter\":");
             w.put(digits.as_bytes());
@@ -482,7 +484,7 @@ impl Table {
             }
             if opts.raw {
                 w.put(b",\"raw\":\"");
-                w.hex(row.raw);
+                w.put(hex);
                 w.byte(b'"');
             }
             if opts.time_abs {
@@ -494,13 +496,6 @@ impl Table {
     }
 
     fn pretty(&mut self, row: &Row<'_>) {
-        if self.opts.time_abs {
-            self.wall_time(row.micros);
-        }
-        if self.opts.raw {
-            self.hex.clear();
-            push_hex_bytes(&mut self.hex, row.raw);
-        }
         let style = match row.class {
             Class::Plain => None,
             Class::Quiet => Some(DIMMED),
