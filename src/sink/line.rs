@@ -191,8 +191,8 @@ impl W<'_> {
     }
 
     /// Writes with `write` in a function of its own (for what is seldom written: quoting,
-    /// escaping, non-ASCII pretty cells), so that the writer of a row keeps its position in a register instead of
-    /// handing its address to that function.
+    /// escaping, non-ASCII pretty cells), so that the writer of a row keeps its position in a
+    /// register instead of handing its address to that function.
     #[inline(always)]
     pub fn aside(&mut self, write: impl FnOnce(&mut W<'_>)) {
         #[inline(never)]
