@@ -32,20 +32,6 @@ fn kv(data: &mut String, key: &str) {
     data.push('=');
 }
 
-/// Writes Sensor and Data for a passthrough frame; returns the unit (always empty: each field
-/// carries its own).
-#[cfg(test)]
-pub fn decode(app_id: u16, v: u32, sensor: &mut String, data: &mut String) -> &'static str {
-    match decode_row(app_id, v, data) {
-        Some(label) => sensor.push_str(label),
-        None => {
-            let _ = write!(sensor, "0x{app_id:04X}");
-            crate::fmt::push_u64(data, v as u64);
-        }
-    }
-    ""
-}
-
 /// Writes the Data column of a passthrough frame and returns its Sensor label; `None` (and
 /// nothing written) for an app ID without a known layout.
 pub(crate) fn decode_row(app_id: u16, v: u32, data: &mut String) -> Option<&'static str> {
@@ -244,11 +230,11 @@ fn text(v: u32, data: &mut String) {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
 
+    /// Sensor and Data of a passthrough frame, as the row mapping writes them.
     fn d(app_id: u16, v: u32) -> (String, String) {
         let (mut s, mut data) = (String::new(), String::new());
-        decode(app_id, v, &mut s, &mut data);
+        crate::sport::values::decode(app_id, v, &mut s, &mut data);
         (s, data)
     }
 
