@@ -548,6 +548,7 @@ mod tests {
 
     fn row(id: Option<u32>, kind: &'static str, class: Class) -> Row<'static> {
         Row {
+            stamp: 0,
             id,
             kind,
             class,

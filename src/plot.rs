@@ -257,6 +257,7 @@ mod tests {
 
     fn row(us: u64, class: Class, parts: &'static [Part<'static>]) -> Row<'static> {
         Row {
+            stamp: 0,
             micros: Some(us),
             id: Some(0),
             device: "",

@@ -138,6 +138,7 @@ pub trait Decoder {
     fn capture_error(&mut self, e: &PcapError, out: &mut dyn RowOut) -> RowResult {
         let data = e.to_string();
         out.row(&Row {
+            stamp: 0,
             kind: crate::row::kind::TRUNCATED,
             class: Class::Error,
             data: &data,

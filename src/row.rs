@@ -104,12 +104,20 @@ pub struct Row<'a> {
     pub parts: &'a [Part<'a>],
     /// The row's bytes as they were on the wire (for `--raw` and recordings).
     pub raw: &'a [u8],
+    /// 0, or a number the decoder gives every row of one kind: two rows of one run with the
+    /// same non-zero stamp have the same `id`, `device`, `kind`, `sensor_no` and `sensor`
+    /// (S.Port: the physical ID, the frame type and the app ID). The table writes those cells
+    /// once per stamp and copies them for the next rows with it. A wrapper that changes one of
+    /// these cells must change it the same way for every row with the stamp (as naming a
+    /// device by its ID does), or set the stamp to 0.
+    pub stamp: u32,
 }
 
 impl<'a> Row<'a> {
     /// A row with every text column empty.
     pub fn empty(micros: Option<u64>) -> Row<'static> {
         Row {
+            stamp: 0,
             micros,
             id: None,
             device: "",

@@ -414,6 +414,7 @@ impl Driver<'_> {
                 .map_err(Failure::from)?;
         }
         let row = Row {
+            stamp: 0,
             kind,
             class,
             data,
@@ -425,6 +426,7 @@ impl Driver<'_> {
     /// A row busnoop itself adds to the log (gaps).
     fn info_row(&mut self, micros: u64, kind: &str, data: &str) -> Result<(), Failure> {
         let row = Row {
+            stamp: 0,
             kind,
             class: Class::Info,
             data,

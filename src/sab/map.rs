@@ -196,6 +196,7 @@ impl Mapper {
             sc.note.as_str(),
         ];
         let row = Row {
+            stamp: 0,
             micros: Some(p.micros),
             id: p.id.map(u32::from),
             device,

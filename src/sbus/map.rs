@@ -92,6 +92,7 @@ pub(super) fn put_row(
                 out,
                 sc,
                 &Row {
+                    stamp: 0,
                     micros: Some(micros),
                     id,
                     device,

@@ -58,6 +58,12 @@ impl W<'_> {
         &self.buf[..self.pos]
     }
 
+    /// Whether a write did not fit (the line is written again into more room).
+    #[inline]
+    pub fn over(&self) -> bool {
+        self.over
+    }
+
     /// Length of the line so far.
     #[inline]
     pub fn len(&self) -> usize {

@@ -2,6 +2,7 @@
 
 mod line;
 pub mod output;
+mod spans;
 mod tap;
 pub mod wide;
 
@@ -15,6 +16,7 @@ use crate::row::{BASE_COLUMNS, Class, Row};
 use crate::time::Anchor;
 use line::W;
 pub use output::Output;
+use spans::Spans;
 pub use tap::{Tap, Tapped};
 
 use crate::row::{OutputError, RowResult};
@@ -87,6 +89,8 @@ pub struct Table {
     wide: Option<wide::Wide>,
     /// `busnoop plot`: rows go to the plot, drawn at the end.
     plot: Option<crate::plot::Plot>,
+    /// The cells ID to Sensor as written, per [`Row::stamp`].
+    spans: Spans,
 }
 
 /// A row counter as decimal digits, incremented in place (no division per row).
@@ -177,6 +181,7 @@ impl Table {
             scratch: String::new(),
             hex: Vec::new(),
             error: None,
+            spans: Spans::new(),
         }
     }
 
@@ -387,22 +392,25 @@ impl Table {
             if CSV { w.csv(field) } else { w.tsv(field) }
         };
         let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let (time, hex) = (&self.scratch, &self.hex);
+        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.spans);
         self.out.line(|w| {
             w.put(digits.as_bytes());
             w.byte(sep);
             if let Some(us) = row.micros {
                 w.dec(us / 1000);
             }
-            w.byte(sep);
-            if let Some(id) = row.id {
-                w.dec(id.into());
-            }
-            let base = [row.device, row.kind, row.sensor_no, row.sensor, row.data];
-            for field in base {
+            span(w, spans, row.stamp, |w| {
                 w.byte(sep);
-                cell(w, field.as_bytes());
-            }
+                if let Some(id) = row.id {
+                    w.dec(id.into());
+                }
+                for field in [row.device, row.kind, row.sensor_no, row.sensor] {
+                    w.byte(sep);
+                    cell(w, field.as_bytes());
+                }
+            });
+            w.byte(sep);
+            cell(w, row.data.as_bytes());
             w.byte(sep);
             cell(w, row.value().as_bytes());
             for i in 0..n_extra {
@@ -432,7 +440,7 @@ impl Table {
 
     fn jsonl(&mut self, row: &Row<'_>) {
         let (digits, opts, keys) = (&self.digits, &self.opts, &self.json_keys);
-        let (time, hex) = (&self.scratch, &self.hex);
+        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.spans);
         self.out.line(|w| {
             w.put(b"{\"counter\":");
             w.put(digits.as_bytes());
@@ -441,19 +449,21 @@ impl Table {
                 Some(us) => w.dec(us / 1000),
                 None => w.put(b"null"),
             }
-            w.put(b",\"id\":");
-            match row.id {
-                Some(id) => w.dec(id.into()),
-                None => w.put(b"null"),
-            }
-            w.put(b",\"device\":");
-            w.json_str(row.device);
-            w.put(b",\"type\":");
-            w.json_str(row.kind);
-            w.put(b",\"sensor_no\":");
-            w.json_str(row.sensor_no);
-            w.put(b",\"sensor\":");
-            w.json_str(row.sensor);
+            span(w, spans, row.stamp, |w| {
+                w.put(b",\"id\":");
+                match row.id {
+                    Some(id) => w.dec(id.into()),
+                    None => w.put(b"null"),
+                }
+                w.put(b",\"device\":");
+                w.json_str(row.device);
+                w.put(b",\"type\":");
+                w.json_str(row.kind);
+                w.put(b",\"sensor_no\":");
+                w.json_str(row.sensor_no);
+                w.put(b",\"sensor\":");
+                w.json_str(row.sensor);
+            });
             w.put(b",\"data\":");
             w.json_str(row.data);
             w.put(b",\"value\":");
@@ -515,17 +525,53 @@ impl Table {
             self.widths.resize(n, 4);
         }
         let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let time = &self.scratch;
+        let (time, spans) = (&self.scratch, &mut self.spans);
         let widths = &mut self.widths[..];
+        // The cells ID to Sensor (columns 2 to 6; never the last column).
+        let cells = |line: &mut PrettyLine<'_, '_>, widths: &mut [usize]| {
+            line.digits(widths, 2, id.as_bytes());
+            let base = [row.device, row.kind, row.sensor_no, row.sensor];
+            for (i, text) in (3..).zip(base) {
+                line.cell(widths, i, text, true, false);
+            }
+        };
         self.out.line(|w| {
             let mut line = PrettyLine::start(w, style);
             line.digits(widths, 0, digits.as_bytes());
             line.digits(widths, 1, millis.as_bytes());
-            line.digits(widths, 2, id.as_bytes());
-            let base = [row.device, row.kind, row.sensor_no, row.sensor, row.data];
-            for (i, text) in (3..).zip(base) {
-                line.cell(widths, i, text, true, i + 1 == n);
+            // Their text depends on the widths too, which only grow: their sum tells them apart.
+            let span_widths = |widths: &[usize]| widths[2..7].iter().sum::<usize>() as u32;
+            match spans.get(row.stamp, span_widths(widths)) {
+                Some((bytes, blanks)) => {
+                    let (at, owed) = (line.line.len(), line.blanks);
+                    line.copy(bytes, blanks);
+                    #[cfg(debug_assertions)]
+                    {
+                        let copied = (line.line.bytes()[at..].to_vec(), line.blanks);
+                        line.line.truncate(at);
+                        line.blanks = owed;
+                        cells(&mut line, widths);
+                        let written = (line.line.bytes()[at..].to_vec(), line.blanks);
+                        assert_eq!(
+                            copied, written,
+                            "rows with stamp {:#x} differ in the cells ID to Sensor",
+                            row.stamp
+                        );
+                    }
+                    let _ = (at, owed);
+                }
+                None => {
+                    let (at, owed) = (line.line.len(), line.blanks);
+                    cells(&mut line, widths);
+                    // Kept only when no blanks were owed before it, so that the span holds
+                    // exactly its own cells.
+                    if row.stamp != 0 && owed == 0 && !line.line.over() {
+                        let bytes = &line.line.bytes()[at..];
+                        spans.put(row.stamp, span_widths(widths), bytes, line.blanks);
+                    }
+                }
             }
+            line.cell(widths, 7, row.data, true, 8 == n);
             for e in 0..n_extra {
                 let i = 8 + e;
                 let text = row.extra.get(e).copied().unwrap_or("");
@@ -542,6 +588,40 @@ impl Table {
             line.finish();
         });
     }
+}
+
+/// Writes the cells ID to Sensor with `write`, or copies them from the row's stamp's span
+/// ([`Spans`]) when they were written before; keeps what it wrote for the next rows.
+#[inline(always)]
+fn span(w: &mut W<'_>, spans: &mut Spans, stamp: u32, write: impl Fn(&mut W<'_>)) {
+    if let Some((bytes, _)) = spans.get(stamp, 0) {
+        w.put(bytes);
+        #[cfg(debug_assertions)]
+        check_span(w, bytes.len(), stamp, write);
+        return;
+    }
+    let at = w.len();
+    write(w);
+    if stamp != 0 && !w.over() {
+        spans.put(stamp, 0, &w.bytes()[at..], 0);
+    }
+}
+
+/// Debug builds: writes the cells of a copied span again and compares (a decoder that gives
+/// one stamp to rows whose cells differ fails every test that reaches it).
+#[cfg(debug_assertions)]
+fn check_span(w: &mut W<'_>, len: usize, stamp: u32, write: impl FnOnce(&mut W<'_>)) {
+    let at = w.len();
+    write(w);
+    if !w.over() {
+        let b = w.bytes();
+        assert_eq!(
+            String::from_utf8_lossy(&b[at - len..at]),
+            String::from_utf8_lossy(&b[at..]),
+            "rows with stamp {stamp:#x} differ in the cells ID to Sensor"
+        );
+    }
+    w.truncate(at);
 }
 
 /// SGR codes of the row classes and the header, as owo-colors writes them.
@@ -644,6 +724,19 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
                     self.chars(cell);
                 }
             }
+        }
+    }
+
+    /// Writes cells kept from an earlier row ([`Spans`]): their text, after the blanks owed
+    /// before it, and the blanks owed after it.
+    #[inline(always)]
+    fn copy(&mut self, bytes: &[u8], blanks: usize) {
+        if bytes.is_empty() {
+            self.blanks += blanks;
+        } else {
+            self.pay_blanks();
+            self.line.put(bytes);
+            self.blanks = blanks;
         }
     }
 

@@ -3,6 +3,7 @@ use crate::row::Part;
 
 fn sample_row() -> Row<'static> {
     Row {
+        stamp: 0,
         micros: Some(4_280_999),
         id: Some(0),
         device: "Vario",
@@ -101,6 +102,7 @@ fn pretty_columns_come_from_the_protocol_and_grow_for_long_values() {
     t.set_pretty_widths(&[7, 8, 3, 15, 9, 9, 12, 10, 3, 0]);
     t.header().unwrap();
     let row = |device: &'static str, data: &'static str| Row {
+        stamp: 0,
         micros: Some(1000),
         id: Some(10),
         device,
@@ -246,6 +248,7 @@ fn pretty_cells_replace_control_characters_and_count_chars() {
     let mut t = Table::new(Output::memory(), opts, &["Note"]);
     t.set_pretty_widths(&[7, 8, 3, 6, 4, 8, 6, 4, 4]);
     let row = Row {
+        stamp: 0,
         micros: None,
         id: None,
         device: "é\tü",
@@ -383,6 +386,7 @@ fn a_tap_sees_everything_first_and_the_sink_gets_the_rest() {
     t.row_unframed(&sample_row(), &frame).unwrap();
     t.skip();
     let bad = Row {
+        stamp: 0,
         data: "bad",
         ..sample_row()
     };
@@ -436,6 +440,7 @@ fn pretty_lines_end_as_trim_end_leaves_them() {
             let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
             let extra = ["", note];
             let row = Row {
+                stamp: 0,
                 micros: Some(1000),
                 id: Some(1),
                 device: "Dev",
@@ -489,4 +494,119 @@ fn rows_longer_than_the_room_are_whole() {
         let rows: Vec<&str> = text.lines().filter(|l| l.contains(&long)).collect();
         assert_eq!(rows.len(), 3, "{format:?}");
     }
+}
+
+/// Rows for the stamp tests: stamps repeat, with cells that need escaping, empty cells, a
+/// missing Millis, a cell that widens a pretty column between two rows of one stamp, and a
+/// span too long to keep.
+fn stamped_rows() -> Vec<Row<'static>> {
+    let base = sample_row();
+    let long: &'static str = "a sensor name long enough that the span of its cells, ID to Sensor, is \
+                               longer than a slot of the cache can hold, in every format";
+    let mut rows = vec![
+        Row { stamp: 1, ..base },
+        Row {
+            stamp: 2,
+            id: Some(27),
+            device: "Dev\tice, \"q\"",
+            kind: "Bad\u{7}",
+            sensor_no: "",
+            sensor: "Höhe",
+            data: "1,5",
+            ..base
+        },
+        Row {
+            stamp: 3,
+            id: None,
+            device: "",
+            kind: "",
+            sensor_no: "",
+            sensor: "",
+            ..base
+        },
+        Row {
+            stamp: 4,
+            micros: None,
+            ..base
+        },
+        Row {
+            stamp: 5,
+            sensor: long,
+            ..base
+        },
+    ];
+    // Every stamp again, then a row that widens the Device column, then every stamp again.
+    let again = rows.clone();
+    rows.extend(again.iter().copied());
+    rows.push(Row {
+        stamp: 6,
+        device: "A device name that widens its column",
+        ..base
+    });
+    rows.extend(again.iter().map(|r| Row {
+        micros: r.micros.map(|us| us + 1_000_000),
+        ..*r
+    }));
+    rows.push(Row {
+        stamp: 4,
+        micros: Some(5),
+        ..base
+    });
+    rows
+}
+
+fn render_rows(format: Format, color: bool, rows: &[Row<'_>]) -> (String, Table) {
+    let opts = TableOptions {
+        format,
+        color,
+        raw: true,
+        time_abs: false,
+        utc: false,
+    };
+    let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
+    for r in rows {
+        t.write(r).unwrap();
+    }
+    t.flush().unwrap();
+    let s = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+    (s, t)
+}
+
+#[test]
+fn stamped_rows_are_written_as_unstamped_ones() {
+    let stamped = stamped_rows();
+    let plain: Vec<Row<'_>> = stamped.iter().map(|r| Row { stamp: 0, ..*r }).collect();
+    for (format, color) in [
+        (Format::Tsv, false),
+        (Format::Csv, false),
+        (Format::Jsonl, false),
+        (Format::Pretty, false),
+        (Format::Pretty, true),
+    ] {
+        let (with, t) = render_rows(format, color, &stamped);
+        let (without, _) = render_rows(format, color, &plain);
+        assert_eq!(with, without, "{format:?}, colour {color}");
+        // The spans were kept (and so copied for the rows after): stamp 1 in every format,
+        // never the span too long for a slot.
+        let widths = t.widths[2..7].iter().sum::<usize>() as u32;
+        let widths = if format == Format::Pretty { widths } else { 0 };
+        assert!(t.spans.get(1, widths).is_some(), "{format:?}");
+        assert!(t.spans.get(5, widths).is_none(), "{format:?}");
+    }
+}
+
+#[cfg(debug_assertions)]
+#[test]
+#[should_panic(expected = "differ in the cells ID to Sensor")]
+fn a_stamp_on_rows_that_differ_fails_in_debug_builds() {
+    let base = sample_row();
+    let rows = [
+        Row { stamp: 9, ..base },
+        Row {
+            stamp: 9,
+            sensor: "Other",
+            ..base
+        },
+    ];
+    render_rows(Format::Tsv, false, &rows);
 }

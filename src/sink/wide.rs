@@ -364,6 +364,7 @@ mod tests {
 
     fn row(micros: u64, id: u32, parts: &[Part<'static>]) -> Row<'static> {
         Row {
+            stamp: 0,
             micros: Some(micros),
             id: Some(id),
             device: "",

@@ -193,12 +193,18 @@ impl Mapper {
 
         let mut class = Class::Plain;
         let mut cols = values::Decoded::built("");
+        // The row's stamp (`Row::stamp`): its cells ID to Sensor follow from the physical ID,
+        // the frame's type, whether its check passed and its app ID (a hub sensor's name from
+        // the app ID's low byte; the GPS date/time frame's from its value too), or for the rows
+        // without a frame type from the body alone.
+        let mut stamp = 1 << 31 | u32::from(phys);
         let kind: &str = match s.body {
             Body::None => "",
             Body::Truncated { bytes, len } => {
                 ps.truncated += 1;
                 st.truncated += 1;
                 class = Class::Error;
+                stamp |= 1 << 5;
                 push_hex(&mut sc.data, &bytes[..len as usize]);
                 push_uint(&mut sc.note, len as u64);
                 sc.note.push_str(" of ");
@@ -219,6 +225,16 @@ impl Mapper {
                 // device) carry their own checksum instead of the S.Port sum (EdgeTX
                 // `radio/src/io/frsky_firmware_update.cpp`).
                 let firmware = b[0] == 0x50 && matches!(s.header, 0xFF | 0x5E);
+                stamp = if firmware {
+                    1 << 31 | 2 << 5 | u32::from(phys)
+                } else {
+                    1 << 30
+                        | u32::from(phys)
+                        | u32::from(b[0]) << 5
+                        | u32::from(ok) << 13
+                        | u32::from(app_id) << 14
+                        | u32::from(values::sensor_from_value(app_id, value)) << 31
+                };
                 if firmware {
                     ps.other += 1;
                     st.valid_frames += 1;
@@ -308,6 +324,7 @@ impl Mapper {
         };
         sc.nums.with_parts(|parts| {
             out.row(&Row {
+                stamp,
                 micros: Some(micros),
                 id: Some(phys as u32),
                 device: names::device(phys),
@@ -344,6 +361,7 @@ impl Mapper {
         }
         let extra = ["", sc.note.as_str()];
         out.row(&Row {
+            stamp: 0,
             micros: Some(micros),
             id: None,
             device: "",
@@ -564,5 +582,62 @@ impl Decoder for SportDecoder {
     fn no_frames_hint(&self) -> &'static str {
         "wrong baud rate (S.Port runs at 57600, the TX16S/F16 mirror at 115200) or the signal is \
          not inverted (S.Port needs an inverting adapter or an FTDI with inverted RX, see docs/live.md)"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every app ID range of the value tables, frame types with and without a name, bad CRCs,
+    /// firmware frames, odd headers, truncated frames and noise, each app ID with several
+    /// values: a row's stamp never changes the table (the GPS date/time frame, whose Sensor its
+    /// value decides, included).
+    #[test]
+    fn stamps_never_change_the_table() {
+        let noise = crate::testing::noise(4_000, 7);
+        let mut n = noise.iter().copied().cycle();
+        let mut next = || n.next().unwrap_or(0);
+        let mut bytes = Vec::new();
+        let app_bases: Vec<u16> = (0..=0xFFu16)
+            .map(|hi| hi << 8)
+            .chain([
+                0x0850, 0x0851, 0x0300, 0x0800, 0x5000, 0x5003, 0x5008, 0x0B20,
+            ])
+            .collect();
+        for (i, &base) in app_bases.iter().enumerate() {
+            // One sensor per app ID range; its data frames first with a zero lowest value byte,
+            // then with a non-zero one (the GPS date/time frame names Time, then Date).
+            let phys = (i % 28) as u8;
+            let app_id = base | u16::from(next() & 0x1F);
+            for k in 0..6u8 {
+                let value = u32::from_le_bytes([
+                    if k == 0 { 0 } else { next() | 1 },
+                    next(),
+                    next(),
+                    next(),
+                ]);
+                let kind = [0x10, 0x10, 0x10, 0x00, 0x32, 0x77][usize::from(k)];
+                wire::encode_frame(&mut bytes, wire::header_for(phys), kind, app_id, value);
+                if k == 2 {
+                    // The same frame with a bad CRC, and a firmware frame.
+                    let mut body = [kind, app_id as u8, (app_id >> 8) as u8, 1, 2, 3, 4, 0];
+                    body[7] = wire::crc(&body[..7]) ^ 1;
+                    wire::encode_raw(&mut bytes, wire::header_for(phys), &body);
+                    body[0] = 0x50;
+                    wire::encode_raw(&mut bytes, 0xFF, &body);
+                }
+            }
+            wire::encode_poll(&mut bytes, wire::header_for((i % 28) as u8));
+            wire::encode_poll(&mut bytes, 0x1A);
+            if i % 16 == 0 {
+                bytes.extend_from_slice(&noise[i..i + 12]);
+            }
+        }
+        // A frame cut short at the end.
+        bytes.extend_from_slice(&[wire::START, wire::header_for(3), 0x10, 0x00]);
+        let chunks: Vec<&[u8]> = bytes.chunks(97).collect();
+        let stamped = crate::testing::assert_stamps_hold(&mut SportDecoder::new(), &chunks);
+        assert!(stamped > 2_000, "{stamped} rows with a stamp");
     }
 }

@@ -489,6 +489,13 @@ fn gps(value: u32, data: &mut String, nums: &mut SportNumbers) {
 }
 
 /// GPS date (low byte ≠ 0) or time (low byte = 0).
+/// Whether the Sensor column of a data frame with this app ID names something its value
+/// decides: only the GPS date/time frame does (`Date` or `Time`, [`date_time`]). Every other
+/// Sensor follows from the app ID alone (what the rows' stamps rely on).
+pub(crate) fn sensor_from_value(app_id: u16, value: u32) -> bool {
+    matches!(app_id, 0x0850..=0x085F) && value & 0xFF != 0
+}
+
 fn date_time(value: u32, data: &mut String) -> Decoded {
     let [b0, b1, b2, b3] = value.to_le_bytes();
     if b0 != 0 {

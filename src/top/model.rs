@@ -467,6 +467,7 @@ mod tests {
         extra: &'a [&'a str],
     ) -> Row<'a> {
         Row {
+            stamp: 0,
             id: Some(id),
             device: "FAS-40S",
             kind: "Data",
@@ -524,11 +525,13 @@ mod tests {
     fn requests_keep_their_value_only_until_an_answer_brings_one() {
         let mut m = Model::new(&[]);
         let req = Row {
+            stamp: 0,
             kind: "Request",
             data: "R0..R3",
             ..data(10, "R0", "Read register(s)", "", &[])
         };
         let resp = Row {
+            stamp: 0,
             kind: "Response",
             data: "R0=42 R1=1",
             ..req
@@ -549,6 +552,7 @@ mod tests {
         let mut m = Model::new(&[]);
         m.row(&data(5, "0x10", "", "01", &[]), 0);
         let bad = Row {
+            stamp: 0,
             kind: kind::BAD_CRC,
             class: Class::Error,
             ..data(5, "0x10", "", "01", &[])
@@ -557,17 +561,20 @@ mod tests {
         // A bad frame of an unknown key opens no line but counts on its ID's line.
         m.row(
             &Row {
+                stamp: 0,
                 sensor_no: "0x99",
                 ..bad
             },
             20,
         );
         let nak = Row {
+            stamp: 0,
             kind: "NACK",
             ..data(5, "0x10", "", "02 (2)", &[])
         };
         m.row(&nak, 30);
         let timeout = Row {
+            stamp: 0,
             kind: kind::TIMEOUT,
             class: Class::Warning,
             ..data(7, "0x11", "", "", &[])
@@ -588,6 +595,7 @@ mod tests {
         let mut m = Model::new(&[]);
         m.row(
             &Row {
+                stamp: 0,
                 kind: "",
                 ..data(26, "", "", "", &[])
             },
@@ -595,6 +603,7 @@ mod tests {
         );
         m.row(
             &Row {
+                stamp: 0,
                 kind: "Null",
                 class: Class::Quiet,
                 ..data(0, "", "", "", &[])
@@ -637,6 +646,7 @@ mod tests {
         let mut m = Model::new(&[]);
         m.row(
             &Row {
+                stamp: 0,
                 device: "Vario",
                 ..data(0, "100", "Alt", "1", &[])
             },
@@ -645,6 +655,7 @@ mod tests {
         for t in 0..10 {
             m.row(
                 &Row {
+                    stamp: 0,
                     device: "FAS-40S",
                     ..data(2, "210", "Volts", "1", &[])
                 },
@@ -653,6 +664,7 @@ mod tests {
         }
         m.row(
             &Row {
+                stamp: 0,
                 device: "GPS",
                 ..data(3, "800", "Lat", "1", &[])
             },

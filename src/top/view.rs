@@ -407,6 +407,7 @@ mod tests {
         for o in &rows.rows {
             let extra: Vec<&str> = o.extra.iter().map(String::as_str).collect();
             let row = crate::row::Row {
+                stamp: 0,
                 micros: o.micros,
                 id: o.id,
                 device: &o.device,
