@@ -284,6 +284,13 @@ mod tests {
             i64::MIN,
             i64::MIN + 1,
         ];
+        // Every digit count, both signs, and the powers of ten around each.
+        let mut raws = raws.to_vec();
+        let mut p: i64 = 1;
+        for _ in 0..19 {
+            raws.extend([p - 1, p, p + 1, -p, -(p - 1), p * 7 / 3]);
+            p = p.saturating_mul(10);
+        }
         for raw in raws {
             for prec in 0..=18 {
                 let (mut a, mut b) = (String::from("x"), String::from("x"));
