@@ -518,8 +518,12 @@ impl Table {
         let mut ib2 = itoa::Buffer::new();
         let millis = row.micros.map_or("", |us| ib.format(us / 1000));
         let id = row.id.map_or("", |i| ib2.format(i));
-        // Hex digits and spaces only.
-        let raw = std::str::from_utf8(&self.hex).unwrap_or("");
+        // Hex digits and spaces only (and only with --raw: the check is not free).
+        let raw = if self.opts.raw {
+            std::str::from_utf8(&self.hex).unwrap_or("")
+        } else {
+            ""
+        };
         let n = 8 + self.n_extra + usize::from(self.opts.raw) + usize::from(self.opts.time_abs);
         if self.widths.len() < n {
             self.widths.resize(n, 4);
@@ -762,6 +766,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
 
     /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
     /// the line.
+    #[inline(always)]
     fn finish(self) {
         let text = &self.line.bytes()[self.start..];
         // Blanks held back were never written; a line that ends in printable ASCII other than
