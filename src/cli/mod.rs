@@ -20,6 +20,7 @@ use crate::top::Top;
 use crate::top::view::Info;
 
 mod args;
+mod choices;
 mod extcap;
 mod manual;
 mod paths;

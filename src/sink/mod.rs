@@ -22,7 +22,8 @@ pub use tap::{Tap, Tapped};
 use crate::row::{OutputError, RowResult};
 
 /// Output format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// (The command line's names for it are in `cli/choices.rs`.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
     /// Aligned, coloured columns for a terminal.
     Pretty,

@@ -36,7 +36,8 @@ pub struct SerialConfig {
 /// What busnoop does with a serial device's DTR and RTS outputs (`--dtr-rts`). Opening a tty
 /// raises both (Linux does it inside open(), before any program can act); on an RS-485 adapter
 /// whose driver is enabled by RTS that could drive the bus.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+/// (The command line's names for it are in `cli/choices.rs`.)
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ModemLines {
     /// Drop DTR and RTS right after opening and keep them low (they then stay low on close).
     #[default]
