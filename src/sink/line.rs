@@ -104,6 +104,15 @@ impl W<'_> {
     /// Appends `n` blanks.
     #[inline(always)]
     pub fn spaces(&mut self, mut n: usize) {
+        // Usually: one fixed-size store of 32 blanks, of which the first `n` count (the rest
+        // is written over by what follows, or lies beyond the line).
+        if n <= SPACES.len()
+            && let Some(room) = self.buf.get_mut(self.pos..self.pos + SPACES.len())
+        {
+            room.copy_from_slice(&SPACES);
+            self.pos += n;
+            return;
+        }
         while n > 0 {
             let k = n.min(SPACES.len());
             self.put(&SPACES[..k]);
