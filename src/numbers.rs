@@ -9,63 +9,36 @@
 use crate::row::Part;
 
 /// Appends `raw / 10^prec` exactly as [`crate::fmt::push_fixed`] does (`6543, 2` → `65.43`,
-/// `-150, 2` → `-1.50`, `5, 3` → `0.005`): the magnitude's digits are written two at a time
-/// from the end of a buffer of zeros (which gives the leading zeros a small value needs), then
-/// pushed with the point between them.
+/// `-150, 2` → `-1.50`, `5, 3` → `0.005`): the magnitude's digits once (`itoa`), then the
+/// point placed in them, or leading zeros put before them.
 pub fn push_decimal(out: &mut String, raw: i64, prec: u8) {
     let prec = prec as usize;
     if prec > 18 {
         crate::fmt::push_fixed(out, raw, prec as u8);
         return;
     }
-    // Up to 20 digits, or prec + 1 of them.
-    const LEN: usize = 20;
-    let mut buf = [b'0'; LEN];
-    let mut i = LEN;
-    let mut mag = raw.unsigned_abs();
-    while mag >= 100 {
-        let r = (mag % 100) as usize * 2;
-        mag /= 100;
-        i -= 2;
-        buf[i..i + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
-    }
-    if mag >= 10 {
-        let r = mag as usize * 2;
-        i -= 2;
-        buf[i..i + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
-    } else {
-        i -= 1;
-        buf[i] = b'0' + mag as u8;
-    }
-    let digits = &buf[i.min(LEN - (prec + 1))..];
-    let (whole, frac) = digits.split_at(digits.len() - prec);
-    out.reserve(digits.len() + 2);
+    let mut buf = itoa::Buffer::new();
+    let digits = buf.format(raw.unsigned_abs());
+    out.reserve(digits.len() + prec + 3);
     if raw < 0 {
         out.push('-');
     }
-    // ASCII digits: the mask tells the compiler that every push is one byte.
-    for &d in whole {
-        out.push(char::from(d & 0x7F));
-    }
-    if prec > 0 {
+    if prec == 0 {
+        out.push_str(digits);
+    } else if digits.len() > prec {
+        let (whole, frac) = digits.split_at(digits.len() - prec);
+        out.push_str(whole);
         out.push('.');
-        for &d in frac {
-            out.push(char::from(d & 0x7F));
-        }
+        out.push_str(frac);
+    } else {
+        out.push_str("0.");
+        out.push_str(&ZEROS[..prec - digits.len()]);
+        out.push_str(digits);
     }
 }
 
-/// `00` to `99`.
-const DIGIT_PAIRS: [u8; 200] = {
-    let mut t = [0u8; 200];
-    let mut i = 0;
-    while i < 100 {
-        t[2 * i] = b'0' + (i / 10) as u8;
-        t[2 * i + 1] = b'0' + (i % 10) as u8;
-        i += 1;
-    }
-    t
-};
+/// Leading zeros of a fraction (up to 18 places).
+const ZEROS: &str = "000000000000000000";
 
 /// Appends an unsigned integer in decimal; a single digit without going through `itoa`.
 #[inline]
