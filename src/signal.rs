@@ -1,5 +1,6 @@
 //! SIGINT/SIGTERM: asked once, busnoop stops cleanly (every decoded row written); asked twice,
-//! it ends at once. The sources' waits and the driver both look here.
+//! it ends at once (after [`at_exit`]: the live view gives the terminal back). The sources'
+//! waits and the driver both look here.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -13,6 +14,16 @@ pub struct Stop {
 
 static STOP: OnceLock<Stop> = OnceLock::new();
 
+/// What the second signal's handler runs before the process ends: see [`at_exit`].
+static AT_EXIT: OnceLock<fn()> = OnceLock::new();
+
+/// Sets what a second signal runs right before the process ends (the live view puts the
+/// terminal back). It runs inside the signal handler: only async-signal-safe calls, no lock, no
+/// allocation. Only the first call counts.
+pub fn at_exit(f: fn()) {
+    let _ = AT_EXIT.set(f);
+}
+
 impl Stop {
     /// Installs the handlers (once per process; later calls return the same catcher).
     pub fn install() -> std::io::Result<Stop> {
@@ -22,8 +33,21 @@ impl Stop {
         let signal = Arc::new(AtomicUsize::new(0));
         for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
             let armed = Arc::new(AtomicBool::new(false));
-            // Second signal: exit immediately with the conventional code.
-            signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())?;
+            // Second signal: exit immediately with the conventional code, the live view's
+            // terminal put back first (raw mode off, main screen).
+            let second = armed.clone();
+            // SAFETY: the action only loads atomics, calls the `at_exit` function (which must be
+            // async-signal-safe, see there) and `_exit`.
+            unsafe {
+                signal_hook::low_level::register(sig, move || {
+                    if second.load(Ordering::SeqCst) {
+                        if let Some(f) = AT_EXIT.get() {
+                            f();
+                        }
+                        signal_hook::low_level::exit(128 + sig);
+                    }
+                })
+            }?;
             signal_hook::flag::register(sig, armed)?;
             signal_hook::flag::register_usize(sig, signal.clone(), sig as usize)?;
         }

@@ -6,6 +6,7 @@ mod common;
 
 use std::io::{BufRead, Read, Write};
 use std::os::fd::{AsRawFd, OwnedFd};
+use std::os::unix::fs::OpenOptionsExt;
 use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -314,4 +315,50 @@ fn ctrl_c_in_a_paced_replay_stops_like_sigint_and_restores_the_terminal() {
     // Paced: far from all of the 30 s were decoded, and what was is in the table.
     let rows = std::fs::read_to_string(&table).unwrap().lines().count();
     assert!(rows > 1 && rows < 2400, "{rows}");
+}
+
+#[test]
+fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    let long = dir.path().join("long.bin");
+    std::fs::write(&long, sample.repeat(400)).unwrap();
+    // The table goes into a FIFO that is open but never read: once its buffer is full, the
+    // table's write blocks, so the first SIGTERM cannot end the run cleanly and the second one
+    // has to end it at once.
+    let fifo = dir.path().join("table.fifo");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(&fifo)
+        .unwrap();
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args(["sport", "--top", "--speed", "0", "-f", "tsv", "-o"])
+        .arg(&fifo)
+        .arg(&long)
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .spawn()
+        .unwrap();
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    // Time to fill the FIFO and block.
+    std::thread::sleep(Duration::from_millis(1500));
+    assert_ne!(term.lflag(), before, "raw mode while the view runs");
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "still blocked");
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(143));
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before, "terminal modes restored");
+    drop(reader);
 }

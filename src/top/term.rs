@@ -4,7 +4,7 @@
 use std::io::{self, Stdout, Write};
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
-use std::sync::{Arc, Mutex, Once};
+use std::sync::{Arc, Mutex, Once, OnceLock};
 
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
@@ -18,6 +18,11 @@ use ratatui::crossterm::terminal::{
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 /// The real stderr while it is captured (-1: not captured).
 static SAVED_STDERR: AtomicI32 = AtomicI32::new(-1);
+
+/// The terminal's descriptor (-1: none) and its settings before raw mode, for
+/// [`restore_at_exit`], which runs inside a signal handler and can take no lock.
+static TTY_FD: AtomicI32 = AtomicI32::new(-1);
+static TTY_SETTINGS: OnceLock<libc::termios> = OnceLock::new();
 
 /// Lines of stderr kept while the view runs; more are counted.
 const KEPT_LINES: usize = 1000;
@@ -35,6 +40,59 @@ pub fn restore() {
         // SAFETY: `saved` is the descriptor `Capture::start` duplicated from stderr and owns;
         // dup2 onto 2 only replaces the pipe's write end.
         unsafe { libc::dup2(saved, 2) };
+    }
+}
+
+/// Puts the terminal back from a signal handler, just before the process ends at once (a
+/// second Ctrl-C or SIGTERM, [`crate::signal`]): only async-signal-safe calls (`tcsetattr`,
+/// `write`, `dup2`), with the settings saved when the view opened. Nothing when the view is
+/// not open.
+pub fn restore_at_exit() {
+    if ACTIVE.swap(false, Ordering::SeqCst) {
+        let fd = TTY_FD.load(Ordering::SeqCst);
+        if let (true, Some(t)) = (fd >= 0, TTY_SETTINGS.get()) {
+            // SAFETY: `fd` is the terminal's descriptor, open for the whole process; `t` is a
+            // termios read from it. tcsetattr is async-signal-safe.
+            unsafe { libc::tcsetattr(fd, libc::TCSANOW, t) };
+        }
+        // Leave the alternate screen, show the cursor (what `restore` writes through
+        // crossterm).
+        const BACK: &[u8] = b"\x1b[?1049l\x1b[?25h";
+        // SAFETY: writes a constant buffer to descriptor 1; write is async-signal-safe.
+        unsafe { libc::write(1, BACK.as_ptr().cast(), BACK.len()) };
+    }
+    let saved = SAVED_STDERR.swap(-1, Ordering::SeqCst);
+    if saved >= 0 {
+        // SAFETY: see `restore`; dup2 is async-signal-safe.
+        unsafe { libc::dup2(saved, 2) };
+    }
+}
+
+/// Saves the terminal's settings before raw mode, for [`restore_at_exit`]: the descriptor
+/// crossterm sets raw mode on (standard input when it is a terminal, else `/dev/tty`).
+fn save_settings() {
+    if TTY_FD.load(Ordering::SeqCst) < 0 {
+        let fd = if nix::unistd::isatty(io::stdin()).unwrap_or(false) {
+            0
+        } else {
+            match std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .open("/dev/tty")
+            {
+                // Kept open for the rest of the process (the handler may need it at any time).
+                Ok(f) => std::os::fd::IntoRawFd::into_raw_fd(f),
+                Err(_) => return,
+            }
+        };
+        TTY_FD.store(fd, Ordering::SeqCst);
+    }
+    let fd = TTY_FD.load(Ordering::SeqCst);
+    // SAFETY: a zeroed termios (integers and arrays of them) is a valid value to read into.
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    // SAFETY: `fd` is open (standard input, or /dev/tty kept open); `t` is writable.
+    if unsafe { libc::tcgetattr(fd, &mut t) } == 0 {
+        let _ = TTY_SETTINGS.set(t);
     }
 }
 
@@ -158,6 +216,8 @@ impl Screen {
         });
         let capture = Capture::start().ok();
         let opened = (|| {
+            save_settings();
+            crate::signal::at_exit(restore_at_exit);
             enable_raw_mode()?;
             ACTIVE.store(true, Ordering::SeqCst);
             execute!(io::stdout(), EnterAlternateScreen, Hide)?;
