@@ -599,6 +599,10 @@ impl Table {
 /// ([`Spans`]) when they were written before; keeps what it wrote for the next rows.
 #[inline(always)]
 fn span(w: &mut W<'_>, spans: &mut Spans, stamp: u32, write: impl Fn(&mut W<'_>)) {
+    if stamp == 0 {
+        write(w);
+        return;
+    }
     if let Some((bytes, _)) = spans.get(stamp, 0) {
         w.put(bytes);
         #[cfg(debug_assertions)]
@@ -607,7 +611,7 @@ fn span(w: &mut W<'_>, spans: &mut Spans, stamp: u32, write: impl Fn(&mut W<'_>)
     }
     let at = w.len();
     write(w);
-    if stamp != 0 && !w.over() {
+    if !w.over() {
         spans.put(stamp, 0, &w.bytes()[at..], 0);
     }
 }
