@@ -23,7 +23,7 @@ pub(crate) fn assert_stamps_hold(
     chunks: &[&[u8]],
 ) -> usize {
     use crate::row::{Row, RowOut, RowResult};
-    use crate::sink::{Format, Output, Table, TableOptions};
+    use crate::sink::{Format, Table};
 
     struct Both {
         stamped: Vec<Table>,
@@ -51,16 +51,7 @@ pub(crate) fn assert_stamps_hold(
     let tables = || {
         formats
             .iter()
-            .map(|&(format, color)| {
-                let opts = TableOptions {
-                    format,
-                    color,
-                    raw: true,
-                    time_abs: false,
-                    utc: false,
-                };
-                Table::new(Output::memory(), opts, decoder.columns())
-            })
+            .map(|&(format, color)| memory_table(format, color, decoder.columns()))
             .collect::<Vec<_>>()
     };
     let mut both = Both {
@@ -84,4 +75,20 @@ pub(crate) fn assert_stamps_hold(
         );
     }
     both.with_stamp
+}
+
+/// A table in memory with the Raw column (`--raw`), for the sink's tests.
+pub(crate) fn memory_table(
+    format: crate::sink::Format,
+    color: bool,
+    extra: &[&'static str],
+) -> crate::sink::Table {
+    let opts = crate::sink::TableOptions {
+        format,
+        color,
+        raw: true,
+        time_abs: false,
+        utc: false,
+    };
+    crate::sink::Table::new(crate::sink::Output::memory(), opts, extra)
 }

@@ -7,7 +7,7 @@ mod common;
 use std::io::{BufRead, Read, Write};
 use std::os::fd::{AsRawFd, OwnedFd};
 use std::os::unix::fs::OpenOptionsExt;
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -49,6 +49,18 @@ fn terminal(cols: u16, rows: u16) -> Term {
 }
 
 impl Term {
+    /// Starts busnoop with `args` on this terminal (stdin, stdout and stderr), `TERM=xterm`.
+    fn run(&self, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Child {
+        Command::new(bin())
+            .args(args.iter().map(|a| a.as_ref()))
+            .stdin(self.stdio())
+            .stdout(self.stdio())
+            .stderr(self.stdio())
+            .env("TERM", "xterm")
+            .spawn()
+            .unwrap()
+    }
+
     fn stdio(&self) -> Stdio {
         let fd = unsafe { libc::dup(self.slave.as_raw_fd()) };
         assert!(fd >= 0);
@@ -117,18 +129,15 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
     let term = terminal(120, 30);
     let before = term.lflag();
     let screen = collect(&term.master);
-    let mut child = Command::new(bin())
-        .args(["sport", "--top", "-o"])
-        .arg(&table)
-        .arg("--record")
-        .arg(&rec)
-        .arg(&b.path)
-        .stdin(term.stdio())
-        .stdout(term.stdio())
-        .stderr(term.stdio())
-        .env("TERM", "xterm")
-        .spawn()
-        .unwrap();
+    let mut child = term.run(&[
+        &"sport",
+        &"--top",
+        &"-o",
+        &table,
+        &"--record",
+        &rec,
+        &b.path,
+    ]);
     // The alternate screen, the header, the key help.
     let at = wait_for(&screen, 0, "\x1b[?1049h");
     let at = wait_for(&screen, at, "S.Port");
@@ -290,16 +299,7 @@ fn ctrl_c_in_a_paced_replay_stops_like_sigint_and_restores_the_terminal() {
     let term = terminal(100, 24);
     let before = term.lflag();
     let screen = collect(&term.master);
-    let mut child = Command::new(bin())
-        .args(["sport", "--top", "-o"])
-        .arg(&table)
-        .arg(&long)
-        .stdin(term.stdio())
-        .stdout(term.stdio())
-        .stderr(term.stdio())
-        .env("TERM", "xterm")
-        .spawn()
-        .unwrap();
+    let mut child = term.run(&[&"sport", &"--top", &"-o", &table, &long]);
     let at = wait_for(&screen, 0, "×1");
     let at = wait_for(&screen, at, "Volts");
     term.master
@@ -338,16 +338,9 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     let term = terminal(100, 24);
     let before = term.lflag();
     let screen = collect(&term.master);
-    let mut child = Command::new(bin())
-        .args(["sport", "--top", "--speed", "0", "-f", "tsv", "-o"])
-        .arg(&fifo)
-        .arg(&long)
-        .stdin(term.stdio())
-        .stdout(term.stdio())
-        .stderr(term.stdio())
-        .env("TERM", "xterm")
-        .spawn()
-        .unwrap();
+    let mut child = term.run(&[
+        &"sport", &"--top", &"--speed", &"0", &"-f", &"tsv", &"-o", &fifo, &long,
+    ]);
     let at = wait_for(&screen, 0, "\x1b[?1049h");
     // Time to fill the FIFO and block.
     std::thread::sleep(Duration::from_millis(1500));

@@ -556,14 +556,7 @@ fn stamped_rows() -> Vec<Row<'static>> {
 }
 
 fn render_rows(format: Format, color: bool, rows: &[Row<'_>]) -> (String, Table) {
-    let opts = TableOptions {
-        format,
-        color,
-        raw: true,
-        time_abs: false,
-        utc: false,
-    };
-    let mut t = Table::new(Output::memory(), opts, &["Unit", "Note"]);
+    let mut t = crate::testing::memory_table(format, color, &["Unit", "Note"]);
     for r in rows {
         t.write(r).unwrap();
     }
