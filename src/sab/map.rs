@@ -10,18 +10,65 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{
-    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
-};
+use crate::fmt::{hex_0x, push_0x, push_0x16, push_i64, push_ms, push_ms_short, push_u64};
 use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
 
+/// `"00 "` … `"FF "`, three bytes each (see [`HEX_SP`]).
+const HEX_SP_TEXT: [u8; 768] = {
+    const HEX: &[u8; 16] = b"0123456789ABCDEF";
+    let mut t = [b' '; 768];
+    let mut i = 0;
+    while i < 256 {
+        t[3 * i] = HEX[i >> 4];
+        t[3 * i + 1] = HEX[i & 0x0F];
+        i += 1;
+    }
+    t
+};
+
+/// `"00 "` … `"FF "` for every byte, as static strings: a byte's hex is one copy of three
+/// bytes instead of three pushes.
+static HEX_SP: [&str; 256] = {
+    let mut t = [""; 256];
+    let mut i = 0;
+    while i < 256 {
+        let (_, rest) = HEX_SP_TEXT.split_at(3 * i);
+        let (digits, _) = rest.split_at(3);
+        t[i] = match std::str::from_utf8(digits) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        i += 1;
+    }
+    t
+};
+
+/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`), the same text as
+/// [`crate::fmt::push_hex`].
+fn push_hex(out: &mut String, bytes: &[u8]) {
+    let Some((&last, init)) = bytes.split_last() else {
+        return;
+    };
+    out.reserve(bytes.len() * 3);
+    for &b in init {
+        out.push_str(&HEX_SP[b as usize][..3]);
+    }
+    out.push_str(&HEX_SP[last as usize][..2]);
+}
+
 /// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
 /// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
 pub fn push_payload(out: &mut String, payload: &[u8]) {
+    push_payload_with(out, payload, None);
+}
+
+/// [`push_payload`]; `unsigned` is the unsigned reading's text when it is already written
+/// (the Value column's), so that the number is formatted once.
+fn push_payload_with(out: &mut String, payload: &[u8], unsigned_text: Option<&str>) {
     push_hex(out, payload);
     let (unsigned, signed) = match *payload {
         [a] => (a as u64, a as i8 as i64),
@@ -36,7 +83,10 @@ pub fn push_payload(out: &mut String, payload: &[u8]) {
         _ => return,
     };
     out.push_str(" (");
-    push_u64(out, unsigned);
+    match unsigned_text {
+        Some(t) => out.push_str(t),
+        None => push_u64(out, unsigned),
+    }
     if signed < 0 {
         out.push_str(", ");
         push_i64(out, signed);
@@ -44,15 +94,37 @@ pub fn push_payload(out: &mut String, payload: &[u8]) {
     out.push(')');
 }
 
+/// `000` … `999`, the three decimals of a response time.
+static DECIMALS3: &str = {
+    const TEXT: [u8; 3000] = {
+        let mut t = [0u8; 3000];
+        let mut i = 0;
+        while i < 1000 {
+            t[3 * i] = b'0' + (i / 100) as u8;
+            t[3 * i + 1] = b'0' + (i / 10 % 10) as u8;
+            t[3 * i + 2] = b'0' + (i % 10) as u8;
+            i += 1;
+        }
+        t
+    };
+    match std::str::from_utf8(&TEXT) {
+        Ok(s) => s,
+        Err(_) => panic!("ASCII"),
+    }
+};
+
 /// [`push_ms`] for a response time: µs as milliseconds with three decimals.
 fn push_ms3(out: &mut String, micros: u64) {
     let micros = micros.min(i64::MAX as u64);
-    out.push_str(itoa::Buffer::new().format(micros / 1000));
-    let f = (micros % 1000) as u32;
+    let ms = micros / 1000;
+    if ms < 10 {
+        out.push(char::from(b'0' + ms as u8));
+    } else {
+        out.push_str(itoa::Buffer::new().format(ms));
+    }
     out.push('.');
-    out.push(char::from(b'0' + (f / 100) as u8));
-    out.push(char::from(b'0' + (f / 10 % 10) as u8));
-    out.push(char::from(b'0' + (f % 10) as u8));
+    let f = (micros % 1000) as usize;
+    out.push_str(&DECIMALS3[3 * f..3 * f + 3]);
 }
 
 /// Scratch buffers reused for every row.
@@ -61,12 +133,11 @@ struct Scratch {
     data: String,
     resp: String,
     note: String,
-    /// The row's number: its name (`distance`, `0x10`, `speed.req`), text and unit.
-    part_name: String,
+    /// The row's number: its text.
     value: String,
-    unit: String,
-    /// The number's value when the row carries one.
-    number: Option<f64>,
+    /// The number's value, command and direction (ACK or request) when the row carries one;
+    /// its name and unit are the command's ([`Names::part`], [`Values::declared`]).
+    number: Option<(f64, u8, bool)>,
 }
 
 impl Scratch {
@@ -74,9 +145,7 @@ impl Scratch {
         self.data.clear();
         self.resp.clear();
         self.note.clear();
-        self.part_name.clear();
         self.value.clear();
-        self.unit.clear();
         self.number = None;
     }
 
@@ -131,8 +200,15 @@ impl Mapper {
 
     /// Time of stream offset `pos` reconstructed from the baud rate (ns).
     pub(super) fn nanos_at(&self, pos: u64) -> u64 {
-        let ns = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / self.baud as u128;
-        ns.min(u64::MAX as u128) as u64
+        const NS_PER_BIT_BYTE: u64 = BITS_PER_BYTE * 1_000_000_000;
+        match pos.checked_mul(NS_PER_BIT_BYTE) {
+            // The same quotient in 64 bits (the usual case: below 1.8 GB into the stream).
+            Some(n) => n / self.baud as u64,
+            None => {
+                let ns = pos as u128 * NS_PER_BIT_BYTE as u128 / self.baud as u128;
+                ns.min(u64::MAX as u128) as u64
+            }
+        }
     }
 
     fn start_ns(&self, ev: &Event<'_>) -> u64 {
@@ -176,11 +252,15 @@ impl Mapper {
             None => ("", ""),
         };
         let part;
+        let mut unit = "";
         let parts: &[Part<'_>] = match sc.number {
-            Some(value) => {
+            Some((value, command, ack)) => {
+                if let Some(d) = self.values.declared(command, ack) {
+                    unit = &d.unit;
+                }
                 part = [Part {
-                    name: &sc.part_name,
-                    unit: &sc.unit,
+                    name: self.names.part(command, ack),
+                    unit,
                     text: &sc.value,
                     value,
                 }];
@@ -189,7 +269,7 @@ impl Mapper {
             None => &[],
         };
         let extra = [
-            sc.unit.as_str(),
+            unit,
             addr,
             sc.resp.as_str(),
             p.framing.name(),
@@ -213,29 +293,14 @@ impl Mapper {
 
     /// The number of a valid request or ACK (`docs/sab.md`, "Values"), its Data cell, and a
     /// note when a declared type does not fit the payload.
-    fn number(
-        values: &Values,
-        names: &Names,
-        sc: &mut Scratch,
-        command: u8,
-        flags: Flags,
-        payload: &[u8],
-    ) {
+    fn number(values: &Values, sc: &mut Scratch, command: u8, flags: Flags, payload: &[u8]) {
         let ack = flags == Flags::Ack;
         let declared = values.declared(command, ack);
         match values.read(command, ack, payload, &mut sc.value) {
             Reading::Number(v) => {
-                sc.number = Some(v);
-                match names.command(command) {
-                    "" => push_0x(&mut sc.part_name, command),
-                    name => sc.part_name.push_str(name),
-                }
-                if !ack {
-                    sc.part_name.push_str(".req");
-                }
+                sc.number = Some((v, command, ack));
                 match declared {
                     Some(d) => {
-                        sc.unit.push_str(&d.unit);
                         // The declared reading instead of the integer one: `23 01 (2.91 m)`.
                         push_hex(&mut sc.data, payload);
                         sc.data.push_str(" (");
@@ -246,7 +311,8 @@ impl Mapper {
                         }
                         sc.data.push(')');
                     }
-                    None => push_payload(&mut sc.data, payload),
+                    // The default reading is the integer one: its text is the Value's.
+                    None => push_payload_with(&mut sc.data, payload, Some(&sc.value)),
                 }
             }
             Reading::WrongSize(ty, len) => {
@@ -357,7 +423,7 @@ impl Mapper {
         let sc = &mut self.scratch;
         sc.clear();
         if matches!(flags, Flags::Request | Flags::Ack) {
-            Self::number(&self.values, &self.names, sc, command, flags, payload);
+            Self::number(&self.values, sc, command, flags, payload);
         } else {
             push_payload(&mut sc.data, payload);
         }
