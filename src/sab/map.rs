@@ -11,6 +11,8 @@ use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
 use crate::fmt::{hex_0x, push_0x, push_0x16, push_i64, push_ms, push_ms_short, push_u64};
+use std::ops::Range;
+
 use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
 
@@ -60,17 +62,10 @@ fn push_hex(out: &mut String, bytes: &[u8]) {
     out.push_str(&HEX_SP[last as usize][..2]);
 }
 
-/// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
-/// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
-pub fn push_payload(out: &mut String, payload: &[u8]) {
-    push_payload_with(out, payload, None);
-}
-
-/// [`push_payload`]; `unsigned` is the unsigned reading's text when it is already written
-/// (the Value column's), so that the number is formatted once.
-fn push_payload_with(out: &mut String, payload: &[u8], unsigned_text: Option<&str>) {
-    push_hex(out, payload);
-    let (unsigned, signed) = match *payload {
+/// The little-endian integer reading of a payload of 1, 2 or 4 bytes: (unsigned, signed).
+#[inline]
+fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
+    Some(match *payload {
         [a] => (a as u64, a as i8 as i64),
         [a, b] => {
             let v = u16::from_le_bytes([a, b]);
@@ -80,18 +75,33 @@ fn push_payload_with(out: &mut String, payload: &[u8], unsigned_text: Option<&st
             let v = u32::from_le_bytes([a, b, c, d]);
             (v as u64, v as i32 as i64)
         }
-        _ => return,
-    };
-    out.push_str(" (");
-    match unsigned_text {
-        Some(t) => out.push_str(t),
-        None => push_u64(out, unsigned),
+        _ => return None,
+    })
+}
+
+/// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
+/// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
+pub fn push_payload(out: &mut String, payload: &[u8]) {
+    push_hex(out, payload);
+    if let Some((unsigned, signed)) = int_reading(payload) {
+        push_reading(out, unsigned, signed);
     }
+}
+
+/// Appends ` (unsigned)` or ` (unsigned, signed)`; returns where the unsigned number's text
+/// stands in `out`.
+#[inline]
+fn push_reading(out: &mut String, unsigned: u64, signed: i64) -> Range<usize> {
+    out.push_str(" (");
+    let start = out.len();
+    push_u64(out, unsigned);
+    let text = start..out.len();
     if signed < 0 {
         out.push_str(", ");
         push_i64(out, signed);
     }
     out.push(')');
+    text
 }
 
 /// `000` … `999`, the three decimals of a response time.
@@ -133,8 +143,10 @@ struct Scratch {
     data: String,
     resp: String,
     note: String,
-    /// The row's number: its text.
+    /// The row's number: its text (a declared reading's), or where it stands in `data` (the
+    /// default reading's, written once).
     value: String,
+    value_at: Option<Range<usize>>,
     /// The number's value, command and direction (ACK or request) when the row carries one;
     /// its name and unit are the command's ([`Names::part`], [`Values::declared`]).
     number: Option<(f64, u8, bool)>,
@@ -146,6 +158,7 @@ impl Scratch {
         self.resp.clear();
         self.note.clear();
         self.value.clear();
+        self.value_at = None;
         self.number = None;
     }
 
@@ -233,6 +246,7 @@ impl Mapper {
     }
 
     /// Writes one row; `out` is the decoder's [`crate::row::Latch`], which keeps a write error.
+    #[inline(always)]
     fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
         let sc = &mut self.scratch;
         if let Some(n) = self.framing_note.take() {
@@ -261,7 +275,10 @@ impl Mapper {
                 part = [Part {
                     name: self.names.part(command, ack),
                     unit,
-                    text: &sc.value,
+                    text: match &sc.value_at {
+                        Some(at) => &sc.data[at.clone()],
+                        None => &sc.value,
+                    },
                     value,
                 }];
                 &part
@@ -295,25 +312,28 @@ impl Mapper {
     /// note when a declared type does not fit the payload.
     fn number(values: &Values, sc: &mut Scratch, command: u8, flags: Flags, payload: &[u8]) {
         let ack = flags == Flags::Ack;
-        let declared = values.declared(command, ack);
+        let Some(declared) = values.declared(command, ack) else {
+            // The default reading (`values::read_default`): the integer of 1, 2 or 4 bytes,
+            // formatted once into the Data cell, which the Value column borrows.
+            push_hex(&mut sc.data, payload);
+            if let Some((unsigned, signed)) = int_reading(payload) {
+                sc.value_at = Some(push_reading(&mut sc.data, unsigned, signed));
+                sc.number = Some((unsigned as f64, command, ack));
+            }
+            return;
+        };
         match values.read(command, ack, payload, &mut sc.value) {
             Reading::Number(v) => {
                 sc.number = Some((v, command, ack));
-                match declared {
-                    Some(d) => {
-                        // The declared reading instead of the integer one: `23 01 (2.91 m)`.
-                        push_hex(&mut sc.data, payload);
-                        sc.data.push_str(" (");
-                        sc.data.push_str(&sc.value);
-                        if !d.unit.is_empty() {
-                            sc.data.push(' ');
-                            sc.data.push_str(&d.unit);
-                        }
-                        sc.data.push(')');
-                    }
-                    // The default reading is the integer one: its text is the Value's.
-                    None => push_payload_with(&mut sc.data, payload, Some(&sc.value)),
+                // The declared reading instead of the integer one: `23 01 (2.91 m)`.
+                push_hex(&mut sc.data, payload);
+                sc.data.push_str(" (");
+                sc.data.push_str(&sc.value);
+                if !declared.unit.is_empty() {
+                    sc.data.push(' ');
+                    sc.data.push_str(&declared.unit);
                 }
+                sc.data.push(')');
             }
             Reading::WrongSize(ty, len) => {
                 push_payload(&mut sc.data, payload);
@@ -725,6 +745,107 @@ impl Mapper {
     pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
         if let Some(x) = self.pairing.finish(now) {
             self.timeout_row(&x, framing, out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_from_the_table_is_fmt_hex() {
+        let all: Vec<u8> = (0..=255).collect();
+        for len in [0, 1, 2, 3, 4, 7, 33, 256] {
+            let bytes = &all[all.len() - len..];
+            let mut ours = String::new();
+            push_hex(&mut ours, bytes);
+            assert_eq!(ours, crate::fmt::hex(bytes), "{len} bytes");
+        }
+    }
+
+    #[test]
+    fn response_time_is_push_ms() {
+        for micros in [
+            0,
+            1,
+            999,
+            1000,
+            1822,
+            9999,
+            10_000,
+            10_001,
+            123_456_789,
+            u64::MAX,
+        ] {
+            let (mut ours, mut reference) = (String::new(), String::new());
+            push_ms3(&mut ours, micros);
+            crate::fmt::push_ms(&mut reference, micros);
+            assert_eq!(ours, reference, "{micros} µs");
+        }
+    }
+
+    #[test]
+    fn payload_reading_is_the_default_value() {
+        for payload in [
+            &[][..],
+            &[0x7F],
+            &[0x80],
+            &[0xFF, 0xFF],
+            &[0x23, 0x01],
+            &[1, 2, 3],
+            &[0, 0, 0, 0x80],
+            &[0xFF; 4],
+            &[1, 2, 3, 4, 5],
+        ] {
+            let mut data = String::new();
+            push_hex(&mut data, payload);
+            let mut value = String::new();
+            let reading = super::super::values::read_default(payload, &mut value);
+            match int_reading(payload) {
+                Some((unsigned, signed)) => {
+                    let at = push_reading(&mut data, unsigned, signed);
+                    assert_eq!(&data[at], value);
+                    assert_eq!(reading, Reading::Number(unsigned as f64));
+                }
+                None => assert_eq!(reading, Reading::None),
+            }
+            let mut whole = String::new();
+            push_payload(&mut whole, payload);
+            assert_eq!(data, whole);
+        }
+        let mut s = String::new();
+        push_payload(&mut s, &[0xFF, 0xFF]);
+        assert_eq!(s, "FF FF (65535, -1)");
+    }
+
+    #[test]
+    fn stream_times_in_64_bits_are_the_128_bit_quotient() {
+        let map = |baud| {
+            Mapper::new(&Options {
+                baud,
+                ..Options::default()
+            })
+        };
+        for baud in [1, 9600, 115_200, 1_000_000, u32::MAX] {
+            let m = map(baud);
+            for pos in [
+                0,
+                1,
+                7,
+                8_388_608,
+                1_844_674_407,
+                1_844_674_408,
+                u64::MAX / 3,
+                u64::MAX,
+            ] {
+                let exact = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / baud as u128;
+                assert_eq!(
+                    m.nanos_at(pos),
+                    exact.min(u64::MAX as u128) as u64,
+                    "{pos} @ {baud}"
+                );
+            }
         }
     }
 }

@@ -220,9 +220,10 @@ impl Reassembler {
     ///
     /// The same as [`Self::step`] for every byte. While nothing is held (the usual case), the
     /// input is read in place: the bytes up to the next 0x54 go to the garbage run whole, and
-    /// a frame that is complete and valid in `data` is emitted from `data` without passing
-    /// through the buffer. Only a candidate that fails or is cut by the end of `data` is
-    /// handled byte by byte (the backtracking needs its bytes held).
+    /// a candidate that `data` decides (a valid frame, a LENGTH above 32, a bad frame, a false
+    /// 0x54: see [`in_place`]) is handled from `data` without passing through the buffer.
+    /// Only a candidate that the end of `data` leaves undecided is handled byte by byte (the
+    /// backtracking needs its bytes held).
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         let mut i = 0;
         while i < data.len() {
