@@ -368,6 +368,13 @@ impl Reassembler {
     ) -> Option<usize> {
         let after = &data[open + 1..];
         let j = find2(FLAG, ESCAPE, after)?;
+        if j == 0 && after[0] == FLAG {
+            // Back-to-back flags (between two frames): nothing to report, a frame opens.
+            self.open(time);
+            self.pos += 1;
+            self.last_time = time;
+            return Some(open + 1);
+        }
         if after[j] != FLAG {
             return self.close_escaped_in_place(data, open, j, time, emit);
         }
