@@ -2,6 +2,43 @@
 
 use super::header::{self, Flags};
 
+/// Bytes a search looks at one by one before it hands the rest to `memchr`: runs inside
+/// frames are short (a few bytes, cheaper without its setup), runs of noise or of the other
+/// framing's traffic long.
+const SCAN_HEAD: usize = 16;
+
+/// The index of the first `needle` in `hay`.
+#[inline(always)]
+pub(super) fn find(needle: u8, hay: &[u8]) -> Option<usize> {
+    let head = hay.len().min(SCAN_HEAD);
+    match hay[..head].iter().position(|&b| b == needle) {
+        Some(i) => Some(i),
+        None => find_tail(needle, &hay[head..]).map(|i| i + head),
+    }
+}
+
+/// [`find`] past its head (out of line: keeps the callers' short searches tight).
+#[inline(never)]
+fn find_tail(needle: u8, hay: &[u8]) -> Option<usize> {
+    memchr::memchr(needle, hay)
+}
+
+/// The index of the first `a` or `b` in `hay`.
+#[inline(always)]
+pub(super) fn find2(a: u8, b: u8, hay: &[u8]) -> Option<usize> {
+    let head = hay.len().min(SCAN_HEAD);
+    match hay[..head].iter().position(|&x| x == a || x == b) {
+        Some(i) => Some(i),
+        None => find2_tail(a, b, &hay[head..]).map(|i| i + head),
+    }
+}
+
+/// [`find2`] past its head.
+#[inline(never)]
+fn find2_tail(a: u8, b: u8, hay: &[u8]) -> Option<usize> {
+    memchr::memchr2(a, b, hay)
+}
+
 /// The two SAB framings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Framing {

@@ -15,7 +15,7 @@
 
 use crc::{CRC_16_MODBUS, Crc, Table};
 
-use super::frame::{Event, EventKind, Framing};
+use super::frame::{Event, EventKind, Framing, find, find2};
 
 /// Frame delimiter.
 pub const FLAG: u8 = 0x7E;
@@ -134,7 +134,7 @@ impl Reassembler {
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         let mut rest = data;
         while !rest.is_empty() {
-            let n = rest.iter().position(|&b| b == FLAG).unwrap_or(rest.len());
+            let n = find(FLAG, rest).unwrap_or(rest.len());
             if n > 0 {
                 let run = &rest[..n];
                 if self.in_frame {
@@ -161,6 +161,12 @@ impl Reassembler {
     /// Bytes of an open frame, none of them a flag (what [`Self::step`] does with each).
     fn frame_run(&mut self, run: &[u8]) {
         self.keep_wire_run(run);
+        self.unescape_run(run);
+    }
+
+    /// The body bytes of `run` (no flag among them): [`Self::step_body`] for each, runs
+    /// without an escape copied whole.
+    fn unescape_run(&mut self, run: &[u8]) {
         let mut rest = run;
         while let Some((&first, tail)) = rest.split_first() {
             if self.escaped {
@@ -169,7 +175,7 @@ impl Reassembler {
                 rest = tail;
                 continue;
             }
-            let n = rest.iter().position(|&b| b == ESCAPE).unwrap_or(rest.len());
+            let n = find(ESCAPE, rest).unwrap_or(rest.len());
             self.keep_body_run(&rest[..n]);
             if n < rest.len() {
                 self.escaped = true;
@@ -260,10 +266,15 @@ impl Reassembler {
     }
 
     /// Emits the garbage collected so far as a row (a live source went quiet).
+    #[inline]
     pub fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
-        if self.garbage_len == 0 {
-            return;
+        if self.garbage_len > 0 {
+            self.emit_garbage(emit);
         }
+    }
+
+    /// [`Self::flush_garbage`] when there is garbage.
+    fn emit_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         let mut ev = Event::new(
             EventKind::Garbage,
             Framing::Hdlc,
@@ -356,9 +367,16 @@ impl Reassembler {
         emit: &mut impl FnMut(&Event<'_>),
     ) -> Option<usize> {
         let after = &data[open + 1..];
-        let j = after.iter().position(|&b| b == FLAG || b == ESCAPE)?;
+        let j = find2(FLAG, ESCAPE, after)?;
+        if j == 0 && after[0] == FLAG {
+            // Back-to-back flags (between two frames): nothing to report, a frame opens.
+            self.open(time);
+            self.pos += 1;
+            self.last_time = time;
+            return Some(open + 1);
+        }
         if after[j] != FLAG {
-            return None;
+            return self.close_escaped_in_place(data, open, j, time, emit);
         }
         let body = &after[..j];
         let wire = &data[open..open + j + 2];
@@ -385,6 +403,49 @@ impl Reassembler {
         self.pos += 1;
         self.last_time = time;
         Some(open + j + 1)
+    }
+
+    /// [`Self::close_in_place`] for a frame with an escape at `after[escape]` (`after` being
+    /// the bytes after the opening flag): when a flag of `data` closes it, the body is
+    /// unescaped into the body buffer and the wire bytes are read in place (what
+    /// [`Self::frame_run`] and [`Self::step`] at the flag would do). Returns the closing
+    /// flag's index.
+    fn close_escaped_in_place(
+        &mut self,
+        data: &[u8],
+        open: usize,
+        escape: usize,
+        time: Option<u64>,
+        emit: &mut impl FnMut(&Event<'_>),
+    ) -> Option<usize> {
+        let after = &data[open + 1..];
+        let close = escape + find(FLAG, &after[escape..])?;
+        self.unescape_run(&after[..close]);
+        let wire = &data[open..open + close + 2];
+        // The closing flag's position.
+        self.pos += close as u64;
+        let stored = (self.body_len as usize).min(STORE_MAX);
+        let run = Run {
+            closed: true,
+            escaped: self.escaped,
+            max_payload: self.max_payload,
+            body: &self.body[..stored],
+            body_len: self.body_len,
+            wire: &wire[..wire.len().min(WIRE_MAX)],
+            wire_len: wire.len() as u64,
+            odd_escapes: self.odd_escapes,
+            start_pos: self.start_pos,
+            end_pos: self.pos + 1,
+            start_time: self.start_time,
+            end_time: time,
+        };
+        if run.emit(emit) {
+            self.frames += 1;
+        }
+        self.open(time);
+        self.pos += 1;
+        self.last_time = time;
+        Some(open + close + 1)
     }
 
     /// A body with its CRC field (at least 2 bytes): whether the CRC checks, the received CRC

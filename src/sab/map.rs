@@ -10,20 +10,62 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{
-    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
-};
+use crate::fmt::{hex_0x, push_0x, push_0x16, push_i64, push_ms, push_ms_short, push_u64};
+use std::ops::Range;
+
 use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
 
-/// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
-/// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
-pub fn push_payload(out: &mut String, payload: &[u8]) {
-    push_hex(out, payload);
-    let (unsigned, signed) = match *payload {
+/// `"00 "` … `"FF "`, three bytes each (see [`HEX_SP`]).
+const HEX_SP_TEXT: [u8; 768] = {
+    const HEX: &[u8; 16] = b"0123456789ABCDEF";
+    let mut t = [b' '; 768];
+    let mut i = 0;
+    while i < 256 {
+        t[3 * i] = HEX[i >> 4];
+        t[3 * i + 1] = HEX[i & 0x0F];
+        i += 1;
+    }
+    t
+};
+
+/// `"00 "` … `"FF "` for every byte, as static strings: a byte's hex is one copy of three
+/// bytes instead of three pushes.
+static HEX_SP: [&str; 256] = {
+    let mut t = [""; 256];
+    let mut i = 0;
+    while i < 256 {
+        let (_, rest) = HEX_SP_TEXT.split_at(3 * i);
+        let (digits, _) = rest.split_at(3);
+        t[i] = match std::str::from_utf8(digits) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        i += 1;
+    }
+    t
+};
+
+/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`), the same text as
+/// [`crate::fmt::push_hex`].
+fn push_hex(out: &mut String, bytes: &[u8]) {
+    let Some((&last, init)) = bytes.split_last() else {
+        return;
+    };
+    out.reserve(bytes.len() * 3);
+    for &b in init {
+        out.push_str(&HEX_SP[b as usize][..3]);
+    }
+    out.push_str(&HEX_SP[last as usize][..2]);
+}
+
+/// The little-endian integer reading of a payload of 1, 2 or 4 bytes: (unsigned, signed).
+#[inline]
+fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
+    Some(match *payload {
         [a] => (a as u64, a as i8 as i64),
         [a, b] => {
             let v = u16::from_le_bytes([a, b]);
@@ -33,26 +75,66 @@ pub fn push_payload(out: &mut String, payload: &[u8]) {
             let v = u32::from_le_bytes([a, b, c, d]);
             (v as u64, v as i32 as i64)
         }
-        _ => return,
-    };
+        _ => return None,
+    })
+}
+
+/// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
+/// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
+pub fn push_payload(out: &mut String, payload: &[u8]) {
+    push_hex(out, payload);
+    if let Some((unsigned, signed)) = int_reading(payload) {
+        push_reading(out, unsigned, signed);
+    }
+}
+
+/// Appends ` (unsigned)` or ` (unsigned, signed)`; returns where the unsigned number's text
+/// stands in `out`.
+#[inline]
+fn push_reading(out: &mut String, unsigned: u64, signed: i64) -> Range<usize> {
     out.push_str(" (");
+    let start = out.len();
     push_u64(out, unsigned);
+    let text = start..out.len();
     if signed < 0 {
         out.push_str(", ");
         push_i64(out, signed);
     }
     out.push(')');
+    text
 }
+
+/// `000` … `999`, the three decimals of a response time.
+static DECIMALS3: &str = {
+    const TEXT: [u8; 3000] = {
+        let mut t = [0u8; 3000];
+        let mut i = 0;
+        while i < 1000 {
+            t[3 * i] = b'0' + (i / 100) as u8;
+            t[3 * i + 1] = b'0' + (i / 10 % 10) as u8;
+            t[3 * i + 2] = b'0' + (i % 10) as u8;
+            i += 1;
+        }
+        t
+    };
+    match std::str::from_utf8(&TEXT) {
+        Ok(s) => s,
+        Err(_) => panic!("ASCII"),
+    }
+};
 
 /// [`push_ms`] for a response time: µs as milliseconds with three decimals.
 fn push_ms3(out: &mut String, micros: u64) {
     let micros = micros.min(i64::MAX as u64);
-    out.push_str(itoa::Buffer::new().format(micros / 1000));
-    let f = (micros % 1000) as u32;
+    let ms = micros / 1000;
+    if ms < 10 {
+        out.push(char::from(b'0' + ms as u8));
+    } else {
+        out.push_str(itoa::Buffer::new().format(ms));
+    }
     out.push('.');
-    out.push(char::from(b'0' + (f / 100) as u8));
-    out.push(char::from(b'0' + (f / 10 % 10) as u8));
-    out.push(char::from(b'0' + (f % 10) as u8));
+    let f = (micros % 1000) as usize;
+    out.push_str(&DECIMALS3[3 * f..3 * f + 3]);
 }
 
 /// Scratch buffers reused for every row.
@@ -61,12 +143,13 @@ struct Scratch {
     data: String,
     resp: String,
     note: String,
-    /// The row's number: its name (`distance`, `0x10`, `speed.req`), text and unit.
-    part_name: String,
+    /// The row's number: its text (a declared reading's), or where it stands in `data` (the
+    /// default reading's, written once).
     value: String,
-    unit: String,
-    /// The number's value when the row carries one.
-    number: Option<f64>,
+    value_at: Option<Range<usize>>,
+    /// The number's value, command and direction (ACK or request) when the row carries one;
+    /// its name and unit are the command's ([`Names::part`], [`Values::declared`]).
+    number: Option<(f64, u8, bool)>,
 }
 
 impl Scratch {
@@ -74,9 +157,8 @@ impl Scratch {
         self.data.clear();
         self.resp.clear();
         self.note.clear();
-        self.part_name.clear();
         self.value.clear();
-        self.unit.clear();
+        self.value_at = None;
         self.number = None;
     }
 
@@ -131,8 +213,15 @@ impl Mapper {
 
     /// Time of stream offset `pos` reconstructed from the baud rate (ns).
     pub(super) fn nanos_at(&self, pos: u64) -> u64 {
-        let ns = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / self.baud as u128;
-        ns.min(u64::MAX as u128) as u64
+        const NS_PER_BIT_BYTE: u64 = BITS_PER_BYTE * 1_000_000_000;
+        match pos.checked_mul(NS_PER_BIT_BYTE) {
+            // The same quotient in 64 bits (the usual case: below 1.8 GB into the stream).
+            Some(n) => n / self.baud as u64,
+            None => {
+                let ns = pos as u128 * NS_PER_BIT_BYTE as u128 / self.baud as u128;
+                ns.min(u64::MAX as u128) as u64
+            }
+        }
     }
 
     fn start_ns(&self, ev: &Event<'_>) -> u64 {
@@ -157,6 +246,7 @@ impl Mapper {
     }
 
     /// Writes one row; `out` is the decoder's [`crate::row::Latch`], which keeps a write error.
+    #[inline(always)]
     fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
         let sc = &mut self.scratch;
         if let Some(n) = self.framing_note.take() {
@@ -176,12 +266,19 @@ impl Mapper {
             None => ("", ""),
         };
         let part;
+        let mut unit = "";
         let parts: &[Part<'_>] = match sc.number {
-            Some(value) => {
+            Some((value, command, ack)) => {
+                if let Some(d) = self.values.declared(command, ack) {
+                    unit = &d.unit;
+                }
                 part = [Part {
-                    name: &sc.part_name,
-                    unit: &sc.unit,
-                    text: &sc.value,
+                    name: self.names.part(command, ack),
+                    unit,
+                    text: match &sc.value_at {
+                        Some(at) => &sc.data[at.clone()],
+                        None => &sc.value,
+                    },
                     value,
                 }];
                 &part
@@ -189,7 +286,7 @@ impl Mapper {
             None => &[],
         };
         let extra = [
-            sc.unit.as_str(),
+            unit,
             addr,
             sc.resp.as_str(),
             p.framing.name(),
@@ -214,41 +311,30 @@ impl Mapper {
 
     /// The number of a valid request or ACK (`docs/sab.md`, "Values"), its Data cell, and a
     /// note when a declared type does not fit the payload.
-    fn number(
-        values: &Values,
-        names: &Names,
-        sc: &mut Scratch,
-        command: u8,
-        flags: Flags,
-        payload: &[u8],
-    ) {
+    fn number(values: &Values, sc: &mut Scratch, command: u8, flags: Flags, payload: &[u8]) {
         let ack = flags == Flags::Ack;
-        let declared = values.declared(command, ack);
+        let Some(declared) = values.declared(command, ack) else {
+            // The default reading (`values::read_default`): the integer of 1, 2 or 4 bytes,
+            // formatted once into the Data cell, which the Value column borrows.
+            push_hex(&mut sc.data, payload);
+            if let Some((unsigned, signed)) = int_reading(payload) {
+                sc.value_at = Some(push_reading(&mut sc.data, unsigned, signed));
+                sc.number = Some((unsigned as f64, command, ack));
+            }
+            return;
+        };
         match values.read(command, ack, payload, &mut sc.value) {
             Reading::Number(v) => {
-                sc.number = Some(v);
-                match names.command(command) {
-                    "" => push_0x(&mut sc.part_name, command),
-                    name => sc.part_name.push_str(name),
+                sc.number = Some((v, command, ack));
+                // The declared reading instead of the integer one: `23 01 (2.91 m)`.
+                push_hex(&mut sc.data, payload);
+                sc.data.push_str(" (");
+                sc.data.push_str(&sc.value);
+                if !declared.unit.is_empty() {
+                    sc.data.push(' ');
+                    sc.data.push_str(&declared.unit);
                 }
-                if !ack {
-                    sc.part_name.push_str(".req");
-                }
-                match declared {
-                    Some(d) => {
-                        sc.unit.push_str(&d.unit);
-                        // The declared reading instead of the integer one: `23 01 (2.91 m)`.
-                        push_hex(&mut sc.data, payload);
-                        sc.data.push_str(" (");
-                        sc.data.push_str(&sc.value);
-                        if !d.unit.is_empty() {
-                            sc.data.push(' ');
-                            sc.data.push_str(&d.unit);
-                        }
-                        sc.data.push(')');
-                    }
-                    None => push_payload(&mut sc.data, payload),
-                }
+                sc.data.push(')');
             }
             Reading::WrongSize(ty, len) => {
                 push_payload(&mut sc.data, payload);
@@ -358,7 +444,7 @@ impl Mapper {
         let sc = &mut self.scratch;
         sc.clear();
         if matches!(flags, Flags::Request | Flags::Ack) {
-            Self::number(&self.values, &self.names, sc, command, flags, payload);
+            Self::number(&self.values, sc, command, flags, payload);
         } else {
             push_payload(&mut sc.data, payload);
         }
@@ -660,6 +746,107 @@ impl Mapper {
     pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
         if let Some(x) = self.pairing.finish(now) {
             self.timeout_row(&x, framing, out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_from_the_table_is_fmt_hex() {
+        let all: Vec<u8> = (0..=255).collect();
+        for len in [0, 1, 2, 3, 4, 7, 33, 256] {
+            let bytes = &all[all.len() - len..];
+            let mut ours = String::new();
+            push_hex(&mut ours, bytes);
+            assert_eq!(ours, crate::fmt::hex(bytes), "{len} bytes");
+        }
+    }
+
+    #[test]
+    fn response_time_is_push_ms() {
+        for micros in [
+            0,
+            1,
+            999,
+            1000,
+            1822,
+            9999,
+            10_000,
+            10_001,
+            123_456_789,
+            u64::MAX,
+        ] {
+            let (mut ours, mut reference) = (String::new(), String::new());
+            push_ms3(&mut ours, micros);
+            crate::fmt::push_ms(&mut reference, micros);
+            assert_eq!(ours, reference, "{micros} µs");
+        }
+    }
+
+    #[test]
+    fn payload_reading_is_the_default_value() {
+        for payload in [
+            &[][..],
+            &[0x7F],
+            &[0x80],
+            &[0xFF, 0xFF],
+            &[0x23, 0x01],
+            &[1, 2, 3],
+            &[0, 0, 0, 0x80],
+            &[0xFF; 4],
+            &[1, 2, 3, 4, 5],
+        ] {
+            let mut data = String::new();
+            push_hex(&mut data, payload);
+            let mut value = String::new();
+            let reading = super::super::values::read_default(payload, &mut value);
+            match int_reading(payload) {
+                Some((unsigned, signed)) => {
+                    let at = push_reading(&mut data, unsigned, signed);
+                    assert_eq!(&data[at], value);
+                    assert_eq!(reading, Reading::Number(unsigned as f64));
+                }
+                None => assert_eq!(reading, Reading::None),
+            }
+            let mut whole = String::new();
+            push_payload(&mut whole, payload);
+            assert_eq!(data, whole);
+        }
+        let mut s = String::new();
+        push_payload(&mut s, &[0xFF, 0xFF]);
+        assert_eq!(s, "FF FF (65535, -1)");
+    }
+
+    #[test]
+    fn stream_times_in_64_bits_are_the_128_bit_quotient() {
+        let map = |baud| {
+            Mapper::new(&Options {
+                baud,
+                ..Options::default()
+            })
+        };
+        for baud in [1, 9600, 115_200, 1_000_000, u32::MAX] {
+            let m = map(baud);
+            for pos in [
+                0,
+                1,
+                7,
+                8_388_608,
+                1_844_674_407,
+                1_844_674_408,
+                u64::MAX / 3,
+                u64::MAX,
+            ] {
+                let exact = pos as u128 * BITS_PER_BYTE as u128 * 1_000_000_000 / baud as u128;
+                assert_eq!(
+                    m.nanos_at(pos),
+                    exact.min(u64::MAX as u128) as u64,
+                    "{pos} @ {baud}"
+                );
+            }
         }
     }
 }

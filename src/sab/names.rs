@@ -8,6 +8,9 @@ use super::header::ADDRESSES;
 pub(super) struct Names {
     devices: Vec<String>,
     commands: Vec<String>,
+    /// The name of a row's number per (command, request or ACK), index `command * 2 + ack`:
+    /// the command's name or `0xNN`, `.req` after it for a request (`speed.req`, `0x34`).
+    parts: Vec<String>,
 }
 
 impl Names {
@@ -22,7 +25,23 @@ impl Names {
         for (name, code) in &opts.commands {
             commands[*code as usize].clone_from(name);
         }
-        Names { devices, commands }
+        let mut parts = Vec::with_capacity(512);
+        for (code, name) in commands.iter().enumerate() {
+            let mut part = if name.is_empty() {
+                crate::fmt::hex_0x(code as u8).to_owned()
+            } else {
+                name.clone()
+            };
+            let ack = part.clone();
+            part.push_str(".req");
+            parts.push(part);
+            parts.push(ack);
+        }
+        Names {
+            devices,
+            commands,
+            parts,
+        }
     }
 
     pub(super) fn device(&self, addr: u8) -> &str {
@@ -31,6 +50,12 @@ impl Names {
 
     pub(super) fn command(&self, code: u8) -> &str {
         &self.commands[code as usize]
+    }
+
+    /// The name of the number of a request (`ack` false) or ACK of `command` (`speed.req`,
+    /// `0x34`).
+    pub(super) fn part(&self, command: u8, ack: bool) -> &str {
+        &self.parts[command as usize * 2 + usize::from(ack)]
     }
 }
 

@@ -26,7 +26,7 @@
 
 use crc::{CRC_8_MAXIM_DOW, Crc};
 
-use super::frame::{Event, EventKind, Framing};
+use super::frame::{Event, EventKind, Framing, find};
 
 /// The first byte of every frame.
 pub const SYNC: u8 = 0x54;
@@ -67,6 +67,43 @@ pub fn encode(out: &mut Vec<u8>, header: u8, command: u8, payload: &[u8]) {
     out.push(crc);
 }
 
+/// What the candidate at the start of `bytes` (a 0x54) is, decided from `bytes` alone with
+/// nothing held: the rule of the module documentation applied in place.
+#[derive(Debug, PartialEq, Eq)]
+enum InPlace {
+    /// A valid frame, ending here (exclusive).
+    Frame(usize),
+    /// A LENGTH above 32: the 0x54 is garbage.
+    BadLength,
+    /// A valid frame starts inside the failed candidate: the 0x54 is garbage.
+    FalseSync,
+    /// A failed candidate with no valid frame start inside: a bad frame ending here.
+    BadCrc(usize),
+    /// `bytes` ends before the candidate (or one inside it) is decided.
+    Undecided,
+}
+
+/// [`Reassembler::check`] on `bytes` alone, for the candidate at its start.
+#[inline]
+fn check_bytes(bytes: &[u8]) -> Check {
+    if bytes.first() != Some(&SYNC) {
+        return Check::Invalid;
+    }
+    let Some(&length) = bytes.get(1) else {
+        return Check::Incomplete;
+    };
+    let length = length as usize;
+    if length > MAX_PAYLOAD {
+        return Check::Invalid;
+    }
+    let end = length + OVERHEAD;
+    match bytes.get(..end) {
+        None => Check::Incomplete,
+        Some(frame) if crc8(&frame[1..end - 1]) == frame[end - 1] => Check::Valid(end),
+        Some(_) => Check::Invalid,
+    }
+}
+
 /// The end of the frame at the start of `bytes` when it is complete there and valid.
 #[inline]
 fn valid_frame(bytes: &[u8]) -> Option<usize> {
@@ -80,6 +117,35 @@ fn valid_frame(bytes: &[u8]) -> Option<usize> {
     let end = length + OVERHEAD;
     let frame = bytes.get(..end)?;
     (crc8(&frame[1..end - 1]) == frame[end - 1]).then_some(end)
+}
+
+/// Classifies the candidate at the start of `bytes` (which starts with 0x54). Out of line:
+/// most candidates are valid frames, which [`valid_frame`] finds first.
+#[inline(never)]
+fn in_place(bytes: &[u8]) -> InPlace {
+    let Some(&length) = bytes.get(1) else {
+        return InPlace::Undecided;
+    };
+    if length as usize > MAX_PAYLOAD {
+        return InPlace::BadLength;
+    }
+    match check_bytes(bytes) {
+        Check::Valid(end) => return InPlace::Frame(end),
+        Check::Incomplete => return InPlace::Undecided,
+        Check::Invalid => {}
+    }
+    let full = length as usize + OVERHEAD;
+    // Does a valid frame start inside the rejected candidate?
+    let mut p = 1;
+    while let Some(k) = find(SYNC, &bytes[p..full]) {
+        p += k;
+        match check_bytes(&bytes[p..]) {
+            Check::Valid(_) => return InPlace::FalseSync,
+            Check::Incomplete => return InPlace::Undecided,
+            Check::Invalid => p += 1,
+        }
+    }
+    InPlace::BadCrc(full)
 }
 
 enum Check {
@@ -154,15 +220,16 @@ impl Reassembler {
     ///
     /// The same as [`Self::step`] for every byte. While nothing is held (the usual case), the
     /// input is read in place: the bytes up to the next 0x54 go to the garbage run whole, and
-    /// a frame that is complete and valid in `data` is emitted from `data` without passing
-    /// through the buffer. Only a candidate that fails or is cut by the end of `data` is
-    /// handled byte by byte (the backtracking needs its bytes held).
+    /// a candidate that `data` decides (a valid frame, a LENGTH above 32, a bad frame, a false
+    /// 0x54: see [`in_place`]) is handled from `data` without passing through the buffer.
+    /// Only a candidate that the end of `data` leaves undecided is handled byte by byte (the
+    /// backtracking needs its bytes held).
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         let mut i = 0;
         while i < data.len() {
             if self.len == 0 {
                 let rest = &data[i..];
-                let n = rest.iter().position(|&b| b == SYNC).unwrap_or(rest.len());
+                let n = find(SYNC, rest).unwrap_or(rest.len());
                 if n > 0 {
                     self.garbage_run(&rest[..n], time, emit);
                     i += n;
@@ -173,10 +240,53 @@ impl Reassembler {
                     i += end;
                     continue;
                 }
+                match in_place(rest) {
+                    InPlace::Frame(end) => {
+                        self.emit_in_place(&rest[..end], time, emit);
+                        i += end;
+                        continue;
+                    }
+                    InPlace::BadLength => {
+                        self.run_note(|r| r.bad_lengths += 1);
+                        self.garbage_byte(SYNC, time, emit);
+                        i += 1;
+                        continue;
+                    }
+                    InPlace::FalseSync => {
+                        self.run_note(|r| r.false_syncs += 1);
+                        self.garbage_byte(SYNC, time, emit);
+                        i += 1;
+                        continue;
+                    }
+                    InPlace::BadCrc(end) => {
+                        self.bad_in_place(&rest[..end], time, emit);
+                        i += end;
+                        continue;
+                    }
+                    InPlace::Undecided => {}
+                }
             }
             self.step(data[i], time, emit);
             i += 1;
         }
+    }
+
+    /// A bad frame read in place with nothing held: what [`Self::emit_span`] would emit for
+    /// it.
+    fn bad_in_place(&mut self, wire: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        let n = wire.len();
+        let mut ev = Event::new(EventKind::BadCrc, Framing::Sync, wire);
+        ev.start_pos = self.base;
+        ev.end_pos = self.base + n as u64;
+        ev.start_time = time;
+        ev.end_time = time;
+        ev.length_byte = Some(wire[1]);
+        ev.body = &wire[2..n - 1];
+        ev.crc = Some((wire[n - 1] as u16, crc8(&wire[1..n - 1]) as u16));
+        ev.crc_with_sync = crc8(&wire[..n - 1]) == wire[n - 1];
+        emit(&ev);
+        self.base += n as u64;
     }
 
     /// A valid frame read in place with nothing held: what [`Self::step`] would emit for its
@@ -258,10 +368,15 @@ impl Reassembler {
     }
 
     /// Emits the garbage collected so far as a row (a live source went quiet).
+    #[inline]
     pub fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
-        if self.run.len == 0 {
-            return;
+        if self.run.len > 0 {
+            self.emit_garbage(emit);
         }
+    }
+
+    /// [`Self::flush_garbage`] when there is garbage.
+    fn emit_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         let r = &self.run;
         let mut ev = Event::new(EventKind::Garbage, Framing::Sync, &r.bytes[..r.len]);
         ev.start_pos = r.start_pos;

@@ -1319,6 +1319,46 @@ proptest! {
         }
     }
 
+    /// SAB v1 candidates that fail, read in place by `push` (a LENGTH above 32, a bad CRC, a
+    /// false 0x54 whose span holds a valid frame, a frame whose CRC byte is damaged): the
+    /// events are those of the backtracking byte by byte.
+    #[test]
+    fn sync_failed_candidates_in_place_equal_byte_steps(
+        frames in prop::collection::vec((frame_parts(8), any::<bool>()), 1..10),
+        prefixes in prop::collection::vec(
+            prop::collection::vec(prop_oneof![
+                2 => Just(sync::SYNC),
+                2 => 0u8..=40,
+                1 => any::<u8>(),
+            ], 0..6),
+            0..11,
+        ),
+        cuts in prop::collection::vec(any::<usize>(), 0..6),
+    ) {
+        let mut w = Vec::new();
+        for (i, ((h, c, p), damaged)) in frames.iter().enumerate() {
+            if let Some(n) = prefixes.get(i) {
+                w.extend_from_slice(n);
+            }
+            sync::encode(&mut w, *h, *c, p);
+            if *damaged {
+                *w.last_mut().unwrap() ^= 0x01;
+            }
+        }
+        let parts: Vec<(&[u8], Option<u64>)> = chunks(&w, &cuts)
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| (c, Some(i as u64)))
+            .collect();
+        let mut pushed = Vec::new();
+        let mut r = sync::Reassembler::new();
+        for (c, t) in &parts {
+            r.push(c, *t, &mut |e| pushed.push(OwnedEvent::from(e)));
+        }
+        r.finish(&mut |e| pushed.push(OwnedEvent::from(e)));
+        prop_assert_eq!(&pushed, &stepped(Framing::Sync, &parts));
+    }
+
     /// The background framing reads blocks ahead of the chosen one; busnoop still switches at
     /// the same byte and writes the same rows as when every byte comes alone (one-byte pushes
     /// are the byte-by-byte order: chosen framing first, then the background one).
