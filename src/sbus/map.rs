@@ -64,7 +64,17 @@ impl Scratch {
     }
 
     pub(super) fn resp_time(&mut self, us: u64) {
-        push_fixed(&mut self.resp, (us as i64 + 50) / 100, 1);
+        // (wrapping as the release build always did; no capture has such times)
+        let tenths = (us as i64).wrapping_add(50) / 100;
+        match u32::try_from(tenths / 10) {
+            // what push_fixed(…, 1) writes, without its general path
+            Ok(ms) if tenths >= 0 => {
+                push_u64(&mut self.resp, ms as u64);
+                self.resp.push('.');
+                self.resp.push((b'0' + (tenths % 10) as u8) as char);
+            }
+            _ => push_fixed(&mut self.resp, tenths, 1),
+        }
     }
 
     pub(super) fn seq(&mut self, seq: u16) {
@@ -785,6 +795,38 @@ impl Mapper {
 mod tests {
     use super::*;
     use crate::row::Collected;
+
+    /// The response time and the sequence number as the general writers give them.
+    #[test]
+    fn response_time_and_sequence_texts() {
+        let mut us: Vec<u64> = (0..3000).collect();
+        us.extend([
+            9_999_949,
+            9_999_950,
+            429_496_729_549,
+            429_496_729_550,
+            429_496_729_650,
+            i64::MAX as u64 - 50,
+            i64::MAX as u64 - 49,
+            i64::MAX as u64,
+            i64::MAX as u64 + 1,
+            u64::MAX - 50,
+            u64::MAX,
+        ]);
+        us.extend((0..64).map(|b| 1u64 << b));
+        for u in us {
+            let mut sc = Scratch::default();
+            sc.resp_time(u);
+            let mut want = String::new();
+            push_fixed(&mut want, (u as i64).wrapping_add(50) / 100, 1);
+            assert_eq!(sc.resp, want, "{u}");
+        }
+        for seq in [0u16, 1, 9, 10, 99, 100, 999, 1000, 9999, 10000, 65535] {
+            let mut sc = Scratch::default();
+            sc.seq(seq);
+            assert_eq!(sc.seq, seq.to_string());
+        }
+    }
 
     fn read_request(station: u8) -> Outstanding {
         let text = telegram::describe_request(

@@ -51,9 +51,13 @@ pub fn crc_step(crc: u16, byte: u8) -> u16 {
     (crc << 8) ^ TABLE[((crc >> 8) as u8 ^ byte) as usize]
 }
 
+/// [`CRC`] with slice-by-16 tables (8 KiB): fewer steps per byte on whole telegrams.
+pub(crate) static CRC_WIDE: crc::Crc<u16, crc::Table<16>> =
+    crc::Crc::<u16, crc::Table<16>>::new(&crc::CRC_16_XMODEM);
+
 /// CRC-16/XMODEM of `bytes`.
 pub fn crc16(bytes: &[u8]) -> u16 {
-    CRC.checksum(bytes)
+    CRC_WIDE.checksum(bytes)
 }
 
 /// Appends `byte` DLE-escaped (data mode, every byte after the FS).
@@ -282,18 +286,6 @@ fn medium_letter(elem: Elem) -> Option<char> {
     }
 }
 
-/// [`push_elem`] for an element of a list (`letter`: its [`medium_letter`]).
-#[inline]
-fn push_list_elem(out: &mut String, letter: Option<char>, elem: Elem, block: u16, addr: u32) {
-    match letter {
-        Some(c) => {
-            out.push(c);
-            push_u64(out, addr as u64);
-        }
-        None => push_elem(out, elem, block, addr),
-    }
-}
-
 fn push_words(
     out: &mut String,
     elem: Elem,
@@ -301,38 +293,78 @@ fn push_words(
     addr: u32,
     data: &[u8],
     media: Option<&mut MediaSpans>,
-) {
+) -> usize {
     let mut media = MediaSpans::begin(media, out);
-    let letter = medium_letter(elem);
-    let medium = letter.is_some();
-    for (i, w) in data.chunks_exact(4).enumerate() {
-        if i > 0 {
-            out.push(' ');
+    let Some(letter) = medium_letter(elem) else {
+        // Data-block, byte and other elements: named by the general path, never recorded.
+        for (i, w) in data.chunks_exact(4).enumerate() {
+            if i > 0 {
+                out.push(' ');
+            }
+            push_elem(out, elem, block, addr.wrapping_add(i as u32));
+            out.push('=');
+            push_value(out, elem, be(w));
         }
-        let start = out.len();
-        push_list_elem(out, letter, elem, block, addr.wrapping_add(i as u32));
-        let eq = out.len();
-        out.push('=');
+        if let Some(m) = media {
+            m.len = Some(out.len());
+        }
+        return 0;
+    };
+    let unsigned = elem.is_unsigned();
+    let mut list = ListText::new(out);
+    let mut name = DecCounter::new(addr);
+    for (i, w) in data.chunks_exact(4).enumerate() {
         let v = be(w);
-        push_value(out, elem, v);
-        if let Some(m) = media.as_deref_mut()
-            && medium
-        {
-            let value = if elem.is_unsigned() {
-                v as f64
-            } else {
-                v as i32 as f64
-            };
+        let (base, p, w) = list.room();
+        let mut k = 0;
+        if i > 0 {
+            w[0] = b' ';
+            k = 1;
+            name.step();
+        }
+        let start = k;
+        w[k] = letter as u8;
+        w[k + 1..k + 17].copy_from_slice(&name.digits);
+        k += 1 + name.len;
+        let eq = k;
+        w[k] = b'=';
+        k += 1;
+        let value = if unsigned {
+            k += put_dec(&mut w[k..], v);
+            v as f64
+        } else {
+            let s = v as i32;
+            if s < 0 {
+                w[k] = b'-';
+                k += 1;
+            }
+            k += put_dec(&mut w[k..], s.unsigned_abs());
+            s as f64
+        };
+        list.n = p + k;
+        if let Some(m) = media.as_deref_mut() {
+            let at = base as u32;
             m.spans.push(MediaSpan {
-                start: start as u32,
-                eq: eq as u32,
-                end: out.len() as u32,
+                start: at + start as u32,
+                eq: at + eq as u32,
+                end: at + k as u32,
                 value,
             });
         }
     }
+    list.flush();
     if let Some(m) = media {
         m.len = Some(out.len());
+    }
+    first_name(data.len() >= 4, addr)
+}
+
+/// The length of a list's first name (`R57`: 3) when the list has one, else 0.
+fn first_name(any: bool, addr: u32) -> usize {
+    if any {
+        1 + addr.checked_ilog10().unwrap_or(0) as usize + 1
+    } else {
+        0
     }
 }
 
@@ -344,38 +376,224 @@ fn push_bits(
     bits: u32,
     data: &[u8],
     media: Option<&mut MediaSpans>,
-) {
+) -> usize {
     let mut media = MediaSpans::begin(media, out);
-    let letter = medium_letter(elem);
-    let medium = letter.is_some();
-    for i in 0..bits.min(data.len() as u32 * 8) {
-        if i > 0 {
-            out.push(' ');
+    let n = bits.min(data.len() as u32 * 8);
+    let Some(letter) = medium_letter(elem) else {
+        for i in 0..n {
+            if i > 0 {
+                out.push(' ');
+            }
+            push_elem(out, elem, 0, addr.wrapping_add(i));
+            let bit = data[(i / 8) as usize] >> (i % 8) & 1;
+            out.push('=');
+            out.push(if bit == 1 { '1' } else { '0' });
         }
-        let start = out.len();
-        push_list_elem(out, letter, elem, 0, addr.wrapping_add(i));
+        if let Some(m) = media {
+            m.len = Some(out.len());
+        }
+        return 0;
+    };
+    let mut list = ListText::new(out);
+    let mut name = DecCounter::new(addr);
+    for i in 0..n {
         let bit = data[(i / 8) as usize] >> (i % 8) & 1;
-        let eq = out.len();
-        out.push('=');
-        out.push(if bit == 1 { '1' } else { '0' });
-        if let Some(m) = media.as_deref_mut()
-            && medium
-        {
+        let (base, p, w) = list.room();
+        let mut k = 0;
+        if i > 0 {
+            w[0] = b' ';
+            k = 1;
+            name.step();
+        }
+        let start = k;
+        w[k] = letter as u8;
+        w[k + 1..k + 17].copy_from_slice(&name.digits);
+        k += 1 + name.len;
+        let eq = k;
+        w[k] = b'=';
+        w[k + 1] = b'0' + bit;
+        k += 2;
+        list.n = p + k;
+        if let Some(m) = media.as_deref_mut() {
+            let at = base as u32;
             m.spans.push(MediaSpan {
-                start: start as u32,
-                eq: eq as u32,
-                end: out.len() as u32,
+                start: at + start as u32,
+                eq: at + eq as u32,
+                end: at + k as u32,
                 value: bit as f64,
             });
         }
     }
+    list.flush();
     if let Some(m) = media {
         m.len = Some(out.len());
     }
+    first_name(n > 0, addr)
 }
 
-fn push_range(out: &mut String, elem: Elem, block: u16, addr: u32, count: u32) {
-    push_elem(out, elem, block, addr);
+/// Room a list element needs at most: a blank, the letter, 10 address digits, `=`, a sign
+/// and 10 value digits.
+const ELEM_ROOM: usize = 32;
+/// The stack block a list is gathered in before it is appended to the cell.
+const LIST_BLOCK: usize = 512;
+
+/// A media list's text (`R0=1 R1=-2`), gathered in a stack block and appended to the cell one
+/// block at a time: one copy and one ASCII check per block instead of a push per name, number
+/// and separator. Everything written into it is ASCII.
+struct ListText<'o> {
+    out: &'o mut String,
+    buf: [u8; LIST_BLOCK],
+    /// Bytes of `buf` in use.
+    n: usize,
+}
+
+impl<'o> ListText<'o> {
+    fn new(out: &'o mut String) -> Self {
+        ListText {
+            out,
+            buf: [0; LIST_BLOCK],
+            n: 0,
+        }
+    }
+
+    /// Room for one element: its offset in the cell and in the block, and the bytes from
+    /// there (the caller sets `n` past what it wrote). Appends the block first when the room
+    /// is not there.
+    #[inline]
+    fn room(&mut self) -> (usize, usize, &mut [u8; ELEM_ROOM]) {
+        if self.n > LIST_BLOCK - ELEM_ROOM {
+            self.flush();
+        }
+        let p = self.n;
+        let at = self.out.len() + p;
+        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf[p..p + ELEM_ROOM])
+            .try_into()
+            .expect("ELEM_ROOM bytes");
+        (at, p, w)
+    }
+
+    fn flush(&mut self) {
+        let text = std::str::from_utf8(&self.buf[..self.n]).expect("list text is ASCII");
+        self.out.push_str(text);
+        self.n = 0;
+    }
+}
+
+/// `"00" "01" … "99"`: two decimal digits per step.
+static DEC2: [u8; 200] = {
+    let mut t = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        t[2 * i] = b'0' + (i / 10) as u8;
+        t[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    t
+};
+
+/// Writes `v` in decimal at the start of `w` (at least 10 bytes long; bytes after the number
+/// may be overwritten too); returns its length.
+#[inline]
+fn put_dec(w: &mut [u8], v: u32) -> usize {
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    if v < 100_000_000 {
+        // the eight digits without their leading zeros (in the low bytes, which come first)
+        let d = eight_digits(v);
+        let lead = if v == 0 {
+            7
+        } else {
+            (d.trailing_zeros() / 8) as usize
+        };
+        w[..8].copy_from_slice(&((d >> (lead * 8)) | ZEROS).to_le_bytes());
+        8 - lead
+    } else {
+        let hi = (v / 100_000_000) as usize;
+        let k = if hi >= 10 {
+            w[..2].copy_from_slice(&DEC2[2 * hi..2 * hi + 2]);
+            2
+        } else {
+            w[0] = b'0' + hi as u8;
+            1
+        };
+        let d = eight_digits(v % 100_000_000) | ZEROS;
+        w[k..k + 8].copy_from_slice(&d.to_le_bytes());
+        k + 8
+    }
+}
+
+/// The eight decimal digits of `v` (below 10^8, leading zeros included) as the values 0-9 in
+/// the eight bytes of a `u64`, the first digit in the lowest byte: all digits at once with
+/// multiplications (after D. Lemire, "Converting integers to decimal strings faster").
+#[inline]
+fn eight_digits(v: u32) -> u64 {
+    // abcd | efgh << 32
+    let merged = (v / 10_000) as u64 | ((v % 10_000) as u64) << 32;
+    // ab, ef: / 100 in each 32-bit lane
+    let top = ((merged * 10_486) >> 20) & (0x7F << 32 | 0x7F);
+    let bottom = merged - 100 * top;
+    // ab | cd << 16 | ef << 32 | gh << 48
+    let hundreds = (bottom << 16) + top;
+    // the tens in the low byte of each 16-bit lane, the units in the high byte
+    let mut tens = ((hundreds * 103) >> 10) & (0xF << 48 | 0xF << 32 | 0xF << 16 | 0xF);
+    tens += (hundreds - 10 * tens) << 8;
+    tens
+}
+
+/// The addresses of a list: a number kept as its decimal text and counted up in place.
+struct DecCounter {
+    value: u32,
+    /// The digits, left-aligned (room to copy the whole array at once).
+    digits: [u8; 16],
+    len: usize,
+}
+
+impl DecCounter {
+    fn new(value: u32) -> Self {
+        let mut digits = [0u8; 16];
+        let len = put_dec(&mut digits, value);
+        DecCounter { value, digits, len }
+    }
+
+    /// The next number (wrapping like `u32::wrapping_add`).
+    #[inline]
+    fn step(&mut self) {
+        if self.value == u32::MAX {
+            *self = DecCounter::new(0);
+            return;
+        }
+        let mut i = self.len;
+        while i > 0 {
+            i -= 1;
+            if self.digits[i] != b'9' {
+                self.digits[i] += 1;
+                self.value = self.value.wrapping_add(1);
+                return;
+            }
+            self.digits[i] = b'0';
+        }
+        // all nines: one digit more
+        *self = DecCounter::new(self.value.wrapping_add(1));
+    }
+}
+
+/// The `Sensor #` of a read (`R57`) and its range in the Data cell (`R57..R63`), which starts
+/// with the same name: formatted once, copied once.
+fn push_name_and_range(
+    name: &mut String,
+    data: &mut String,
+    elem: Elem,
+    block: u16,
+    addr: u32,
+    count: u32,
+) {
+    let from = name.len();
+    push_elem(name, elem, block, addr);
+    data.push_str(&name[from..]);
+    push_range_end(data, elem, block, addr, count);
+}
+
+/// What follows the first name in a range: `..R63`, ` n=8`, or nothing for one element.
+fn push_range_end(out: &mut String, elem: Elem, block: u16, addr: u32, count: u32) {
     if count > 1 {
         match elem {
             Elem::Text | Elem::Byte => {
@@ -490,20 +708,24 @@ pub(crate) fn describe_request_media(
     match command.layout {
         ReadWords(e) | ReadBits(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
-            push_elem(sensor_no, e, 0, info.addr);
-            push_range(data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
         }
         ReadDb if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
             info.addr = be(&body[3..5]);
-            push_elem(sensor_no, Elem::DataBlock, info.block, info.addr);
-            push_range(data, Elem::DataBlock, info.block, info.addr, info.count);
+            push_name_and_range(
+                sensor_no,
+                data,
+                Elem::DataBlock,
+                info.block,
+                info.addr,
+                info.count,
+            );
         }
         ReadProg(_) | ReadBytes if body.len() >= 4 => {
             let e = command.layout.elem().unwrap_or(Elem::Byte);
             info.addr = be(&body[1..4]);
-            push_elem(sensor_no, e, 0, info.addr);
-            push_range(data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
         }
         ReadText if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -516,8 +738,7 @@ pub(crate) fn describe_request_media(
         }
         ReadEeprom if body.len() >= 4 => {
             info.addr = be(&body[2..4]);
-            push_elem(sensor_no, Elem::Eeprom, 0, info.addr);
-            push_range(data, Elem::Eeprom, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, Elem::Eeprom, 0, info.addr, info.count);
         }
         WriteWords(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
@@ -609,16 +830,16 @@ pub(crate) fn describe_response_media(
     out: &mut String,
     media: Option<&mut MediaSpans>,
 ) {
-    if let Some(e) = req.elem {
-        push_elem(sensor_no, e, req.block, req.addr);
-    }
     let fits = req.expect.fits(payload);
+    let list_at = out.len();
+    // A list of a medium starts with the Sensor # text (`R57=…`): copied from there.
+    let mut first = 0;
     match (req.cmd, req.elem) {
         (0x00 | 0x06 | 0x07 | 0x96 | 0xA1, Some(e)) if fits => {
-            push_words(out, e, req.block, req.addr, payload, media)
+            first = push_words(out, e, req.block, req.addr, payload, media);
         }
         (0x02 | 0x03 | 0x05, Some(e)) if fits => {
-            push_bits(out, e, req.addr, req.count, payload, media)
+            first = push_bits(out, e, req.addr, req.count, payload, media);
         }
         (0x01, _) if fits => {
             out.push_str("display=");
@@ -648,6 +869,12 @@ pub(crate) fn describe_response_media(
             push_u64(out, (f & 1) as u64);
         }
         _ => push_hex(out, payload),
+    }
+    if let Some(e) = req.elem {
+        match out.get(list_at..list_at + first) {
+            Some(name) if first > 0 => sensor_no.push_str(name),
+            _ => push_elem(sensor_no, e, req.block, req.addr),
+        }
     }
 }
 
@@ -761,5 +988,135 @@ mod tests {
         let mut d = String::new();
         describe_response(&t.info, b"R", &mut String::new(), &mut d);
         assert_eq!(d, "R (run)");
+    }
+
+    /// The block-wise list writer against the text written piece by piece with `format!`:
+    /// every medium, addresses and values at the digit-count edges, wrapping addresses, lists
+    /// longer than a block, and a cell that already holds text (nothing recorded then).
+    #[test]
+    fn lists_match_the_text_written_piece_by_piece() {
+        let media = [
+            Elem::Register,
+            Elem::Flag,
+            Elem::Input,
+            Elem::Output,
+            Elem::Timer,
+            Elem::Counter,
+        ];
+        let values: Vec<u32> = vec![
+            0,
+            1,
+            9,
+            10,
+            99,
+            100,
+            12345,
+            999_999_999,
+            1_000_000_000,
+            i32::MAX as u32,
+            i32::MIN as u32,
+            u32::MAX,
+            u32::MAX - 9,
+            (-100i32) as u32,
+        ];
+        let addrs = [0u32, 7, 9, 95, 999, 65530, 99_999_998, u32::MAX - 2];
+        for &elem in &media {
+            for &addr in &addrs {
+                for count in [1usize, 2, 5, 14, 40, 128] {
+                    let words: Vec<u32> = (0..count).map(|i| values[i % values.len()]).collect();
+                    let data: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+                    let mut want = String::new();
+                    let mut want_spans = Vec::new();
+                    for (i, &w) in words.iter().enumerate() {
+                        if i > 0 {
+                            want.push(' ');
+                        }
+                        let start = want.len();
+                        want.push_str(&format!("{}{}", elem.prefix(), addr.wrapping_add(i as u32)));
+                        let eq = want.len();
+                        let (text, value) = if elem.is_unsigned() {
+                            (w.to_string(), w as f64)
+                        } else {
+                            ((w as i32).to_string(), w as i32 as f64)
+                        };
+                        want.push('=');
+                        want.push_str(&text);
+                        want_spans.push((start as u32, eq as u32, want.len() as u32, value));
+                    }
+                    let mut got = String::new();
+                    let mut m = MediaSpans::default();
+                    let first = push_words(&mut got, elem, 0, addr, &data, Some(&mut m));
+                    assert_eq!(got, want, "{elem:?} {addr} {count}");
+                    assert_eq!(got[..first], format!("{}{addr}", elem.prefix()));
+                    assert_eq!(m.len, Some(got.len()));
+                    let spans: Vec<_> = m
+                        .spans
+                        .iter()
+                        .map(|s| (s.start, s.eq, s.end, s.value))
+                        .collect();
+                    assert_eq!(spans, want_spans, "{elem:?} {addr} {count}");
+                    // after other text: the same text, nothing recorded
+                    let mut after = String::from("x");
+                    let mut m2 = MediaSpans::default();
+                    push_words(&mut after, elem, 0, addr, &data, Some(&mut m2));
+                    assert_eq!(after, format!("x{want}"));
+                    assert_eq!((m2.len, m2.spans.len()), (None, 0));
+
+                    // bits: element i is bit i % 8 of byte i / 8
+                    let bytes: Vec<u8> = words.iter().map(|&w| (w ^ (w >> 11)) as u8).collect();
+                    for bits in [1u32, 7, 8, 9, count as u32 * 8, count as u32 * 8 + 3] {
+                        let mut want = String::new();
+                        let mut want_spans = Vec::new();
+                        for i in 0..bits.min(bytes.len() as u32 * 8) {
+                            if i > 0 {
+                                want.push(' ');
+                            }
+                            let start = want.len();
+                            want.push_str(&format!("{}{}", elem.prefix(), addr.wrapping_add(i)));
+                            let eq = want.len();
+                            let bit = bytes[(i / 8) as usize] >> (i % 8) & 1;
+                            want.push_str(&format!("={bit}"));
+                            want_spans.push((
+                                start as u32,
+                                eq as u32,
+                                want.len() as u32,
+                                bit as f64,
+                            ));
+                        }
+                        let mut got = String::new();
+                        let mut m = MediaSpans::default();
+                        let first = push_bits(&mut got, elem, addr, bits, &bytes, Some(&mut m));
+                        assert_eq!(got, want, "{elem:?} {addr} {bits}");
+                        assert_eq!(got[..first], format!("{}{addr}", elem.prefix()));
+                        let spans: Vec<_> = m
+                            .spans
+                            .iter()
+                            .map(|s| (s.start, s.eq, s.end, s.value))
+                            .collect();
+                        assert_eq!(spans, want_spans);
+                    }
+                }
+                let mut name = String::from("a");
+                push_elem(&mut name, elem, 0, addr);
+                assert_eq!(name, format!("a{}{addr}", elem.prefix()));
+            }
+        }
+        let edges = (0..10).flat_map(|p| {
+            let t = 10u32.pow(p);
+            [t - 1, t, t + 1]
+        });
+        let mut x = 0x9E37_79B9u32;
+        let random = (0..200_000).map(move |i| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x >> (i % 32)
+        });
+        let spread = values.iter().copied().chain((0..2000).map(|i| i * 7919));
+        for v in spread.chain(edges).chain(random).chain([u32::MAX]) {
+            let mut b = [0u8; 10];
+            let n = put_dec(&mut b, v);
+            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
+        }
     }
 }

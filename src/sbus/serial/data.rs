@@ -366,7 +366,7 @@ impl DataFramer {
             return CrcCheck::None;
         }
         let got = u16::from_be_bytes([self.tele[n - 2], self.tele[n - 1]]);
-        let mut d = crate::sbus::telegram::CRC.digest();
+        let mut d = crate::sbus::telegram::CRC_WIDE.digest();
         d.update(&[FS]);
         d.update(&self.tele[..n - 2]);
         let unescaped = d.finalize();
