@@ -59,15 +59,46 @@ pub fn push_0x16(out: &mut String, v: u16) {
     push_hex_u8(out, lo);
 }
 
-/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`).
-pub fn push_hex(out: &mut String, bytes: &[u8]) {
-    out.reserve(bytes.len() * 3);
-    for (i, &b) in bytes.iter().enumerate() {
-        if i > 0 {
-            out.push(' ');
-        }
-        push_hex_u8(out, b);
+/// `"00 "` … `"FF "`, three bytes each (see [`HEX_SP`]).
+const HEX_SP_TEXT: [u8; 768] = {
+    let mut t = [b' '; 768];
+    let mut i = 0;
+    while i < 256 {
+        t[3 * i] = HEX[i >> 4];
+        t[3 * i + 1] = HEX[i & 0x0F];
+        i += 1;
     }
+    t
+};
+
+/// `"00 "` … `"FF "` for every byte, as static strings: a byte's hex is one copy of three
+/// bytes instead of three pushes.
+static HEX_SP: [&str; 256] = {
+    let mut t = [""; 256];
+    let mut i = 0;
+    while i < 256 {
+        let (_, rest) = HEX_SP_TEXT.split_at(3 * i);
+        let (digits, _) = rest.split_at(3);
+        t[i] = match std::str::from_utf8(digits) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        i += 1;
+    }
+    t
+};
+
+/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`): one copy of three
+/// bytes per byte.
+pub fn push_hex(out: &mut String, bytes: &[u8]) {
+    let Some((&last, init)) = bytes.split_last() else {
+        return;
+    };
+    out.reserve(bytes.len() * 3);
+    for &b in init {
+        out.push_str(&HEX_SP[b as usize][..3]);
+    }
+    out.push_str(&HEX_SP[last as usize][..2]);
 }
 
 /// Same as [`push_hex`] into a byte buffer.
@@ -156,6 +187,21 @@ pub fn push_ms_short(out: &mut String, micros: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hex_from_the_table_is_the_byte_buffer_hex() {
+        let all: Vec<u8> = (0..=255).collect();
+        for len in [0, 1, 2, 3, 4, 7, 33, 256] {
+            let bytes = &all[all.len() - len..];
+            let (mut text, mut buf) = (String::new(), Vec::new());
+            push_hex(&mut text, bytes);
+            push_hex_bytes(&mut buf, bytes);
+            assert_eq!(text.as_bytes(), buf, "{len} bytes");
+        }
+        let mut s = String::new();
+        push_hex(&mut s, &[0x7E, 0xA1, 0x10]);
+        assert_eq!(s, "7E A1 10");
+    }
 
     #[test]
     fn static_0x_texts() {

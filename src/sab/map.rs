@@ -10,7 +10,9 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{hex_0x, push_0x, push_0x16, push_i64, push_ms, push_ms_short, push_u64};
+use crate::fmt::{
+    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
+};
 use std::ops::Range;
 
 use crate::row::RowOut;
@@ -18,49 +20,6 @@ use crate::row::{Class, Part, Row};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
-
-/// `"00 "` … `"FF "`, three bytes each (see [`HEX_SP`]).
-const HEX_SP_TEXT: [u8; 768] = {
-    const HEX: &[u8; 16] = b"0123456789ABCDEF";
-    let mut t = [b' '; 768];
-    let mut i = 0;
-    while i < 256 {
-        t[3 * i] = HEX[i >> 4];
-        t[3 * i + 1] = HEX[i & 0x0F];
-        i += 1;
-    }
-    t
-};
-
-/// `"00 "` … `"FF "` for every byte, as static strings: a byte's hex is one copy of three
-/// bytes instead of three pushes.
-static HEX_SP: [&str; 256] = {
-    let mut t = [""; 256];
-    let mut i = 0;
-    while i < 256 {
-        let (_, rest) = HEX_SP_TEXT.split_at(3 * i);
-        let (digits, _) = rest.split_at(3);
-        t[i] = match std::str::from_utf8(digits) {
-            Ok(s) => s,
-            Err(_) => panic!("ASCII"),
-        };
-        i += 1;
-    }
-    t
-};
-
-/// Appends `bytes` as upper-case hex separated by single spaces (`7E A1 10`), the same text as
-/// [`crate::fmt::push_hex`].
-fn push_hex(out: &mut String, bytes: &[u8]) {
-    let Some((&last, init)) = bytes.split_last() else {
-        return;
-    };
-    out.reserve(bytes.len() * 3);
-    for &b in init {
-        out.push_str(&HEX_SP[b as usize][..3]);
-    }
-    out.push_str(&HEX_SP[last as usize][..2]);
-}
 
 /// The little-endian integer reading of a payload of 1, 2 or 4 bytes: (unsigned, signed).
 #[inline]
@@ -178,6 +137,10 @@ struct RowParts<'a> {
     class: Class,
     framing: Framing,
     raw: &'a [u8],
+    /// The row's stamp (`Row::stamp`), 0 for none: its ID, Device, Type, Sensor # and Sensor
+    /// cells follow from the address, the command and the Type (the names are fixed for a
+    /// run).
+    stamp: u32,
 }
 
 /// Maps events onto rows, pairs requests with responses, keeps the statistics.
@@ -293,7 +256,7 @@ impl Mapper {
             sc.note.as_str(),
         ];
         let row = Row {
-            stamp: 0,
+            stamp: p.stamp,
             micros: Some(p.micros),
             id: p.id.map(u32::from),
             device,
@@ -398,6 +361,7 @@ impl Mapper {
                 class: Class::Warning,
                 framing,
                 raw: &[],
+                stamp: 1 << 30 | u32::from(r.address) << 16 | u32::from(r.command) << 8,
             },
             out,
         );
@@ -567,6 +531,7 @@ impl Mapper {
                 class,
                 framing: ev.framing,
                 raw: ev.wire,
+                stamp: 1 << 31 | u32::from(addr) << 16 | u32::from(command) << 8 | flags as u32,
             },
             out,
         );
@@ -619,6 +584,7 @@ impl Mapper {
                 class: Class::Error,
                 framing: ev.framing,
                 raw: ev.wire,
+                stamp: 0,
             },
             out,
         );
@@ -737,6 +703,7 @@ impl Mapper {
                 class: Class::Error,
                 framing: ev.framing,
                 raw: ev.wire,
+                stamp: 0,
             },
             out,
         );
@@ -753,17 +720,6 @@ impl Mapper {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn hex_from_the_table_is_fmt_hex() {
-        let all: Vec<u8> = (0..=255).collect();
-        for len in [0, 1, 2, 3, 4, 7, 33, 256] {
-            let bytes = &all[all.len() - len..];
-            let mut ours = String::new();
-            push_hex(&mut ours, bytes);
-            assert_eq!(ours, crate::fmt::hex(bytes), "{len} bytes");
-        }
-    }
 
     #[test]
     fn response_time_is_push_ms() {

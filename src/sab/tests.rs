@@ -1410,3 +1410,56 @@ fn shadow_blocks_switch_at_the_same_byte_in_long_captures() {
         d.counters().framings
     );
 }
+
+/// Rows' stamps never change the table: both framings, named devices and commands, every flag
+/// (requests, ACKs, NACKs, reserved), timeouts (requests without an answer), bad CRCs, noise,
+/// and the fixture sessions.
+#[test]
+fn stamps_never_change_the_table() {
+    let noise = crate::testing::noise(3_000, 11);
+    for framing in [Framing::Sync, Framing::Hdlc] {
+        let mut bytes = Vec::new();
+        let enc = |out: &mut Vec<u8>, h: u8, c: u8, p: &[u8]| match framing {
+            Framing::Sync => sync::encode(out, h, c, p),
+            Framing::Hdlc => hdlc::encode(out, h, c, p),
+        };
+        for i in 0..400usize {
+            let addr = (i % 7) as u8;
+            let cmd = [0x03, 0x10, 0x11, 0x34][i % 4];
+            let payload = &noise[i..i + (i % 5)];
+            let flags = [Flags::Request, Flags::Ack, Flags::Nack, Flags::Reserved][(i / 4) % 4];
+            enc(
+                &mut bytes,
+                header::header(Flags::Request, addr),
+                cmd,
+                payload,
+            );
+            if i % 9 != 0 {
+                enc(
+                    &mut bytes,
+                    header::header(flags, addr),
+                    cmd,
+                    &payload[..payload.len().min(1)],
+                );
+            }
+            if i % 37 == 0 {
+                let at = bytes.len() - 2;
+                bytes[at] ^= 0x21;
+                bytes.extend_from_slice(&noise[i..i + 9]);
+            }
+        }
+        let mut o = opts(choice(framing));
+        o.devices = vec![("arm".into(), 1), ("gripper".into(), 2)];
+        o.commands = vec![("distance".into(), 0x10)];
+        let chunks: Vec<&[u8]> = bytes.chunks(61).collect();
+        let n = crate::testing::assert_stamps_hold(&mut SabDecoder::new(o), &chunks);
+        assert!(n > 600, "{framing:?}: {n} rows with a stamp");
+    }
+    for f in ["fixtures/sab1-session.bin", "fixtures/sab2-session.bin"] {
+        let bytes = std::fs::read(f).unwrap();
+        let chunks: Vec<&[u8]> = bytes.chunks(17).collect();
+        let n =
+            crate::testing::assert_stamps_hold(&mut SabDecoder::new(Options::default()), &chunks);
+        assert!(n > 0, "{f}");
+    }
+}
