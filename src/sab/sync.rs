@@ -271,18 +271,27 @@ impl Reassembler {
         }
     }
 
-    /// A bad frame read in place with nothing held: what [`Self::emit_span`] would emit for
-    /// it.
-    fn bad_in_place(&mut self, wire: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        self.flush_garbage(emit);
+    /// The event of a frame (`SYNC LENGTH … CRC`) read in place at the stream position: its
+    /// positions, times, length byte and body; the CRC is the caller's.
+    #[inline(always)]
+    fn in_place<'w>(&self, kind: EventKind, wire: &'w [u8], time: Option<u64>) -> Event<'w> {
         let n = wire.len();
-        let mut ev = Event::new(EventKind::BadCrc, Framing::Sync, wire);
+        let mut ev = Event::new(kind, Framing::Sync, wire);
         ev.start_pos = self.base;
         ev.end_pos = self.base + n as u64;
         ev.start_time = time;
         ev.end_time = time;
         ev.length_byte = Some(wire[1]);
         ev.body = &wire[2..n - 1];
+        ev
+    }
+
+    /// A bad frame read in place with nothing held: what [`Self::emit_span`] would emit for
+    /// it.
+    fn bad_in_place(&mut self, wire: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        self.flush_garbage(emit);
+        let n = wire.len();
+        let mut ev = self.in_place(EventKind::BadCrc, wire, time);
         ev.crc = Some((wire[n - 1] as u16, crc8(&wire[1..n - 1]) as u16));
         ev.crc_with_sync = crc8(&wire[..n - 1]) == wire[n - 1];
         emit(&ev);
@@ -294,13 +303,7 @@ impl Reassembler {
     fn emit_in_place(&mut self, wire: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
         self.flush_garbage(emit);
         let n = wire.len();
-        let mut ev = Event::new(EventKind::Frame, Framing::Sync, wire);
-        ev.start_pos = self.base;
-        ev.end_pos = self.base + n as u64;
-        ev.start_time = time;
-        ev.end_time = time;
-        ev.length_byte = Some(wire[1]);
-        ev.body = &wire[2..n - 1];
+        let mut ev = self.in_place(EventKind::Frame, wire, time);
         let crc = wire[n - 1] as u16;
         ev.crc = Some((crc, crc));
         emit(&ev);

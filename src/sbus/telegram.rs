@@ -316,19 +316,8 @@ fn push_words(
     for (i, w) in data.chunks_exact(4).enumerate() {
         let v = be(w);
         let (base, p, w) = list.room();
-        let mut k = 0;
-        if i > 0 {
-            w[0] = b' ';
-            k = 1;
-            name.step();
-        }
-        let start = k;
-        w[k] = letter as u8;
-        w[k + 1..k + 17].copy_from_slice(&name.digits);
-        k += 1 + name.len;
-        let eq = k;
-        w[k] = b'=';
-        k += 1;
+        let (start, eq) = name.put(w, i == 0, letter);
+        let mut k = eq + 1;
         let value = if unsigned {
             k += put_dec(&mut w[k..], v);
             v as f64
@@ -399,20 +388,9 @@ fn push_bits(
     for i in 0..n {
         let bit = data[(i / 8) as usize] >> (i % 8) & 1;
         let (base, p, w) = list.room();
-        let mut k = 0;
-        if i > 0 {
-            w[0] = b' ';
-            k = 1;
-            name.step();
-        }
-        let start = k;
-        w[k] = letter as u8;
-        w[k + 1..k + 17].copy_from_slice(&name.digits);
-        k += 1 + name.len;
-        let eq = k;
-        w[k] = b'=';
-        w[k + 1] = b'0' + bit;
-        k += 2;
+        let (start, eq) = name.put(w, i == 0, letter);
+        w[eq + 1] = b'0' + bit;
+        let k = eq + 2;
         list.n = p + k;
         if let Some(m) = media.as_deref_mut() {
             let at = base as u32;
@@ -573,6 +551,25 @@ impl DecCounter {
         }
         // all nines: one digit more
         *self = DecCounter::new(self.value.wrapping_add(1));
+    }
+
+    /// Writes a list element's name and `=` at the start of `w`: a blank first unless it is the
+    /// `first` element (and then the next number), the `letter`, the digits. Returns where the
+    /// name starts and where the `=` is.
+    #[inline(always)]
+    fn put(&mut self, w: &mut [u8], first: bool, letter: char) -> (usize, usize) {
+        let mut k = 0;
+        if !first {
+            w[0] = b' ';
+            k = 1;
+            self.step();
+        }
+        let start = k;
+        w[k] = letter as u8;
+        w[k + 1..k + 17].copy_from_slice(&self.digits);
+        k += 1 + self.len;
+        w[k] = b'=';
+        (start, k)
     }
 }
 
