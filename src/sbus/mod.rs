@@ -14,6 +14,7 @@ pub mod commands;
 pub mod ether;
 mod ether_decoder;
 mod map;
+mod media;
 pub(crate) mod pairing;
 pub(crate) mod serial;
 mod serial_decoder;

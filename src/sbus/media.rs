@@ -1,0 +1,751 @@
+//! Media lists in the Data cell (`R57=-859895076 R58=12`, `F135=0 F136=1`): written a block
+//! at a time with the place of every number recorded ([`MediaSpans`]), so that the row's numbers
+//! (`Row::parts`) need not be read back from the text; and read back from the text
+//! ([`media_parts`]) where nothing was recorded.
+
+use super::commands::Elem;
+use super::telegram::{be, push_elem, push_value};
+use crate::row::Part;
+
+/// Where the numbers of a Data cell that lists media values stand (`R0=1 R1=2`), recorded while
+/// the cell is written so that the row's numbers (`Row::parts`) need not be read back from
+/// the text. Only a list that is the whole cell is recorded.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct MediaSpans {
+    /// The cell's length when its list was written: the spans describe that text only.
+    /// `None`: nothing recorded.
+    pub len: Option<usize>,
+    /// Each number of the list; empty when the list names no medium (`DB4000[2]=5`): the
+    /// rule of the parts (`[RFIOTC][0-9]+=[+-]?[0-9]+` per token) then gives none.
+    pub spans: Vec<MediaSpan>,
+}
+
+/// One `name=number` of a media list: byte offsets in the Data cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct MediaSpan {
+    pub start: u32,
+    /// The `=` (the name ends here, the number starts after it).
+    pub eq: u32,
+    pub end: u32,
+    pub value: f64,
+}
+
+impl MediaSpans {
+    pub fn clear(&mut self) {
+        self.len = None;
+        self.spans.clear();
+    }
+
+    /// Records one number written at `base + span` (its `=` at `base + eq`).
+    #[inline(always)]
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
+        let at = base as u32;
+        self.spans.push(MediaSpan {
+            start: at + span.start as u32,
+            eq: at + eq as u32,
+            end: at + span.end as u32,
+            value,
+        });
+    }
+
+    /// Recording for a list written into `out`: only when the list is the whole cell.
+    fn begin<'m>(media: Option<&'m mut MediaSpans>, out: &str) -> Option<&'m mut MediaSpans> {
+        let m = media.filter(|_| out.is_empty())?;
+        m.clear();
+        Some(m)
+    }
+}
+
+/// The letter of the media whose element names are that letter and a decimal address (`R`,
+/// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
+fn medium_letter(elem: Elem) -> Option<char> {
+    match elem {
+        Elem::Register => Some('R'),
+        Elem::Flag => Some('F'),
+        Elem::Input => Some('I'),
+        Elem::Output => Some('O'),
+        Elem::Timer => Some('T'),
+        Elem::Counter => Some('C'),
+        _ => None,
+    }
+}
+
+pub(super) fn push_words(
+    out: &mut String,
+    elem: Elem,
+    block: u16,
+    addr: u32,
+    data: &[u8],
+    media: Option<&mut MediaSpans>,
+) -> usize {
+    let mut media = MediaSpans::begin(media, out);
+    let Some(letter) = medium_letter(elem) else {
+        // Data-block, byte and other elements: named by the general path, never recorded.
+        for (i, w) in data.chunks_exact(4).enumerate() {
+            if i > 0 {
+                out.push(' ');
+            }
+            push_elem(out, elem, block, addr.wrapping_add(i as u32));
+            out.push('=');
+            push_value(out, elem, be(w));
+        }
+        if let Some(m) = media {
+            m.len = Some(out.len());
+        }
+        return 0;
+    };
+    let unsigned = elem.is_unsigned();
+    let mut list = ListText::new(out);
+    let mut name = DecCounter::new(addr);
+    for (i, w) in data.chunks_exact(4).enumerate() {
+        let v = be(w);
+        let (base, p, w) = list.room();
+        let (start, eq) = name.put(w, i == 0, letter);
+        let mut k = eq + 1;
+        let value = if unsigned {
+            k += put_dec(&mut w[k..], v);
+            v as f64
+        } else {
+            let s = v as i32;
+            if s < 0 {
+                w[k] = b'-';
+                k += 1;
+            }
+            k += put_dec(&mut w[k..], s.unsigned_abs());
+            s as f64
+        };
+        list.n = p + k;
+        if let Some(m) = media.as_deref_mut() {
+            m.record(base, start..k, eq, value);
+        }
+    }
+    list.flush();
+    if let Some(m) = media {
+        m.len = Some(out.len());
+    }
+    first_name(data.len() >= 4, addr)
+}
+
+/// The length of a list's first name (`R57`: 3) when the list has one, else 0.
+fn first_name(any: bool, addr: u32) -> usize {
+    if any {
+        1 + addr.checked_ilog10().unwrap_or(0) as usize + 1
+    } else {
+        0
+    }
+}
+
+/// `F0=1 F1=0 …`: element 0 is bit 0 of the first byte.
+pub(super) fn push_bits(
+    out: &mut String,
+    elem: Elem,
+    addr: u32,
+    bits: u32,
+    data: &[u8],
+    media: Option<&mut MediaSpans>,
+) -> usize {
+    let mut media = MediaSpans::begin(media, out);
+    let n = bits.min(data.len() as u32 * 8);
+    let Some(letter) = medium_letter(elem) else {
+        for i in 0..n {
+            if i > 0 {
+                out.push(' ');
+            }
+            push_elem(out, elem, 0, addr.wrapping_add(i));
+            let bit = data[(i / 8) as usize] >> (i % 8) & 1;
+            out.push('=');
+            out.push(if bit == 1 { '1' } else { '0' });
+        }
+        if let Some(m) = media {
+            m.len = Some(out.len());
+        }
+        return 0;
+    };
+    let mut list = ListText::new(out);
+    let mut name = DecCounter::new(addr);
+    for i in 0..n {
+        let bit = data[(i / 8) as usize] >> (i % 8) & 1;
+        let (base, p, w) = list.room();
+        let (start, eq) = name.put(w, i == 0, letter);
+        w[eq + 1] = b'0' + bit;
+        let k = eq + 2;
+        list.n = p + k;
+        if let Some(m) = media.as_deref_mut() {
+            m.record(base, start..k, eq, bit as f64);
+        }
+    }
+    list.flush();
+    if let Some(m) = media {
+        m.len = Some(out.len());
+    }
+    first_name(n > 0, addr)
+}
+
+/// Room a list element needs at most: a blank, the letter, 10 address digits, `=`, a sign
+/// and 10 value digits.
+const ELEM_ROOM: usize = 32;
+/// The stack block a list is gathered in before it is appended to the cell.
+const LIST_BLOCK: usize = 512;
+
+/// A media list's text (`R0=1 R1=-2`), gathered in a stack block and appended to the cell one
+/// block at a time: one copy and one ASCII check per block instead of a push per name, number
+/// and separator. Everything written into it is ASCII.
+struct ListText<'o> {
+    out: &'o mut String,
+    buf: [u8; LIST_BLOCK],
+    /// Bytes of `buf` in use.
+    n: usize,
+}
+
+impl<'o> ListText<'o> {
+    fn new(out: &'o mut String) -> Self {
+        ListText {
+            out,
+            buf: [0; LIST_BLOCK],
+            n: 0,
+        }
+    }
+
+    /// Room for one element: its offset in the cell and in the block, and the bytes from
+    /// there (the caller sets `n` past what it wrote). Appends the block first when the room
+    /// is not there.
+    #[inline]
+    fn room(&mut self) -> (usize, usize, &mut [u8; ELEM_ROOM]) {
+        if self.n > LIST_BLOCK - ELEM_ROOM {
+            self.flush();
+        }
+        let p = self.n;
+        let at = self.out.len() + p;
+        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf[p..p + ELEM_ROOM])
+            .try_into()
+            .expect("ELEM_ROOM bytes");
+        (at, p, w)
+    }
+
+    fn flush(&mut self) {
+        let text = std::str::from_utf8(&self.buf[..self.n]).expect("list text is ASCII");
+        self.out.push_str(text);
+        self.n = 0;
+    }
+}
+
+/// `"00" "01" … "99"`: two decimal digits per step.
+static DEC2: [u8; 200] = {
+    let mut t = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        t[2 * i] = b'0' + (i / 10) as u8;
+        t[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    t
+};
+
+/// Writes `v` in decimal at the start of `w` (at least 10 bytes long; bytes after the number
+/// may be overwritten too); returns its length.
+#[inline]
+fn put_dec(w: &mut [u8], v: u32) -> usize {
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    if v < 100_000_000 {
+        // the eight digits without their leading zeros (in the low bytes, which come first)
+        let d = eight_digits(v);
+        let lead = if v == 0 {
+            7
+        } else {
+            (d.trailing_zeros() / 8) as usize
+        };
+        w[..8].copy_from_slice(&((d >> (lead * 8)) | ZEROS).to_le_bytes());
+        8 - lead
+    } else {
+        let hi = (v / 100_000_000) as usize;
+        let k = if hi >= 10 {
+            w[..2].copy_from_slice(&DEC2[2 * hi..2 * hi + 2]);
+            2
+        } else {
+            w[0] = b'0' + hi as u8;
+            1
+        };
+        let d = eight_digits(v % 100_000_000) | ZEROS;
+        w[k..k + 8].copy_from_slice(&d.to_le_bytes());
+        k + 8
+    }
+}
+
+/// The eight decimal digits of `v` (below 10^8, leading zeros included) as the values 0-9 in
+/// the eight bytes of a `u64`, the first digit in the lowest byte: all digits at once with
+/// multiplications (after D. Lemire, "Converting integers to decimal strings faster").
+#[inline]
+fn eight_digits(v: u32) -> u64 {
+    // abcd | efgh << 32
+    let merged = (v / 10_000) as u64 | ((v % 10_000) as u64) << 32;
+    // ab, ef: / 100 in each 32-bit lane
+    let top = ((merged * 10_486) >> 20) & (0x7F << 32 | 0x7F);
+    let bottom = merged - 100 * top;
+    // ab | cd << 16 | ef << 32 | gh << 48
+    let hundreds = (bottom << 16) + top;
+    // the tens in the low byte of each 16-bit lane, the units in the high byte
+    let mut tens = ((hundreds * 103) >> 10) & (0xF << 48 | 0xF << 32 | 0xF << 16 | 0xF);
+    tens += (hundreds - 10 * tens) << 8;
+    tens
+}
+
+/// The addresses of a list: a number kept as its decimal text and counted up in place.
+struct DecCounter {
+    value: u32,
+    /// The digits, left-aligned (room to copy the whole array at once).
+    digits: [u8; 16],
+    len: usize,
+}
+
+impl DecCounter {
+    fn new(value: u32) -> Self {
+        let mut digits = [0u8; 16];
+        let len = put_dec(&mut digits, value);
+        DecCounter { value, digits, len }
+    }
+
+    /// The next number (wrapping like `u32::wrapping_add`).
+    #[inline]
+    fn step(&mut self) {
+        if self.value == u32::MAX {
+            *self = DecCounter::new(0);
+            return;
+        }
+        let mut i = self.len;
+        while i > 0 {
+            i -= 1;
+            if self.digits[i] != b'9' {
+                self.digits[i] += 1;
+                self.value = self.value.wrapping_add(1);
+                return;
+            }
+            self.digits[i] = b'0';
+        }
+        // all nines: one digit more
+        *self = DecCounter::new(self.value.wrapping_add(1));
+    }
+
+    /// Writes a list element's name and `=` at the start of `w`: a blank first unless it is the
+    /// `first` element (and then the next number), the `letter`, the digits. Returns where the
+    /// name starts and where the `=` is.
+    #[inline(always)]
+    fn put(&mut self, w: &mut [u8], first: bool, letter: char) -> (usize, usize) {
+        let mut k = 0;
+        if !first {
+            w[0] = b' ';
+            k = 1;
+            self.step();
+        }
+        let start = k;
+        w[k] = letter as u8;
+        w[k + 1..k + 17].copy_from_slice(&self.digits);
+        k += 1 + self.len;
+        w[k] = b'=';
+        (start, k)
+    }
+}
+
+/// A parts buffer for the usual row (up to 16 registers), cheaper to set up than the largest.
+pub(super) const FEW_PARTS: usize = 16;
+
+/// The most numbers an S-Bus telegram carries (a read or write of 128 flags).
+pub(super) const MAX_PARTS: usize = 128;
+
+/// The numbers of a Data cell that lists media values, `R0=305419896 R1=100` or `F3=0`: each
+/// `R`/`F`/`I`/`O`/`T`/`C` with its address and an integer is a number named like the medium
+/// (`R0`, `F3`). Any other Data (a range `R0..R3`, a status, a NAK, a clock) carries none: every
+/// token must be such a pair.
+/// `buf` holds at most [`MAX_PARTS`] parts; more tokens than `buf` holds give none.
+///
+/// One pass over the bytes: every token must read `[RFIOTC][0-9]+=[+-]?[0-9]+` with the number
+/// in the range of an `i64` (what `str::parse::<i64>` accepts), tokens separated by single
+/// spaces.
+pub(super) fn media_parts<'a>(data: &'a str, buf: &mut [Part<'a>]) -> usize {
+    let bytes = data.as_bytes();
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut n = 0;
+    let mut i = 0;
+    loop {
+        // the name: a medium letter and its address (the slices below are at ASCII bytes)
+        let start = i;
+        if !matches!(bytes.get(i), Some(b'R' | b'F' | b'I' | b'O' | b'T' | b'C')) {
+            return 0;
+        }
+        let eq = digits(i + 1);
+        if eq == i + 1 || bytes.get(eq) != Some(&b'=') {
+            return 0;
+        }
+        // the number
+        i = eq + 1;
+        let neg = bytes.get(i) == Some(&b'-');
+        if neg || bytes.get(i) == Some(&b'+') {
+            i += 1;
+        }
+        let first = i;
+        let mut value: i64 = 0;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            let d = (bytes[i] - b'0') as i64;
+            let v = value.checked_mul(10).and_then(|v| {
+                if neg {
+                    v.checked_sub(d)
+                } else {
+                    v.checked_add(d)
+                }
+            });
+            let Some(v) = v else {
+                return 0;
+            };
+            value = v;
+            i += 1;
+        }
+        if i == first || n == buf.len() {
+            return 0;
+        }
+        buf[n] = Part {
+            name: &data[start..eq],
+            unit: "",
+            text: &data[eq + 1..i],
+            value: value as f64,
+        };
+        n += 1;
+        match bytes.get(i) {
+            None => return n,
+            Some(b' ') => i += 1,
+            Some(_) => return 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::telegram;
+    use super::*;
+
+    fn parts(data: &str) -> Vec<(String, f64)> {
+        let mut buf = [Part::EMPTY; MAX_PARTS];
+        let n = media_parts(data, &mut buf);
+        buf[..n]
+            .iter()
+            .map(|p| (format!("{}={}", p.name, p.text), p.value))
+            .collect()
+    }
+
+    #[test]
+    fn media_values_are_numbers() {
+        assert_eq!(
+            parts("R0=305419896 R2=-1245334075"),
+            [
+                ("R0=305419896".to_owned(), 305419896.0),
+                ("R2=-1245334075".to_owned(), -1245334075.0)
+            ]
+        );
+        assert_eq!(parts("F3=0"), [("F3=0".to_owned(), 0.0)]);
+        for none in [
+            "R0..R3",
+            "",
+            "R (run)",
+            "ACK (0x0000)",
+            "display=12",
+            "R1=1 n=3",
+            "Z=1 N=0 E=0",
+            "R=5",
+        ] {
+            assert!(parts(none).is_empty(), "{none}");
+        }
+    }
+
+    /// The rule as first written with `str::split` (the reference for the byte scanner).
+    fn reference(data: &str) -> Vec<(String, f64)> {
+        let mut v = Vec::new();
+        for tok in data.split(' ') {
+            let Some((name, text)) = tok.split_once('=') else {
+                return Vec::new();
+            };
+            let medium = name.chars().next().is_some_and(|c| "RFIOTC".contains(c));
+            let addr = name.len() > 1 && name.bytes().skip(1).all(|b| b.is_ascii_digit());
+            let Ok(value) = text.parse::<i64>() else {
+                return Vec::new();
+            };
+            if !medium || !addr || v.len() == MAX_PARTS {
+                return Vec::new();
+            }
+            v.push((format!("{name}={text}"), value as f64));
+        }
+        v
+    }
+
+    #[test]
+    fn the_byte_scanner_reads_like_the_reference_and_the_small_buffer_like_the_large() {
+        let many = |n: usize| {
+            (0..n)
+                .map(|i| format!("F{i}={}", i % 2))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let mut cases: Vec<String> = [
+            "R0=1",
+            "R0=1 ",
+            " R0=1",
+            "R0=1  R1=2",
+            "R0=1=2",
+            "R0==1",
+            "=1",
+            "R0=",
+            "R0=+7 T12=-3 C1=0",
+            "R00=1 O7=99999999999",
+            "R0=99999999999999999999",
+            "é5=1",
+            "Ré=1",
+            "R1=1 é",
+            "R1=+",
+            "R1=-",
+            "R1=+-5",
+            "R1=-0 R2=+0",
+            "R1=-9223372036854775808",
+            "R1=-9223372036854775809",
+            "R1=9223372036854775807",
+            "R1=9223372036854775808",
+            "R1=5x",
+            "R1x=5",
+            "r1=5",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for n in [1, 15, 16, 17, 127, 128, 129, 200] {
+            cases.push(many(n));
+        }
+        for data in &cases {
+            let want = reference(data);
+            assert_eq!(parts(data), want, "{data}");
+            let tokens = 1 + data.bytes().filter(|&b| b == b' ').count();
+            if tokens <= FEW_PARTS {
+                let mut buf = [Part::EMPTY; FEW_PARTS];
+                let n = media_parts(data, &mut buf);
+                assert_eq!(n, want.len(), "{data}");
+            }
+        }
+        assert_eq!(parts(&many(128)).len(), 128);
+        assert!(parts(&many(129)).is_empty());
+    }
+
+    /// The parts of a row whose Data cell was recorded as a media list, as `put_row` builds
+    /// them; `None` when nothing was recorded for this text.
+    fn recorded(data: &str, media: &MediaSpans) -> Option<Vec<(String, f64)>> {
+        if media.len != Some(data.len()) {
+            return None;
+        }
+        if media.spans.len() > MAX_PARTS {
+            return Some(Vec::new());
+        }
+        Some(
+            media
+                .spans
+                .iter()
+                .map(|s| {
+                    let name = &data[s.start as usize..s.eq as usize];
+                    let text = &data[s.eq as usize + 1..s.end as usize];
+                    (format!("{name}={text}"), s.value)
+                })
+                .collect(),
+        )
+    }
+
+    /// Every command with bodies of many lengths and values, and the responses to the
+    /// requests: the numbers recorded while the Data cell is written are the ones reading the
+    /// cell back gives.
+    #[test]
+    fn recorded_media_lists_give_the_parts_read_from_the_text() {
+        let mut seed = 0x2545_F491_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut lists = 0;
+        for cmd in 0..=255u8 {
+            for len in [0usize, 1, 2, 3, 4, 5, 7, 8, 11, 19, 35, 67, 131, 200, 300] {
+                for _ in 0..3 {
+                    let mut body: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+                    if len > 0 {
+                        body[0] = (next() % 40) as u8;
+                    }
+                    let (mut sensor, mut data, mut media) =
+                        (String::new(), String::new(), MediaSpans::default());
+                    let t = telegram::describe_request_media(
+                        1,
+                        cmd,
+                        &body,
+                        &mut sensor,
+                        &mut data,
+                        Some(&mut media),
+                    );
+                    if let Some(got) = recorded(&data, &media) {
+                        lists += 1;
+                        assert_eq!(got, parts(&data), "request {cmd:02X} {data}");
+                    }
+                    for plen in [0usize, 1, 4, 8, 16, 17, 64, 128] {
+                        let payload: Vec<u8> = (0..plen).map(|_| next() as u8).collect();
+                        let (mut sensor, mut data, mut media) =
+                            (String::new(), String::new(), MediaSpans::default());
+                        telegram::describe_response_media(
+                            &t.info,
+                            &payload,
+                            &mut sensor,
+                            &mut data,
+                            Some(&mut media),
+                        );
+                        if let Some(got) = recorded(&data, &media) {
+                            lists += 1;
+                            assert_eq!(got, parts(&data), "response to {cmd:02X} {data}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(lists > 300, "{lists}");
+        // Text that merely looks like a list is not recorded: it is read back.
+        let t = telegram::describe_request(1, 0x20, &[], &mut String::new(), &mut String::new());
+        let (mut data, mut media) = (String::new(), MediaSpans::default());
+        let sensor = &mut String::new();
+        telegram::describe_response_media(&t.info, b"R1=5", sensor, &mut data, Some(&mut media));
+        assert_eq!(recorded(&data, &media), None);
+        assert_eq!(parts(&data).len(), 1);
+    }
+
+    /// The block-wise list writer against the text written piece by piece with `format!`:
+    /// every medium, addresses and values at the digit-count edges, wrapping addresses, lists
+    /// longer than a block, and a cell that already holds text (nothing recorded then).
+    #[test]
+    fn lists_match_the_text_written_piece_by_piece() {
+        let media = [
+            Elem::Register,
+            Elem::Flag,
+            Elem::Input,
+            Elem::Output,
+            Elem::Timer,
+            Elem::Counter,
+        ];
+        let values: Vec<u32> = vec![
+            0,
+            1,
+            9,
+            10,
+            99,
+            100,
+            12345,
+            999_999_999,
+            1_000_000_000,
+            i32::MAX as u32,
+            i32::MIN as u32,
+            u32::MAX,
+            u32::MAX - 9,
+            (-100i32) as u32,
+        ];
+        let addrs = [0u32, 7, 9, 95, 999, 65530, 99_999_998, u32::MAX - 2];
+        for &elem in &media {
+            for &addr in &addrs {
+                for count in [1usize, 2, 5, 14, 40, 128] {
+                    let words: Vec<u32> = (0..count).map(|i| values[i % values.len()]).collect();
+                    let data: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+                    let mut want = String::new();
+                    let mut want_spans = Vec::new();
+                    for (i, &w) in words.iter().enumerate() {
+                        if i > 0 {
+                            want.push(' ');
+                        }
+                        let start = want.len();
+                        want.push_str(&format!("{}{}", elem.prefix(), addr.wrapping_add(i as u32)));
+                        let eq = want.len();
+                        let (text, value) = if elem.is_unsigned() {
+                            (w.to_string(), w as f64)
+                        } else {
+                            ((w as i32).to_string(), w as i32 as f64)
+                        };
+                        want.push('=');
+                        want.push_str(&text);
+                        want_spans.push((start as u32, eq as u32, want.len() as u32, value));
+                    }
+                    let mut got = String::new();
+                    let mut m = MediaSpans::default();
+                    let first = push_words(&mut got, elem, 0, addr, &data, Some(&mut m));
+                    assert_eq!(got, want, "{elem:?} {addr} {count}");
+                    assert_eq!(got[..first], format!("{}{addr}", elem.prefix()));
+                    assert_eq!(m.len, Some(got.len()));
+                    let spans: Vec<_> = m
+                        .spans
+                        .iter()
+                        .map(|s| (s.start, s.eq, s.end, s.value))
+                        .collect();
+                    assert_eq!(spans, want_spans, "{elem:?} {addr} {count}");
+                    // after other text: the same text, nothing recorded
+                    let mut after = String::from("x");
+                    let mut m2 = MediaSpans::default();
+                    push_words(&mut after, elem, 0, addr, &data, Some(&mut m2));
+                    assert_eq!(after, format!("x{want}"));
+                    assert_eq!((m2.len, m2.spans.len()), (None, 0));
+
+                    // bits: element i is bit i % 8 of byte i / 8
+                    let bytes: Vec<u8> = words.iter().map(|&w| (w ^ (w >> 11)) as u8).collect();
+                    for bits in [1u32, 7, 8, 9, count as u32 * 8, count as u32 * 8 + 3] {
+                        let mut want = String::new();
+                        let mut want_spans = Vec::new();
+                        for i in 0..bits.min(bytes.len() as u32 * 8) {
+                            if i > 0 {
+                                want.push(' ');
+                            }
+                            let start = want.len();
+                            want.push_str(&format!("{}{}", elem.prefix(), addr.wrapping_add(i)));
+                            let eq = want.len();
+                            let bit = bytes[(i / 8) as usize] >> (i % 8) & 1;
+                            want.push_str(&format!("={bit}"));
+                            want_spans.push((
+                                start as u32,
+                                eq as u32,
+                                want.len() as u32,
+                                bit as f64,
+                            ));
+                        }
+                        let mut got = String::new();
+                        let mut m = MediaSpans::default();
+                        let first = push_bits(&mut got, elem, addr, bits, &bytes, Some(&mut m));
+                        assert_eq!(got, want, "{elem:?} {addr} {bits}");
+                        assert_eq!(got[..first], format!("{}{addr}", elem.prefix()));
+                        let spans: Vec<_> = m
+                            .spans
+                            .iter()
+                            .map(|s| (s.start, s.eq, s.end, s.value))
+                            .collect();
+                        assert_eq!(spans, want_spans);
+                    }
+                }
+                let mut name = String::from("a");
+                push_elem(&mut name, elem, 0, addr);
+                assert_eq!(name, format!("a{}{addr}", elem.prefix()));
+            }
+        }
+        let edges = (0..10).flat_map(|p| {
+            let t = 10u32.pow(p);
+            [t - 1, t, t + 1]
+        });
+        let mut x = 0x9E37_79B9u32;
+        let random = (0..200_000).map(move |i| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x >> (i % 32)
+        });
+        let spread = values.iter().copied().chain((0..2000).map(|i| i * 7919));
+        for v in spread.chain(edges).chain(random).chain([u32::MAX]) {
+            let mut b = [0u8; 10];
+            let n = put_dec(&mut b, v);
+            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
+        }
+    }
+}
