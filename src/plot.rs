@@ -267,7 +267,7 @@ mod tests {
             sensor: "",
             data: "",
             extra: &[],
-            parts,
+            parts: parts.into(),
             raw: &[],
         }
     }

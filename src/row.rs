@@ -79,6 +79,111 @@ impl Part<'static> {
     };
 }
 
+/// A row's numbers ([`Row::parts`]): a list of [`Part`]s, or the places of `name=number`
+/// pairs in one text cell (an S-Bus media list, `R57=-859895076 R58=…`), which become parts
+/// only when a reader asks for them, so that a table that shows the first number alone does
+/// not build the rest.
+#[derive(Clone, Copy, Debug)]
+pub enum Parts<'a> {
+    List(&'a [Part<'a>]),
+    /// `name = text[start..eq]`, `text = text[eq + 1..end]`, no unit.
+    Spans {
+        text: &'a str,
+        spans: &'a [PartSpan],
+    },
+}
+
+/// One `name=number` in a text cell: byte offsets (see [`Parts::Spans`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PartSpan {
+    pub start: u32,
+    /// The `=` (the name ends here, the number starts after it).
+    pub eq: u32,
+    pub end: u32,
+    pub value: f64,
+}
+
+impl<'a> Parts<'a> {
+    /// No numbers.
+    pub const NONE: Parts<'static> = Parts::List(&[]);
+
+    pub fn len(&self) -> usize {
+        match self {
+            Parts::List(l) => l.len(),
+            Parts::Spans { spans, .. } => spans.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The `i`-th number. A span that does not lie on the text's character boundaries (which
+    /// its writer never records) gives empty strings rather than a panic.
+    #[inline]
+    pub fn get(&self, i: usize) -> Option<Part<'a>> {
+        match *self {
+            Parts::List(l) => l.get(i).copied(),
+            Parts::Spans { text, spans } => {
+                let s = spans.get(i)?;
+                let cut = |a: u32, b: u32| text.get(a as usize..b as usize).unwrap_or("");
+                Some(Part {
+                    name: cut(s.start, s.eq),
+                    unit: "",
+                    text: cut(s.eq.saturating_add(1), s.end),
+                    value: s.value,
+                })
+            }
+        }
+    }
+
+    pub fn first(&self) -> Option<Part<'a>> {
+        self.get(0)
+    }
+
+    pub fn iter(&self) -> PartsIter<'a> {
+        PartsIter {
+            parts: *self,
+            next: 0,
+        }
+    }
+}
+
+impl<'a> From<&'a [Part<'a>]> for Parts<'a> {
+    fn from(list: &'a [Part<'a>]) -> Self {
+        Parts::List(list)
+    }
+}
+
+impl<'a> IntoIterator for Parts<'a> {
+    type Item = Part<'a>;
+    type IntoIter = PartsIter<'a>;
+    fn into_iter(self) -> PartsIter<'a> {
+        self.iter()
+    }
+}
+
+/// The numbers of a [`Parts`], in order.
+#[derive(Clone, Debug)]
+pub struct PartsIter<'a> {
+    parts: Parts<'a>,
+    next: usize,
+}
+
+impl<'a> Iterator for PartsIter<'a> {
+    type Item = Part<'a>;
+    fn next(&mut self) -> Option<Part<'a>> {
+        let p = self.parts.get(self.next)?;
+        self.next += 1;
+        Some(p)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.parts.len().saturating_sub(self.next);
+        (n, Some(n))
+    }
+}
+
 /// One row of the table. Strings are borrowed from the decoder's scratch buffers so that
 /// producing a row allocates nothing.
 #[derive(Clone, Copy, Debug)]
@@ -101,7 +206,7 @@ pub struct Row<'a> {
     /// whose check failed). The first is the `Value` column; a packed value (an FLVSS frame's two
     /// cells, a pair of halves, several registers) has one part per number, so every number is
     /// reachable (JSON `parts`, one wide column each).
-    pub parts: &'a [Part<'a>],
+    pub parts: Parts<'a>,
     /// The row's bytes as they were on the wire (for `--raw` and recordings).
     pub raw: &'a [u8],
     /// 0, or a number the decoder gives every row of one kind: two rows of one run with the
@@ -127,7 +232,7 @@ impl<'a> Row<'a> {
             sensor: "",
             data: "",
             extra: &[],
-            parts: &[],
+            parts: Parts::NONE,
             raw: &[],
         }
     }
@@ -315,5 +420,59 @@ impl RowOut for Latch<'_> {
         }
         let written = self.out.row_unframed(row, frame);
         self.keep(written)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Spans into a text give the parts a list of the same numbers gives; a span off the
+    /// text's character boundaries or beyond it gives empty strings, not a panic.
+    #[test]
+    fn spans_give_the_parts_of_a_list() {
+        let text = "R57=-8 R58=12 Fü=1";
+        let span = |start, eq, end, value| PartSpan {
+            start,
+            eq,
+            end,
+            value,
+        };
+        let spans = [span(0, 3, 6, -8.0), span(7, 10, 13, 12.0)];
+        let list = [
+            Part {
+                name: "R57",
+                unit: "",
+                text: "-8",
+                value: -8.0,
+            },
+            Part {
+                name: "R58",
+                unit: "",
+                text: "12",
+                value: 12.0,
+            },
+        ];
+        let from_spans = Parts::Spans {
+            text,
+            spans: &spans,
+        };
+        let from_list = Parts::from(&list[..]);
+        assert_eq!(from_spans.len(), 2);
+        assert_eq!(from_spans.first(), Some(list[0]));
+        assert_eq!(from_spans.iter().collect::<Vec<_>>(), list);
+        assert_eq!(from_list.into_iter().collect::<Vec<_>>(), list);
+        assert_eq!(from_spans.get(2), None);
+        assert!(Parts::NONE.is_empty() && Parts::NONE.first().is_none());
+        // `ü` is bytes 15-16: 16 is inside it (and 18..16 runs backwards); 40 is past the end;
+        // eq at u32::MAX.
+        let bad = [
+            span(16, 17, 16, 1.0),
+            span(0, 3, 40, 2.0),
+            span(0, u32::MAX, 3, 3.0),
+        ];
+        let odd = Parts::Spans { text, spans: &bad };
+        let got: Vec<(&str, &str)> = odd.iter().map(|p| (p.name, p.text)).collect();
+        assert_eq!(got, [("", ""), ("R57", ""), ("", "")]);
     }
 }

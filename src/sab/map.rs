@@ -266,7 +266,7 @@ impl Mapper {
             sensor,
             data: &sc.data,
             extra: &extra,
-            parts,
+            parts: parts.into(),
             raw: p.raw,
         };
         let _ = out.row(&row);

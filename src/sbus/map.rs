@@ -7,14 +7,14 @@
 use std::fmt::Write as _;
 
 use super::commands::{self, Expect};
-use super::media::{FEW_PARTS, MAX_PARTS, MediaSpan, MediaSpans, media_parts};
+use super::media::{FEW_PARTS, MAX_PARTS, MediaSpans, media_parts};
 use super::pairing::{
     Answer, MAX_CONVERSATIONS, MAX_OUTSTANDING, Outstanding, RequestKind, TimeoutWhy,
 };
 use super::stats::{StationStats, Totals, nak_slot};
 use super::telegram::{self, BROADCAST, ReqInfo};
 use crate::fmt::{push_fixed, push_hex, push_u64};
-use crate::row::{Class, Part, Row, RowOut, RowResult, Unframed};
+use crate::row::{Class, Part, Parts, Row, RowOut, RowResult, Unframed};
 
 /// Scratch buffers reused for every row.
 #[derive(Default)]
@@ -120,33 +120,20 @@ pub(super) fn put_row(
         };
     }
     if class == Class::Error {
-        return row!(&[]);
+        return row!(Parts::NONE);
     }
-    // A media list recorded while the Data cell was written: its numbers as they were
-    // formatted (the same parts as reading the text back, see `media_parts`).
+    // A media list recorded while the Data cell was written: its numbers where they were
+    // formatted (the same parts as reading the text back, see `media_parts`), made into parts
+    // only by a reader that wants them all.
     if sc.media.len == Some(sc.data.len()) {
         let spans = &sc.media.spans;
-        let part = |s: &MediaSpan| Part {
-            name: &sc.data[s.start as usize..s.eq as usize],
-            unit: "",
-            text: &sc.data[s.eq as usize + 1..s.end as usize],
-            value: s.value,
-        };
         if spans.is_empty() || spans.len() > MAX_PARTS {
-            return row!(&[]);
+            return row!(Parts::NONE);
         }
-        if spans.len() <= FEW_PARTS {
-            let mut buf = [Part::EMPTY; FEW_PARTS];
-            for (b, s) in buf.iter_mut().zip(spans) {
-                *b = part(s);
-            }
-            return row!(&buf[..spans.len()]);
-        }
-        let mut buf = [Part::EMPTY; MAX_PARTS];
-        for (b, s) in buf.iter_mut().zip(spans) {
-            *b = part(s);
-        }
-        return row!(&buf[..spans.len()]);
+        return row!(Parts::Spans {
+            text: &sc.data,
+            spans,
+        });
     }
     // Only rows that list values pay for the parts' buffer, and most need a small one.
     if sc.data.as_bytes().contains(&b'=') {
@@ -154,13 +141,13 @@ pub(super) fn put_row(
         if tokens <= FEW_PARTS {
             let mut buf = [Part::EMPTY; FEW_PARTS];
             let n = media_parts(&sc.data, &mut buf);
-            return row!(&buf[..n]);
+            return row!(Parts::List(&buf[..n]));
         }
         let mut buf = [Part::EMPTY; MAX_PARTS];
         let n = media_parts(&sc.data, &mut buf);
-        return row!(&buf[..n]);
+        return row!(Parts::List(&buf[..n]));
     }
-    row!(&[])
+    row!(Parts::NONE)
 }
 
 /// Hands the row on, with the telegram's content when the decoder kept it (the export).

@@ -21,14 +21,7 @@ pub(crate) struct MediaSpans {
 }
 
 /// One `name=number` of a media list: byte offsets in the Data cell.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct MediaSpan {
-    pub start: u32,
-    /// The `=` (the name ends here, the number starts after it).
-    pub eq: u32,
-    pub end: u32,
-    pub value: f64,
-}
+pub(crate) use crate::row::PartSpan as MediaSpan;
 
 impl MediaSpans {
     pub fn clear(&mut self) {
@@ -543,15 +536,14 @@ mod tests {
         if media.spans.len() > MAX_PARTS {
             return Some(Vec::new());
         }
+        let parts = crate::row::Parts::Spans {
+            text: data,
+            spans: &media.spans,
+        };
         Some(
-            media
-                .spans
+            parts
                 .iter()
-                .map(|s| {
-                    let name = &data[s.start as usize..s.eq as usize];
-                    let text = &data[s.eq as usize + 1..s.end as usize];
-                    (format!("{name}={text}"), s.value)
-                })
+                .map(|p| (format!("{}={}", p.name, p.text), p.value))
                 .collect(),
         )
     }

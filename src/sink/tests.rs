@@ -13,12 +13,12 @@ fn sample_row() -> Row<'static> {
         sensor: "Alt",
         data: "65.43",
         extra: &["m", "a \"quoted\", note"],
-        parts: &[Part {
+        parts: crate::row::Parts::List(&[Part {
             name: "Alt",
             unit: "m",
             text: "65.43",
             value: 65.43,
-        }],
+        }]),
         raw: &[0x7E, 0x00],
     }
 }
@@ -112,7 +112,7 @@ fn pretty_columns_come_from_the_protocol_and_grow_for_long_values() {
         sensor: "Read",
         data,
         extra: &["1.5", "note"],
-        parts: &[],
+        parts: crate::row::Parts::NONE,
         raw: &[],
     };
     t.write(&row("10.0.0.1:5050", "R0=1")).unwrap();
@@ -258,7 +258,7 @@ fn pretty_cells_replace_control_characters_and_count_chars() {
         sensor: "a\u{85}b",
         data: "",
         extra: &[""],
-        parts: &[],
+        parts: crate::row::Parts::NONE,
         raw: &[],
     };
     t.write(&row).unwrap();
@@ -450,7 +450,7 @@ fn pretty_lines_end_as_trim_end_leaves_them() {
                 sensor: "",
                 data,
                 extra: &extra,
-                parts: &[],
+                parts: crate::row::Parts::NONE,
                 raw: &[],
             };
             t.write(&row).unwrap();

@@ -360,7 +360,7 @@ fn push_cell(out: &mut String, s: &str, format: Format) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::row::{Class, Part};
+    use crate::row::{Class, Part, Parts};
 
     fn row(micros: u64, id: u32, parts: &[Part<'static>]) -> Row<'static> {
         Row {
@@ -374,7 +374,7 @@ mod tests {
             sensor: "",
             data: "",
             extra: &[],
-            parts: parts.to_vec().leak(),
+            parts: Parts::List(parts.to_vec().leak()),
             raw: &[],
         }
     }

@@ -334,7 +334,7 @@ impl Mapper {
                 sensor,
                 data,
                 extra: &extra,
-                parts,
+                parts: parts.into(),
                 raw: s.wire(),
             })
         })
@@ -371,7 +371,7 @@ impl Mapper {
             sensor: "",
             data: &sc.data,
             extra: &extra,
-            parts: &[],
+            parts: crate::row::Parts::NONE,
             raw: g.bytes(),
         })
     }

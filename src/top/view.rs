@@ -417,7 +417,7 @@ mod tests {
                 sensor: &o.sensor,
                 data: &o.data,
                 extra: &extra,
-                parts: &[],
+                parts: crate::row::Parts::NONE,
                 raw: &o.raw,
             };
             m.row(&row, o.micros.unwrap());
