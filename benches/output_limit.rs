@@ -6,10 +6,10 @@
 //! BUSNOOP_BENCH_MB=64 BUSNOOP_BENCH_PACKETS=1000000 cargo bench --bench output_limit
 //! ```
 //!
-//! The limit is a reference writer in this benchmark: it reads the capture in the same 64 KiB
-//! chunks busnoop reads, finds frame starts with `memchr` (the protocol's start byte; see
-//! [`CASES`]), and for every start writes one line of the same format: the Counter formatted
-//! with `itoa`, then the rest of a line of busnoop's own output (so the same columns, quoting
+//! The limit is a reference writer in this benchmark: it reads the capture in the same chunks
+//! busnoop reads (`busnoop::READ_SIZE`), finds frame starts with `memchr` (the protocol's
+//! start byte; see [`CASES`]), and for every start writes one line of the same format: the
+//! Counter formatted with `itoa`, then the rest of a line of busnoop's own output (so the same columns, quoting
 //! and colour codes), cycling through a template of busnoop's first lines; it stops at, or
 //! pads up to, exactly busnoop's total output size. It decodes nothing. Both write through a
 //! 64 KiB buffer to the same place (`/dev/null`, or a file for `-o`), pinned to CPU 0. Times
@@ -206,7 +206,7 @@ fn reference(capture: &Path, start: u8, lines: &[&[u8]], total: u64, dest: &Path
     let t0 = cpu_time(libc::RUSAGE_SELF);
     let mut input = File::open(capture).unwrap();
     let mut out = File::create(dest).unwrap();
-    let mut chunk = vec![0u8; 64 * 1024];
+    let mut chunk = vec![0u8; busnoop::READ_SIZE];
     let mut buf: Vec<u8> = Vec::with_capacity(128 * 1024);
     let mut written = 0u64;
     let mut counter = 0u64;

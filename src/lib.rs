@@ -66,5 +66,5 @@ mod top;
 pub use cli::main;
 pub use exit::Failure;
 pub use record::Recorder;
-pub use source::edgetx;
+pub use source::{READ_SIZE, edgetx};
 pub use stats::{Problems, Report};

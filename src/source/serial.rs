@@ -456,6 +456,12 @@ impl SerialReader {
 }
 
 impl ChunkReader for SerialReader {
+    /// A port's reads are a few bytes each; while the decoder is held up (a terminal that
+    /// scrolls slowly), its reader goes on reading so the adapter's buffer never overflows.
+    fn ahead(&self) -> usize {
+        32
+    }
+
     fn next_batch(&mut self, tx: &SyncSender<Message>) -> Result<Option<Chunk>, Failure> {
         use std::io::ErrorKind::*;
         if !self.started {
