@@ -124,16 +124,7 @@ impl<'a> Parts<'a> {
     pub fn get(&self, i: usize) -> Option<Part<'a>> {
         match *self {
             Parts::List(l) => l.get(i).copied(),
-            Parts::Spans { text, spans } => {
-                let s = spans.get(i)?;
-                let cut = |a: u32, b: u32| text.get(a as usize..b as usize).unwrap_or("");
-                Some(Part {
-                    name: cut(s.start, s.eq),
-                    unit: "",
-                    text: cut(s.eq.saturating_add(1), s.end),
-                    value: s.value,
-                })
-            }
+            Parts::Spans { text, spans } => spans.get(i).map(|s| s.part(text)),
         }
     }
 
@@ -142,9 +133,23 @@ impl<'a> Parts<'a> {
     }
 
     pub fn iter(&self) -> PartsIter<'a> {
-        PartsIter {
-            parts: *self,
-            next: 0,
+        match *self {
+            Parts::List(l) => PartsIter::List(l.iter()),
+            Parts::Spans { text, spans } => PartsIter::Spans(text, spans.iter()),
+        }
+    }
+}
+
+impl PartSpan {
+    /// The part this span marks in `text`.
+    #[inline]
+    fn part<'a>(&self, text: &'a str) -> Part<'a> {
+        let cut = |a: u32, b: u32| text.get(a as usize..b as usize).unwrap_or("");
+        Part {
+            name: cut(self.start, self.eq),
+            unit: "",
+            text: cut(self.eq.saturating_add(1), self.end),
+            value: self.value,
         }
     }
 }
@@ -165,22 +170,26 @@ impl<'a> IntoIterator for Parts<'a> {
 
 /// The numbers of a [`Parts`], in order.
 #[derive(Clone, Debug)]
-pub struct PartsIter<'a> {
-    parts: Parts<'a>,
-    next: usize,
+pub enum PartsIter<'a> {
+    List(std::slice::Iter<'a, Part<'a>>),
+    Spans(&'a str, std::slice::Iter<'a, PartSpan>),
 }
 
 impl<'a> Iterator for PartsIter<'a> {
     type Item = Part<'a>;
+    #[inline]
     fn next(&mut self) -> Option<Part<'a>> {
-        let p = self.parts.get(self.next)?;
-        self.next += 1;
-        Some(p)
+        match self {
+            PartsIter::List(l) => l.next().copied(),
+            PartsIter::Spans(text, spans) => spans.next().map(|s| s.part(text)),
+        }
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        let n = self.parts.len().saturating_sub(self.next);
-        (n, Some(n))
+        match self {
+            PartsIter::List(l) => l.size_hint(),
+            PartsIter::Spans(_, spans) => spans.size_hint(),
+        }
     }
 }
 
