@@ -110,7 +110,92 @@ impl DataFramer {
             self.byte(data[i], time, emit);
             self.pos += 1;
             i += 1;
+            if data[i - 1] == FS && self.phase == Phase::At {
+                // A telegram just started: take it whole if it is all in `data`.
+                let n = self.whole_telegram(&data[i..], emit);
+                i += n;
+                self.pos += n as u64;
+            }
         }
+    }
+
+    /// The fast path for the usual telegram: a standard one (no secure header) whose bytes
+    /// after the FS are all in `data`, with no raw B5, no invalid DLE pair, a known length and
+    /// a CRC that checks. It is read in one loop, without the byte-by-byte state machine, and
+    /// emitted; returns how many bytes of `data` it took. Anything else (the end of `data`
+    /// first, a raw B5, an unknown length, a bad CRC, a secure header, [`MAX_WIRE`]) takes
+    /// nothing and leaves the telegram as [`Self::start`] opened it, for [`Self::byte`] to read
+    /// again from its first byte after the FS: so the events are those of the byte-by-byte
+    /// path, however the input is split (the gap rule cannot end the telegram either: every
+    /// byte of `data` arrived at the same time).
+    fn whole_telegram(&mut self, data: &[u8], emit: &mut impl FnMut(&Event<'_>)) -> usize {
+        debug_assert!(self.wire.len() == 1 && self.tele.is_empty() && self.secure.is_none());
+        let data = &data[..data.len().min(MAX_WIRE - 1)];
+        // `tele_at` as the byte-by-byte path keeps it: wire offsets (the FS is at 0, `data`
+        // starts at 1) of the last two logical bytes.
+        let mut tele_at = [0; 2];
+        let mut j = 0;
+        // The header, one logical byte at a time until the length is known.
+        let mut len = None;
+        while let Some((v, w)) = logical_at(data, j) {
+            if self.tele.is_empty() && (v == AT_SECURE_REQUEST || v == AT_SECURE_RESPONSE) {
+                break;
+            }
+            self.tele.push(v);
+            tele_at = [tele_at[1], 1 + j];
+            j += w;
+            match self.complete_len() {
+                Known::NotYet => {}
+                Known::Len(k) if k >= self.tele.len() => {
+                    len = Some(k);
+                    break;
+                }
+                _ => break,
+            }
+        }
+        if let Some(k) = len {
+            // The rest: runs without B5 or C5 copied whole, DLE pairs undone one by one.
+            while self.tele.len() < k {
+                let rest = &data[j..];
+                let run = &rest[..rest.len().min(k - self.tele.len())];
+                let p = run
+                    .iter()
+                    .position(|&b| b == FS || b == DLE)
+                    .unwrap_or(run.len());
+                if p > 0 {
+                    self.tele.extend_from_slice(&run[..p]);
+                    let end = 1 + j + p;
+                    tele_at = if p >= 2 {
+                        [end - 2, end - 1]
+                    } else {
+                        [tele_at[1], end - 1]
+                    };
+                    j += p;
+                    continue;
+                }
+                let Some((v, w)) = logical_at(data, j) else {
+                    break;
+                };
+                self.tele.push(v);
+                tele_at = [tele_at[1], 1 + j];
+                j += w;
+            }
+            if self.tele.len() == k {
+                self.wire.extend_from_slice(&data[..j]);
+                self.tele_at = tele_at;
+                let crc = self.crc_check();
+                if crc.ok() {
+                    self.phase = Phase::Body;
+                    self.known = Known::Len(k);
+                    self.close_checked(Some(crc), emit);
+                    return j;
+                }
+                self.wire.truncate(1);
+            }
+        }
+        self.tele.clear();
+        self.tele_at = [0; 2];
+        0
     }
 
     /// How many of the first bytes of `data` can be taken as one run of logical bytes: inside a
@@ -457,6 +542,21 @@ impl DataFramer {
     }
 }
 
+/// The logical byte at `data[j]` (after a standard telegram's FS) and how many wire bytes it
+/// takes (2 for a DLE pair); `None` at the end of `data`, at a raw B5 and at a C5 not followed
+/// by 00 or 01 (or by nothing yet): where [`DataFramer::whole_telegram`] gives up.
+fn logical_at(data: &[u8], j: usize) -> Option<(u8, usize)> {
+    match *data.get(j)? {
+        FS => None,
+        DLE => match *data.get(j + 1)? {
+            0x00 => Some((FS, 2)),
+            0x01 => Some((DLE, 2)),
+            _ => None,
+        },
+        b => Some((b, 1)),
+    }
+}
+
 /// The problem noted when a secure header is not followed by a telegram.
 const NO_INNER_TELEGRAM: &str = "secure header not followed by a telegram (B5)";
 
@@ -775,6 +875,66 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn whole_telegrams_read_as_byte_by_byte() {
+        // The fast path (`whole_telegram`) against the byte-by-byte path (one byte per push,
+        // where it never applies): sessions of both modes, then with bytes flipped, dropped
+        // and inserted (B5, C5, a DLE pair's second byte, anything), fed whole and in random
+        // chunks.
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = |n: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % n
+        };
+        let mut fast_taken = 0;
+        for seed in 0..40 {
+            let mode = if seed % 4 == 3 {
+                SMode::Secure
+            } else {
+                SMode::Data
+            };
+            let g = session(mode, false, seed, 30);
+            let mut all: Vec<u8> = g.segments.iter().flat_map(|s| s.0.clone()).collect();
+            let clean = seed % 5 == 0;
+            if !clean {
+                for _ in 0..1 + rnd(12) {
+                    let at = rnd(all.len() as u64 + 1) as usize;
+                    let b = [FS, DLE, 0x00, 0x01, 0x02, rnd(256) as u8][rnd(6) as usize];
+                    match rnd(3) {
+                        0 if at < all.len() => all[at] = b,
+                        1 if at < all.len() => {
+                            all.remove(at);
+                        }
+                        _ => all.insert(at, b),
+                    }
+                }
+            }
+            // a telegram near the longest kept: a response of 1000 data bytes to nothing
+            if seed % 7 == 6 {
+                all.extend(data(AT_RESPONSE, &[0x33; 1000], CrcBasis::Both));
+            }
+            let (_, slow) = run_segments(&bytewise(&[(all.clone(), None)]));
+            let (_, whole) = run(&all);
+            assert_eq!(whole, slow, "seed {seed}");
+            let mut chunks = Vec::new();
+            let mut at = 0;
+            while at < all.len() {
+                let n = (1 + rnd(40) as usize).min(all.len() - at);
+                chunks.push((all[at..at + n].to_vec(), None));
+                at += n;
+            }
+            assert_eq!(run_segments(&chunks).1, slow, "seed {seed}, chunked");
+            fast_taken += slow.iter().filter(|e| e.crc().ok()).count();
+        }
+        assert!(fast_taken > 500, "{fast_taken}");
+    }
+
+    fn run_segments(segments: &[(Vec<u8>, Option<u64>)]) -> (usize, Vec<Ev>) {
+        feed(&mut DataFramer::new(None), segments)
     }
 
     #[test]
