@@ -98,15 +98,20 @@ impl SerialPairing {
         self.pending.as_ref()
     }
 
-    /// A new request `bytes` (station, command, body). Returns how it relates to the previous
-    /// one and, when the previous one got no answer, that request for a Timeout row.
+    /// A new request: `head` (station, command) and `body`, taken apart so that the caller
+    /// need not join them first. Returns how it relates to the previous one and, when the
+    /// previous one got no answer, that request for a Timeout row.
     pub fn request(
         &mut self,
-        bytes: &[u8],
+        head: [u8; 2],
+        body: &[u8],
         req: Outstanding,
         expects_answer: bool,
     ) -> (RequestKind, Option<(Outstanding, TimeoutWhy)>) {
-        let same = !self.last_answered && self.last == bytes;
+        let same = !self.last_answered
+            && self.last.len() == 2 + body.len()
+            && self.last[..2] == head
+            && self.last[2..] == *body;
         let mut timed_out = None;
         let mut kind = RequestKind::New;
         let mut next = req;
@@ -124,7 +129,8 @@ impl SerialPairing {
             }
         }
         self.last.clear();
-        self.last.extend_from_slice(bytes);
+        self.last.extend_from_slice(&head);
+        self.last.extend_from_slice(body);
         self.last_answered = !expects_answer;
         if expects_answer {
             self.pending = Some(next);
@@ -466,7 +472,7 @@ mod tests {
         let mut p = SerialPairing::new(375_000);
         let r = Outstanding::new(info(1), 0, true, None);
         assert_eq!(
-            p.request(&[1, 6, 0, 0, 0], r, true),
+            p.request([1, 6], &[0, 0, 0], r, true),
             (RequestKind::New, None)
         );
         assert_eq!(p.expire(100_000), None);
@@ -475,7 +481,7 @@ mod tests {
         assert_eq!(p.expire(500_000), None, "reported once");
         // the retry: no second Timeout row (already reported)
         let r2 = Outstanding::new(info(1), 400_000, true, None);
-        let (kind, prev) = p.request(&[1, 6, 0, 0, 0], r2, true);
+        let (kind, prev) = p.request([1, 6], &[0, 0, 0], r2, true);
         assert_eq!(
             kind,
             RequestKind::Retry {
@@ -495,10 +501,10 @@ mod tests {
         assert_eq!(p.answer(950_000, None), Answer::NoRequest);
         // an answered request repeated is a new poll, not a retry
         let r3 = Outstanding::new(info(1), 1_000_000, true, None);
-        assert_eq!(p.request(&[1, 6, 0, 0, 0], r3, true).0, RequestKind::New);
+        assert_eq!(p.request([1, 6], &[0, 0, 0], r3, true).0, RequestKind::New);
         // a different request before the answer: Timeout for the first
         let r4 = Outstanding::new(info(2), 1_100_000, true, None);
-        let (_, prev) = p.request(&[2, 6, 0, 0, 0], r4, true);
+        let (_, prev) = p.request([2, 6], &[0, 0, 0], r4, true);
         assert_eq!(prev.unwrap().1, TimeoutWhy::NextRequest);
     }
 
@@ -506,7 +512,7 @@ mod tests {
     fn secure_seq_must_match() {
         let mut p = SerialPairing::new(375_000);
         let r = Outstanding::new(info(5), 0, false, Some(3));
-        p.request(&[5, 6, 0, 0, 0], r, true);
+        p.request([5, 6], &[0, 0, 0], r, true);
         assert!(matches!(p.answer(10, Some(2)), Answer::SeqMismatch { .. }));
         // a standard answer to a secure request is normal
         assert!(matches!(

@@ -159,8 +159,6 @@ struct SerialCore {
     pairing: SerialPairing,
     per: Vec<StationStats>,
     map: Mapper,
-    /// The pairing key of the last request (station, command, body).
-    key: Vec<u8>,
     resolved: Option<Resolved>,
     timeout_override: Option<u64>,
 }
@@ -209,7 +207,6 @@ impl SerialDecoder {
             pairing: SerialPairing::new(0),
             per: vec![StationStats::default(); 256],
             map: Mapper::new(true),
-            key: Vec::new(),
             resolved: None,
             timeout_override: opts.timeout_ms.map(|t| t * 1000),
         };
@@ -290,9 +287,7 @@ impl SerialCore {
     }
 
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
-        time.unwrap_or_else(|| {
-            (offset as u128 * self.bits as u128 * 1_000_000 / self.baud as u128) as u64
-        })
+        time.unwrap_or_else(|| offset_micros(offset, self.bits, self.baud))
     }
 
     fn device(&self, station: Option<u8>) -> &str {
@@ -616,12 +611,8 @@ impl SerialCore {
         req: Outstanding,
         out: &mut dyn RowOut,
     ) -> Result<RequestKind, OutputError> {
-        self.key.clear();
-        self.key.push(station);
-        self.key.push(cmd);
-        self.key.extend_from_slice(body);
         let expects = req.info.expect != super::commands::Expect::Nothing;
-        let (kind, prev) = self.pairing.request(&self.key, req, expects);
+        let (kind, prev) = self.pairing.request([station, cmd], body, req, expects);
         if let Some((p, why)) = prev {
             self.timeout_row(&p, why, req.time, out)?;
         }
@@ -654,6 +645,17 @@ impl SerialCore {
         if self.pairing.finish().is_some() {
             self.map.totals.unanswered_at_end += 1;
         }
+    }
+}
+
+/// The time of byte `offset` on a line of `baud` with `bits` per character (sources without
+/// times), in µs.
+fn offset_micros(offset: u64, bits: u32, baud: u32) -> u64 {
+    match offset.checked_mul(bits as u64 * 1_000_000) {
+        // The quotient of the u128 reading below, without its division routine, while the
+        // product fits (offsets below 10^12 bytes).
+        Some(p) => p / baud as u64,
+        None => (offset as u128 * bits as u128 * 1_000_000 / baud as u128) as u64,
     }
 }
 
@@ -735,5 +737,42 @@ impl Decoder for SerialDecoder {
 
     fn no_frames_hint(&self) -> &'static str {
         "check the baud rate (S-Bus ports default to 9600) and the mode (--mode data|break|parity)"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::offset_micros;
+
+    #[test]
+    fn offset_micros_in_u64_is_the_u128_reading() {
+        let wide = |o: u64, bits: u32, baud: u32| {
+            (o as u128 * bits as u128 * 1_000_000 / baud as u128) as u64
+        };
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut offsets = vec![0, 1, 1 << 20, u64::MAX / 11_000_000, u64::MAX / 10_000_000];
+        offsets.extend([
+            u64::MAX / 10_000_000 + 1,
+            u64::MAX / 2,
+            u64::MAX - 1,
+            u64::MAX,
+        ]);
+        for _ in 0..2000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            offsets.push(x >> (x % 64));
+        }
+        for o in offsets {
+            for bits in [10, 11] {
+                for baud in [1, 300, 9600, 38_400, 115_200, u32::MAX] {
+                    assert_eq!(
+                        offset_micros(o, bits, baud),
+                        wide(o, bits, baud),
+                        "{o} {bits} {baud}"
+                    );
+                }
+            }
+        }
     }
 }
