@@ -525,12 +525,14 @@ fn date_time(value: u32, data: &mut String) -> Decoded {
     }
 }
 
-/// At least two digits (`{:02}`).
+/// At least two digits (`{:02}`); two digits are pushed as they are, not through `itoa`.
 fn push_2(data: &mut String, v: u8) {
-    if v < 10 {
-        data.push('0');
+    if v < 100 {
+        data.push(char::from(b'0' + v / 10));
+        data.push(char::from(b'0' + v % 10));
+    } else {
+        push_uint(data, v as u64);
     }
-    push_uint(data, v as u64);
 }
 
 /// Legacy hub data: cells (ID 0x06) are byte-swapped 16-bit values, the rest plain 16-bit.
@@ -677,6 +679,15 @@ mod tests {
         let (mut s, mut v) = (String::new(), String::new());
         let unit = decode(app_id, value, &mut s, &mut v);
         (s, v, unit)
+    }
+
+    #[test]
+    fn push_2_is_two_digits_at_least() {
+        for v in 0..=255u8 {
+            let mut s = String::from("x");
+            push_2(&mut s, v);
+            assert_eq!(s, format!("x{v:02}"));
+        }
     }
 
     /// The constant texts of FLVSS frames are what formatting the numbers wrote, for every
