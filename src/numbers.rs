@@ -237,24 +237,34 @@ impl<const N: usize> Numbers<N> {
         }
     }
 
-    /// Calls `f` with the numbers as [`Part`]s (built on the stack).
+    /// Calls `f` with the numbers as [`Part`]s (built on the stack). A single number (most
+    /// rows that have any) is one part, without filling an array of `N` first.
     pub fn with_parts<R>(&self, f: impl FnOnce(&[Part<'_>]) -> R) -> R {
-        if self.len == 0 {
-            return f(&[]);
+        match self.len {
+            0 => f(&[]),
+            1 => f(&[self.part(&self.slots[0])]),
+            len => {
+                let mut parts = [Part::EMPTY; N];
+                for (p, s) in parts.iter_mut().zip(&self.slots[..len]) {
+                    *p = self.part(s);
+                }
+                f(&parts[..len])
+            }
         }
-        let mut parts = [Part::EMPTY; N];
-        for (p, s) in parts.iter_mut().zip(&self.slots[..self.len]) {
-            *p = Part {
-                name: match s.name {
-                    Name::Static(n) => n,
-                    Name::Built(a, b) => self.range(&self.names, (a, b)),
-                },
-                unit: s.unit,
-                text: self.range(&self.text, s.text),
-                value: s.value,
-            };
+    }
+
+    /// The [`Part`] of one slot.
+    #[inline]
+    fn part(&self, s: &Slot) -> Part<'_> {
+        Part {
+            name: match s.name {
+                Name::Static(n) => n,
+                Name::Built(a, b) => self.range(&self.names, (a, b)),
+            },
+            unit: s.unit,
+            text: self.range(&self.text, s.text),
+            value: s.value,
         }
-        f(&parts[..self.len])
     }
 }
 
@@ -328,6 +338,28 @@ mod tests {
                 assert_eq!(parsed, part.value, "{}", part.text);
             }
         });
+        // One number (the path without the array) and two give the parts alike.
+        for count in 1..=2 {
+            let mut m = Numbers::<4>::default();
+            m.fixed("Alt", "m", -150, 2);
+            if count == 2 {
+                m.int_with(|s| s.push_str("Cell3"), "V", 7);
+            }
+            m.with_parts(|p| {
+                assert_eq!(p.len(), count);
+                assert_eq!((p[0].name, p[0].unit, p[0].text), ("Alt", "m", "-1.50"));
+                assert_eq!(p[0].value, -1.5);
+                if count == 2 {
+                    assert_eq!((p[1].name, p[1].unit, p[1].text), ("Cell3", "V", "7"));
+                }
+            });
+            let mut one = Numbers::<4>::default();
+            one.int_with(|s| s.push_str("0x5100"), "", 42);
+            one.with_parts(|p| {
+                assert_eq!(p.len(), 1);
+                assert_eq!((p[0].name, p[0].text, p[0].value), ("0x5100", "42", 42.0));
+            });
+        }
         n.clear();
         assert!(n.is_empty());
         assert_eq!(n.first_text(), "");

@@ -24,12 +24,14 @@ fn compressed(v: u32, from: u32, exp_bits: u32, mant_bits: u32, signed: bool) ->
     }
 }
 
-fn kv(data: &mut String, key: &str) {
+/// Starts a `key=value` field: `key_eq` is the key with its `=` (one copy, not two), after a
+/// blank unless the field is the first.
+#[inline]
+fn kv(data: &mut String, key_eq: &str) {
     if !data.is_empty() {
         data.push(' ');
     }
-    data.push_str(key);
-    data.push('=');
+    data.push_str(key_eq);
 }
 
 /// Writes the Data column of a passthrough frame and returns its Sensor label; `None` (and
@@ -44,48 +46,49 @@ pub(crate) fn decode_row(app_id: u16, v: u32, data: &mut String) -> Option<&'sta
         0x5001 => {
             label = "AP Status";
             let mode = field(v, 0, 5);
-            kv(data, "mode");
+            kv(data, "mode=");
             if mode == 0 {
                 data.push('?');
             } else {
                 push_uint(data, (mode - 1) as u64);
             }
-            for (bit, name) in [
-                (5, "simple"),
-                (6, "ssimple"),
-                (7, "flying"),
-                (8, "armed"),
-                (9, "batt_fs"),
-                (10, "ekf_fs"),
-                (12, "fs"),
-                (13, "fence"),
-                (14, "breach"),
+            // The flags follow `mode=`: each is ` name=` and one digit.
+            for (bit, blank_name_eq) in [
+                (5, " simple="),
+                (6, " ssimple="),
+                (7, " flying="),
+                (8, " armed="),
+                (9, " batt_fs="),
+                (10, " ekf_fs="),
+                (12, " fs="),
+                (13, " fence="),
+                (14, " breach="),
             ] {
-                kv(data, name);
-                push_uint(data, field(v, bit, 1) as u64);
+                data.push_str(blank_name_eq);
+                data.push(if field(v, bit, 1) == 1 { '1' } else { '0' });
             }
             // (2,0) signed: magnitude in bits 0-5, sign in bit 6; -63..63 = -100..100 %.
             let t = field(v, 19, 7);
             let mag = (t & 0x3F) as i64;
             let thr = if t & 0x40 != 0 { -mag } else { mag };
-            kv(data, "thr");
+            kv(data, "thr=");
             push_i64(data, (thr * 100 + thr.signum() * 31) / 63);
             data.push('%');
-            kv(data, "imu_temp");
+            kv(data, "imu_temp=");
             push_uint(data, (field(v, 26, 6) + 19) as u64);
             data.push_str("degC");
         }
         0x5002 => {
             label = "AP GPS";
-            kv(data, "sats");
+            kv(data, "sats=");
             push_uint(data, field(v, 0, 4) as u64);
-            kv(data, "fix");
+            kv(data, "fix=");
             push_uint(data, field(v, 4, 2) as u64);
-            kv(data, "hdop");
+            kv(data, "hdop=");
             push_decimal(data, compressed(v, 6, 1, 7, false), 1);
-            kv(data, "adv_fix");
+            kv(data, "adv_fix=");
             push_uint(data, field(v, 14, 2) as u64);
-            kv(data, "alt_msl");
+            kv(data, "alt_msl=");
             push_decimal(data, compressed(v, 22, 2, 7, true), 1);
             data.push('m');
         }
@@ -95,57 +98,64 @@ pub(crate) fn decode_row(app_id: u16, v: u32, data: &mut String) -> Option<&'sta
             } else {
                 "AP Batt2"
             };
-            kv(data, "volts");
+            kv(data, "volts=");
             push_decimal(data, field(v, 0, 9) as i64, 1);
             data.push('V');
-            kv(data, "amps");
+            kv(data, "amps=");
             push_decimal(data, compressed(v, 9, 1, 7, false), 1);
             data.push('A');
-            kv(data, "used");
+            kv(data, "used=");
             push_uint(data, field(v, 17, 15) as u64);
             data.push_str("mAh");
         }
         0x5004 => {
             label = "AP Home";
-            kv(data, "dist");
+            kv(data, "dist=");
             push_i64(data, compressed(v, 0, 2, 10, false));
             data.push('m');
-            kv(data, "alt");
+            kv(data, "alt=");
             push_decimal(data, compressed(v, 12, 2, 10, true), 1);
             data.push('m');
-            kv(data, "bearing");
+            kv(data, "bearing=");
             push_uint(data, field(v, 25, 7) as u64 * 3);
             data.push_str("deg");
         }
         0x5005 => {
             label = "AP Vel/Yaw";
-            kv(data, "vspd");
+            kv(data, "vspd=");
             push_decimal(data, compressed(v, 0, 1, 7, true), 1);
             data.push_str("m/s");
-            kv(data, if field(v, 28, 1) == 1 { "aspd" } else { "hspd" });
+            kv(
+                data,
+                if field(v, 28, 1) == 1 {
+                    "aspd="
+                } else {
+                    "hspd="
+                },
+            );
             push_decimal(data, compressed(v, 9, 1, 7, false), 1);
             data.push_str("m/s");
-            kv(data, "yaw");
+            kv(data, "yaw=");
             push_decimal(data, field(v, 17, 11) as i64 * 2, 1);
             data.push_str("deg");
         }
         0x5006 => {
             label = "AP Attitude";
             // (angle + offset) * 5 → tenths of a degree = raw * 2 - offset * 10.
-            kv(data, "roll");
+            kv(data, "roll=");
             push_decimal(data, field(v, 0, 11) as i64 * 2 - 1800, 1);
             data.push_str("deg");
-            kv(data, "pitch");
+            kv(data, "pitch=");
             push_decimal(data, field(v, 11, 10) as i64 * 2 - 900, 1);
             data.push_str("deg");
-            kv(data, "range");
+            kv(data, "range=");
             push_i64(data, compressed(v, 21, 1, 10, false));
             data.push_str("cm");
         }
         0x5007 => {
             label = "AP Param";
             let id = field(v, 24, 8);
-            kv(data, "id");
+            kv(data, "id=");
             push_uint(data, id as u64);
             let name = match id {
                 1 => Some("frame_type"),
@@ -160,41 +170,41 @@ pub(crate) fn decode_row(app_id: u16, v: u32, data: &mut String) -> Option<&'sta
                 data.push(' ');
                 data.push_str(n);
             }
-            kv(data, "value");
+            kv(data, "value=");
             push_uint(data, field(v, 0, 24) as u64);
         }
         0x500A => {
             label = "AP RPM";
-            kv(data, "rpm1");
+            kv(data, "rpm1=");
             push_i64(data, (v as u16 as i16) as i64 * 10);
-            kv(data, "rpm2");
+            kv(data, "rpm2=");
             push_i64(data, ((v >> 16) as u16 as i16) as i64 * 10);
         }
         0x500B => {
             label = "AP Terrain";
-            kv(data, "height");
+            kv(data, "height=");
             push_decimal(data, compressed(v, 0, 2, 10, true), 1);
             data.push('m');
-            kv(data, "unhealthy");
+            kv(data, "unhealthy=");
             push_uint(data, field(v, 13, 1) as u64);
         }
         0x500C => {
             label = "AP Wind";
-            kv(data, "dir");
+            kv(data, "dir=");
             push_uint(data, field(v, 0, 7) as u64 * 3);
             data.push_str("deg");
-            kv(data, "speed");
+            kv(data, "speed=");
             push_decimal(data, compressed(v, 7, 1, 7, false), 1);
             data.push_str("m/s");
         }
         0x500D => {
             label = "AP Waypoint";
-            kv(data, "num");
+            kv(data, "num=");
             push_uint(data, field(v, 0, 11) as u64);
-            kv(data, "dist");
+            kv(data, "dist=");
             push_i64(data, compressed(v, 11, 2, 10, false));
             data.push('m');
-            kv(data, "bearing");
+            kv(data, "bearing=");
             push_uint(data, field(v, 23, 7) as u64 * 3);
             data.push_str("deg");
         }
@@ -264,6 +274,14 @@ mod tests {
         assert_eq!(
             d(0x5001, v).1,
             "mode=5 simple=0 ssimple=0 flying=0 armed=1 batt_fs=0 ekf_fs=0 fs=0 fence=0 breach=0 thr=100% imu_temp=29degC"
+        );
+        // Every flag set, mode unknown (0), throttle -100 %.
+        let flags = [5, 6, 7, 8, 9, 10, 12, 13, 14]
+            .iter()
+            .fold(0, |v, b| v | 1 << b);
+        assert_eq!(
+            d(0x5001, flags | (127 << 19)).1,
+            "mode=? simple=1 ssimple=1 flying=1 armed=1 batt_fs=1 ekf_fs=1 fs=1 fence=1 breach=1 thr=-100% imu_temp=19degC"
         );
         assert_eq!(d(0x5099, 7), ("0x5099".into(), "7".into()));
     }

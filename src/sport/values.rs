@@ -454,6 +454,19 @@ fn r9_power_mw(dbm: u8) -> Option<u64> {
     })
 }
 
+/// `count=` and the cell count (0-15) of an FLVSS frame, as constants (one copy a row).
+const CELL_COUNTS: [&str; 16] = [
+    "count=0", "count=1", "count=2", "count=3", "count=4", "count=5", "count=6", "count=7",
+    "count=8", "count=9", "count=10", "count=11", "count=12", "count=13", "count=14", "count=15",
+];
+
+/// ` cell`, the 0-based index of a cell (0-15: the second cell of a frame is shown only when
+/// its index is below the count) and `=`, as constants.
+const CELL_KEYS: [&str; 16] = [
+    " cell0=", " cell1=", " cell2=", " cell3=", " cell4=", " cell5=", " cell6=", " cell7=",
+    " cell8=", " cell9=", " cell10=", " cell11=", " cell12=", " cell13=", " cell14=", " cell15=",
+];
+
 /// FLVSS cells: bits 0-3 first index, 4-7 count, 8-19 and 20-31 two cells in 2 mV units,
 /// shown to the millivolt (raw 1959 → 3.918). EdgeTX keeps `raw / 5` hundredths of a volt
 /// (integer division: 3.91).
@@ -462,13 +475,10 @@ fn cells(value: u32, data: &mut String, nums: &mut SportNumbers) {
     let count = (value >> 4) & 0x0F;
     let c0 = (value >> 8) & 0x0FFF;
     let c1 = (value >> 20) & 0x0FFF;
-    data.push_str("count=");
-    push_uint(data, count as u64);
+    data.push_str(CELL_COUNTS[count as usize]);
     for (i, c) in [(index, c0), (index + 1, c1)] {
         if i == index || i < count {
-            data.push_str(" cell");
-            push_uint(data, i as u64);
-            data.push('=');
+            data.push_str(CELL_KEYS[(i & 0x0F) as usize]);
             nums.fixed(cell_name(i), "V", (c * 2) as i64, 3);
             data.push_str(nums.last_text());
         }
@@ -515,12 +525,14 @@ fn date_time(value: u32, data: &mut String) -> Decoded {
     }
 }
 
-/// At least two digits (`{:02}`).
+/// At least two digits (`{:02}`); two digits are pushed as they are, not through `itoa`.
 fn push_2(data: &mut String, v: u8) {
-    if v < 10 {
-        data.push('0');
+    if v < 100 {
+        data.push(char::from(b'0' + v / 10));
+        data.push(char::from(b'0' + v % 10));
+    } else {
+        push_uint(data, v as u64);
     }
-    push_uint(data, v as u64);
 }
 
 /// Legacy hub data: cells (ID 0x06) are byte-swapped 16-bit values, the rest plain 16-bit.
@@ -667,6 +679,37 @@ mod tests {
         let (mut s, mut v) = (String::new(), String::new());
         let unit = decode(app_id, value, &mut s, &mut v);
         (s, v, unit)
+    }
+
+    #[test]
+    fn push_2_is_two_digits_at_least() {
+        for v in 0..=255u8 {
+            let mut s = String::from("x");
+            push_2(&mut s, v);
+            assert_eq!(s, format!("x{v:02}"));
+        }
+    }
+
+    /// The constant texts of FLVSS frames are what formatting the numbers wrote, for every
+    /// first index and count.
+    #[test]
+    fn cell_texts_match_formatting() {
+        for n in 0..16 {
+            assert_eq!(CELL_COUNTS[n], format!("count={n}"));
+            assert_eq!(CELL_KEYS[n], format!(" cell{n}="));
+        }
+        for index in 0..16u32 {
+            for count in 0..16u32 {
+                let value = index | count << 4 | 1959 << 8 | 1000 << 20;
+                let (mut data, mut nums) = (String::new(), SportNumbers::default());
+                cells(value, &mut data, &mut nums);
+                let mut want = format!("count={count} cell{index}=3.918");
+                if index + 1 < count {
+                    want.push_str(&format!(" cell{}=2.000", index + 1));
+                }
+                assert_eq!(data, want, "index {index} count {count}");
+            }
+        }
     }
 
     #[test]
