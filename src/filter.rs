@@ -342,6 +342,14 @@ pub struct Selection {
     pub names: Names,
 }
 
+impl Selection {
+    /// Whether every row passes unchanged: no filter rule and no name.
+    #[inline]
+    pub fn passes_all(&self) -> bool {
+        !self.filter.active && self.names.by_id.is_empty()
+    }
+}
+
 /// A [`RowOut`] that names devices and filters rows into a [`Sink`] (the table or the live
 /// view); rows it drops are still counted there.
 pub struct Select<'a> {
@@ -349,7 +357,19 @@ pub struct Select<'a> {
     pub selection: &'a Selection,
 }
 
-impl Select<'_> {
+impl<'a> Select<'a> {
+    /// Where the decoder's rows go: the table itself when there is no filter and no name (every
+    /// row would pass unchanged, so the check per row and the extra dynamic call are saved),
+    /// else this layer.
+    #[inline]
+    pub fn out(&mut self) -> &mut dyn RowOut {
+        if self.selection.passes_all() {
+            &mut *self.table
+        } else {
+            self
+        }
+    }
+
     /// Names the row's device and hands the row on to `write` when the filter keeps it.
     #[inline]
     fn select(
@@ -728,6 +748,86 @@ mod tests {
         let e = filter(&spec(|s| s.device = vec!["Boiler".into()])).unwrap_err();
         assert!(e.contains("shows FLVSS, Vario"), "{e}");
         assert!(filter(&spec(|s| s.device = vec!["vario".into()])).is_ok());
+    }
+
+    /// A TSV table in memory, for comparing what reaches it.
+    fn memory_table() -> crate::sink::Table {
+        crate::sink::Table::new(
+            crate::sink::Output::memory(),
+            crate::sink::TableOptions {
+                format: crate::sink::Format::Tsv,
+                color: false,
+                raw: false,
+                time_abs: false,
+                utc: false,
+            },
+            &[],
+        )
+    }
+
+    /// The table's text and row count after `rows` went in through `send`.
+    fn through(
+        rows: &[Row<'_>],
+        mut send: impl FnMut(&mut crate::sink::Table, &Row<'_>),
+    ) -> (String, u64) {
+        let mut t = memory_table();
+        for r in rows {
+            send(&mut t, r);
+        }
+        t.flush().unwrap();
+        let text = String::from_utf8(t.output().memory_contents().to_vec()).unwrap();
+        (text, t.rows())
+    }
+
+    /// `Select::out` hands rows straight to the table only when the `Select` layer would pass
+    /// every row unchanged: the table gets the same rows either way, for selections with and
+    /// without names and filters.
+    #[test]
+    fn out_skips_the_layer_only_when_it_changes_nothing() {
+        let mut rows = Vec::new();
+        for id in [None, Some(0), Some(1), Some(2), Some(27), Some(31)] {
+            for (kind, class) in [
+                ("Data", Class::Plain),
+                ("", Class::Quiet),
+                ("Null", Class::Quiet),
+                ("BadCRC", Class::Error),
+                ("Garbage", Class::Error),
+                ("LinkDown", Class::Info),
+            ] {
+                rows.push(row(id, kind, class));
+            }
+        }
+        let specs = [
+            Spec::default(),
+            spec(|s| s.names = vec!["Pack=1".into()]),
+            spec(|s| s.id = vec!["1-2".into()]),
+            spec(|s| s.types = vec!["Data".into()]),
+        ];
+        for (i, s) in specs.iter().enumerate() {
+            let sel = Selection {
+                filter: filter(s).unwrap(),
+                names: Names::parse(&s.names, "--name", &VOCAB).unwrap(),
+            };
+            assert_eq!(sel.passes_all(), i == 0, "spec {i}");
+            let direct = through(&rows, |table, r| {
+                Select {
+                    table,
+                    selection: &sel,
+                }
+                .out()
+                .row(r)
+                .unwrap()
+            });
+            let layered = through(&rows, |table, r| {
+                Select {
+                    table,
+                    selection: &sel,
+                }
+                .row(r)
+                .unwrap()
+            });
+            assert_eq!(direct, layered, "spec {i}");
+        }
     }
 
     #[test]

@@ -8,20 +8,22 @@ use crate::exit::{Failure, Interrupt};
 use crate::filter::{Select, Selection};
 use crate::protocol::Decoder;
 use crate::record::Recorder;
-use crate::row::RowOut;
 use crate::row::{Class, Row};
 use crate::signal::Stop;
 use crate::sink::Sink;
 use crate::source::capture::Captured;
 use crate::source::{Batch, Feed, Message};
 
-/// The decoder's rows go through the filter and the names into the table.
+/// The decoder's rows go through the filter and the names into the table (straight into the
+/// table when neither is set, see [`Select::out`]). The `Select` is a temporary that lives until
+/// the end of the statement that uses it.
 macro_rules! select {
     ($d:expr) => {
         Select {
             table: $d.table,
             selection: $d.selection,
         }
+        .out()
     };
 }
 
@@ -105,7 +107,7 @@ pub fn drive(
     // Flush whatever is open, even after an error of the source.
     let output_gone = matches!(result, Err(Failure::Output(_) | Failure::BrokenPipe));
     if !output_gone {
-        let _ = decoder.finish(&mut Select { table, selection });
+        let _ = decoder.finish(Select { table, selection }.out());
     }
     let recorded = match recorder {
         Some(r) => r.flush(),
@@ -199,7 +201,7 @@ impl Driver<'_> {
                 }
                 Ok(Message::CaptureError(e)) => self
                     .decoder
-                    .capture_error(&e, &mut select!(self))
+                    .capture_error(&e, select!(self))
                     .map_err(Failure::from)?,
                 Ok(Message::ReadUpTo(n)) => {
                     // Exact for raw bytes; parsed inputs (logs, recordings) take up more room
@@ -228,7 +230,7 @@ impl Driver<'_> {
                     {
                         let now = zero.elapsed().as_micros() as u64;
                         self.decoder
-                            .idle(now, &mut select!(self))
+                            .idle(now, select!(self))
                             .map_err(Failure::from)?;
                     }
                     self.watch();
@@ -310,7 +312,7 @@ impl Driver<'_> {
                 return Ok(false);
             }
             self.decoder
-                .packet(&p, &mut select!(self))
+                .packet(&p, select!(self))
                 .map_err(Failure::from)?;
         }
         Ok(true)
@@ -321,7 +323,7 @@ impl Driver<'_> {
             r.data(bytes, time)?;
         }
         self.decoder
-            .push(bytes, time, &mut select!(self))
+            .push(bytes, time, select!(self))
             .map_err(Failure::from)
     }
 
@@ -370,9 +372,7 @@ impl Driver<'_> {
             r.link(false, micros)?;
         }
         // Close what the unplug cut off; the decoder goes on after the gap.
-        self.decoder
-            .finish(&mut select!(self))
-            .map_err(Failure::from)?;
+        self.decoder.finish(select!(self)).map_err(Failure::from)?;
         self.down_at = Some(micros);
         let data = format!(
             "adapter disconnected after {}; waiting for it",
@@ -409,9 +409,7 @@ impl Driver<'_> {
         gap: bool,
     ) -> Result<(), Failure> {
         if gap {
-            self.decoder
-                .finish(&mut select!(self))
-                .map_err(Failure::from)?;
+            self.decoder.finish(select!(self)).map_err(Failure::from)?;
         }
         let row = Row {
             stamp: 0,
