@@ -720,18 +720,7 @@ mod tests {
         let f = filter(&s).unwrap();
         let names = Names::parse(&s.names, "--name", &VOCAB).unwrap();
         assert_eq!(names.get(1), Some("Pack"));
-        let t = crate::sink::Table::new(
-            crate::sink::Output::memory(),
-            crate::sink::TableOptions {
-                format: crate::sink::Format::Tsv,
-                color: false,
-                raw: false,
-                time_abs: false,
-                utc: false,
-            },
-            &[],
-        );
-        let mut t = t;
+        let mut t = memory_table();
         let sel = Selection { filter: f, names };
         let mut out = Select {
             table: &mut t,

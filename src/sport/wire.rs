@@ -456,18 +456,9 @@ mod tests {
         Garbage(Garbage),
     }
 
+    /// The events of `data` pushed whole.
     fn events(data: &[u8]) -> Vec<Owned> {
-        let mut r = Reassembler::new();
-        let mut out = Vec::new();
-        let mut keep = |e: Event<'_>| {
-            out.push(match e {
-                Event::Slot(s) => Owned::Slot(*s),
-                Event::Garbage(g) => Owned::Garbage(*g),
-            })
-        };
-        r.push(data, None, &mut keep);
-        r.finish(&mut keep);
-        out
+        events_in_chunks(data, data.len().max(1))
     }
 
     #[test]
