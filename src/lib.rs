@@ -32,6 +32,7 @@
 
 mod cli;
 mod detect;
+mod digits;
 mod exit;
 mod export;
 mod filter;

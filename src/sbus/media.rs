@@ -5,6 +5,7 @@
 
 use super::commands::Elem;
 use super::telegram::{be, push_elem, push_value};
+use crate::digits::put_u32;
 use crate::row::Part;
 
 /// Where the numbers of a Data cell that lists media values stand (`R0=1 R1=2`), recorded while
@@ -96,7 +97,7 @@ pub(super) fn push_words(
         let (start, eq) = name.put(w, i == 0, letter);
         let mut k = eq + 1;
         let value = if unsigned {
-            k += put_dec(&mut w[k..], v);
+            k += put_u32(&mut w[k..], v);
             v as f64
         } else {
             let s = v as i32;
@@ -104,7 +105,7 @@ pub(super) fn push_words(
                 w[k] = b'-';
                 k += 1;
             }
-            k += put_dec(&mut w[k..], s.unsigned_abs());
+            k += put_u32(&mut w[k..], s.unsigned_abs());
             s as f64
         };
         list.n = p + k;
@@ -222,66 +223,6 @@ impl<'o> ListText<'o> {
     }
 }
 
-/// `"00" "01" … "99"`: two decimal digits per step.
-static DEC2: [u8; 200] = {
-    let mut t = [0u8; 200];
-    let mut i = 0;
-    while i < 100 {
-        t[2 * i] = b'0' + (i / 10) as u8;
-        t[2 * i + 1] = b'0' + (i % 10) as u8;
-        i += 1;
-    }
-    t
-};
-
-/// Writes `v` in decimal at the start of `w` (at least 10 bytes long; bytes after the number
-/// may be overwritten too); returns its length.
-#[inline]
-fn put_dec(w: &mut [u8], v: u32) -> usize {
-    const ZEROS: u64 = 0x3030_3030_3030_3030;
-    if v < 100_000_000 {
-        // the eight digits without their leading zeros (in the low bytes, which come first)
-        let d = eight_digits(v);
-        let lead = if v == 0 {
-            7
-        } else {
-            (d.trailing_zeros() / 8) as usize
-        };
-        w[..8].copy_from_slice(&((d >> (lead * 8)) | ZEROS).to_le_bytes());
-        8 - lead
-    } else {
-        let hi = (v / 100_000_000) as usize;
-        let k = if hi >= 10 {
-            w[..2].copy_from_slice(&DEC2[2 * hi..2 * hi + 2]);
-            2
-        } else {
-            w[0] = b'0' + hi as u8;
-            1
-        };
-        let d = eight_digits(v % 100_000_000) | ZEROS;
-        w[k..k + 8].copy_from_slice(&d.to_le_bytes());
-        k + 8
-    }
-}
-
-/// The eight decimal digits of `v` (below 10^8, leading zeros included) as the values 0-9 in
-/// the eight bytes of a `u64`, the first digit in the lowest byte: all digits at once with
-/// multiplications (after D. Lemire, "Converting integers to decimal strings faster").
-#[inline]
-fn eight_digits(v: u32) -> u64 {
-    // abcd | efgh << 32
-    let merged = (v / 10_000) as u64 | ((v % 10_000) as u64) << 32;
-    // ab, ef: / 100 in each 32-bit lane
-    let top = ((merged * 10_486) >> 20) & (0x7F << 32 | 0x7F);
-    let bottom = merged - 100 * top;
-    // ab | cd << 16 | ef << 32 | gh << 48
-    let hundreds = (bottom << 16) + top;
-    // the tens in the low byte of each 16-bit lane, the units in the high byte
-    let mut tens = ((hundreds * 103) >> 10) & (0xF << 48 | 0xF << 32 | 0xF << 16 | 0xF);
-    tens += (hundreds - 10 * tens) << 8;
-    tens
-}
-
 /// The addresses of a list: a number kept as its decimal text and counted up in place.
 struct DecCounter {
     value: u32,
@@ -293,7 +234,7 @@ struct DecCounter {
 impl DecCounter {
     fn new(value: u32) -> Self {
         let mut digits = [0u8; 16];
-        let len = put_dec(&mut digits, value);
+        let len = put_u32(&mut digits, value);
         DecCounter { value, digits, len }
     }
 
@@ -721,23 +662,6 @@ mod tests {
                 push_elem(&mut name, elem, 0, addr);
                 assert_eq!(name, format!("a{}{addr}", elem.prefix()));
             }
-        }
-        let edges = (0..10).flat_map(|p| {
-            let t = 10u32.pow(p);
-            [t - 1, t, t + 1]
-        });
-        let mut x = 0x9E37_79B9u32;
-        let random = (0..200_000).map(move |i| {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x >> (i % 32)
-        });
-        let spread = values.iter().copied().chain((0..2000).map(|i| i * 7919));
-        for v in spread.chain(edges).chain(random).chain([u32::MAX]) {
-            let mut b = [0u8; 10];
-            let n = put_dec(&mut b, v);
-            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
         }
     }
 }
