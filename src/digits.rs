@@ -69,6 +69,20 @@ fn eight_digits(v: u32) -> u64 {
     tens
 }
 
+/// Writes `v` (below 100) in decimal at the start of `w` (at least 2 bytes long); returns its
+/// length. One table lookup: for the small numbers (IDs, stations) that most cells hold.
+#[inline(always)]
+pub fn put_below_100(w: &mut [u8], v: u8) -> usize {
+    let i = 2 * usize::from(v % 100);
+    w[..2].copy_from_slice(&DEC2[i..i + 2]);
+    if v < 10 {
+        w[0] = w[1];
+        1
+    } else {
+        2
+    }
+}
+
 /// Writes `v` in decimal at the start of `w` (at least [`U64_ROOM`] bytes long; bytes after
 /// the number may be overwritten too); returns its length.
 #[inline]
@@ -122,6 +136,15 @@ mod tests {
         for v in samples().map(|v| v as u32) {
             let mut b = [b'#'; 10];
             let n = put_u32(&mut b, v);
+            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
+        }
+    }
+
+    #[test]
+    fn small_numbers_are_the_decimal_text() {
+        for v in 0..100u8 {
+            let mut b = [b'#'; 2];
+            let n = put_below_100(&mut b, v);
             assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
         }
     }

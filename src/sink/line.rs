@@ -8,7 +8,7 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
-use crate::digits::{U64_ROOM, put_u64};
+use crate::digits::{U64_ROOM, put_below_100, put_u64};
 
 const SPACES: [u8; 32] = [b' '; 32];
 
@@ -275,7 +275,12 @@ impl W<'_> {
     #[inline(always)]
     pub fn dec(&mut self, n: u64) {
         match self.buf.get_mut(self.pos..self.pos + U64_ROOM) {
-            Some(room) => self.pos += put_u64(room, n),
+            Some(room) => {
+                self.pos += match u8::try_from(n) {
+                    Ok(small) if small < 100 => put_below_100(room, small),
+                    _ => put_u64(room, n),
+                }
+            }
             None => self.over = true,
         }
     }
