@@ -9,6 +9,7 @@
 //! exactly what the byte-by-byte rules always produced.
 
 use crate::digits::{U64_ROOM, put_below_100, put_u64};
+use crate::row::{Part, PartSpan, Parts};
 
 const SPACES: [u8; 32] = [b' '; 32];
 
@@ -248,6 +249,64 @@ impl W<'_> {
         self.byte(b'"');
     }
 
+    /// A row's numbers as JSON (`,"parts":{"Cell1":3.918,…}`). Not inlined: the table
+    /// writer's code for the rest of the row stays as it was.
+    #[inline(never)]
+    pub fn json_parts(&mut self, parts: Parts<'_>) {
+        self.put(b",\"parts\":{");
+        match parts {
+            Parts::List(list) => {
+                for (i, p) in list.iter().enumerate() {
+                    self.json_member(i, p);
+                }
+            }
+            // Names and numbers cut from one text with nothing to escape: copied.
+            Parts::Spans { text, spans } if json_plain(text) => self.json_spans(text, spans),
+            parts => {
+                for (i, p) in parts.iter().enumerate() {
+                    self.json_member(i, &p);
+                }
+            }
+        }
+        self.byte(b'}');
+    }
+
+    /// One member of `parts` (the `i`-th): its name as a JSON string, its number as it is.
+    #[inline(always)]
+    fn json_member(&mut self, i: usize, p: &Part<'_>) {
+        if i > 0 {
+            self.byte(b',');
+        }
+        self.json_str(p.name);
+        self.byte(b':');
+        self.put(p.text.as_bytes());
+    }
+
+    /// The members for the `name=number` spans of `text` (see [`Parts::Spans`]): what
+    /// [`W::json_member`] writes for each, when [`json_plain`] holds for `text` (then every
+    /// byte offset is a character boundary, and no name needs escaping). A span outside the
+    /// text gives empty strings, as [`Parts::get`] does.
+    #[inline(always)]
+    fn json_spans(&mut self, text: &str, spans: &[PartSpan]) {
+        let t = text.as_bytes();
+        let cut = |a: u32, b: u32| t.get(a as usize..b as usize).unwrap_or_default();
+        for (i, s) in spans.iter().enumerate() {
+            if i > 0 {
+                self.byte(b',');
+            }
+            let name = cut(s.start, s.eq);
+            if name.is_empty() {
+                self.put(b"null");
+            } else {
+                self.byte(b'"');
+                self.put(name);
+                self.byte(b'"');
+            }
+            self.byte(b':');
+            self.put(cut(s.eq.saturating_add(1), s.end));
+        }
+    }
+
     fn json_escaped(&mut self, bytes: &[u8]) {
         const HEX: &[u8; 16] = b"0123456789abcdef";
         for &b in bytes {
@@ -327,6 +386,15 @@ const HIGH: u64 = rep(0x80);
 #[inline(always)]
 pub(super) fn zero_byte(x: u64) -> u64 {
     x.wrapping_sub(rep(1)) & !x & HIGH
+}
+
+/// Whether `text` is ASCII without a byte that JSON strings escape (control characters, `"`,
+/// `\\`): what [`W::json_spans`] needs.
+#[inline]
+pub(super) fn json_plain(text: &str) -> bool {
+    scan(text.as_bytes(), |x| {
+        below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\')) | x & HIGH
+    }) == 0
 }
 
 /// Non-zero when some byte of `x` is below 0x20 (exact as to whether one is, as [`zero_byte`]).
@@ -415,6 +483,79 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// The spans' copy path writes what the member-by-member path writes, for texts with and
+    /// without bytes to escape (quotes, backslashes, control characters, non-ASCII), empty
+    /// names and numbers, and spans off the text or off its character boundaries.
+    #[test]
+    fn json_spans_write_what_each_member_writes() {
+        let texts = [
+            "R57=-859895076 R58=12 F3=0",
+            "a=1",
+            "=5 x= y=7",
+            "q\"=1 b\\=2",
+            "t\tab=3 n\nl=4",
+            "caf\u{e9}=1 z=2",
+            "",
+        ];
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u32| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % u64::from(n)) as u32
+        };
+        for text in texts {
+            let n = text.len() as u32;
+            // the spans a writer records, then random ones, some off the text
+            let mut lists: Vec<Vec<PartSpan>> = vec![
+                text.split(' ')
+                    .scan(0u32, |at, tok| {
+                        let start = *at;
+                        *at += tok.len() as u32 + 1;
+                        let eq = start + tok.find('=').unwrap_or(tok.len()) as u32;
+                        Some(PartSpan {
+                            start,
+                            eq,
+                            end: start + tok.len() as u32,
+                            value: 1.0,
+                        })
+                    })
+                    .collect(),
+            ];
+            for _ in 0..200 {
+                let k = next(5) as usize;
+                lists.push(
+                    (0..k)
+                        .map(|_| {
+                            let (a, b, c) = (next(n + 3), next(n + 3), next(n + 3));
+                            let eq = if next(9) == 0 { u32::MAX } else { b };
+                            PartSpan {
+                                start: a,
+                                eq,
+                                end: c,
+                                value: 0.0,
+                            }
+                        })
+                        .collect(),
+                );
+            }
+            for spans in &lists {
+                let parts = Parts::Spans { text, spans };
+                let mut fast = vec![0; 8];
+                let len = write_line(&mut fast, 0, |w| w.json_parts(parts));
+                let mut slow = vec![0; 8];
+                let slow_len = write_line(&mut slow, 0, |w| {
+                    w.put(b",\"parts\":{");
+                    for (i, p) in parts.iter().enumerate() {
+                        w.json_member(i, &p);
+                    }
+                    w.byte(b'}');
+                });
+                assert_eq!(&fast[..len], &slow[..slow_len], "{text:?} {spans:?}");
             }
         }
     }

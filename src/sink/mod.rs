@@ -504,16 +504,7 @@ impl Table {
                 }
             }
             if !row.parts.is_empty() {
-                w.put(b",\"parts\":{");
-                for (i, p) in row.parts.iter().enumerate() {
-                    if i > 0 {
-                        w.byte(b',');
-                    }
-                    w.json_str(p.name);
-                    w.byte(b':');
-                    w.put(p.text.as_bytes());
-                }
-                w.byte(b'}');
+                w.json_parts(row.parts);
             }
             if opts.raw {
                 w.put(b",\"raw\":\"");
