@@ -42,10 +42,79 @@ fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
 /// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
 pub fn push_payload(out: &mut String, payload: &[u8]) {
     push_hex(out, payload);
-    if let Some((unsigned, signed)) = int_reading(payload) {
-        push_reading(out, unsigned, signed);
-    }
+    push_int_reading(out, payload);
 }
+
+/// Appends the integer reading of a 1-, 2- or 4-byte payload ([`push_reading`], a 1-byte
+/// one copied from [`READING1`]); returns where the unsigned number's text stands in `out`
+/// and its value, `None` (nothing appended) for other lengths. Inlined: most payloads have
+/// no reading, and the call would cost more than the length test.
+#[inline(always)]
+fn push_int_reading(out: &mut String, payload: &[u8]) -> Option<(Range<usize>, u64)> {
+    if let [b] = *payload {
+        let start = out.len() + 2;
+        out.push_str(READING1[b as usize]);
+        let digits = 1 + usize::from(b >= 10) + usize::from(b >= 100);
+        return Some((start..start + digits, b as u64));
+    }
+    let (unsigned, signed) = int_reading(payload)?;
+    Some((push_reading(out, unsigned, signed), unsigned))
+}
+
+/// [`push_reading`]'s text of every 1-byte payload, 12 bytes a slot (` (128, -128)` is the
+/// longest); the rest of a slot is padding.
+const READING1_TEXT: ([u8; 256 * 12], [usize; 256]) = {
+    /// Writes `v` (below 1000) in decimal at `t[at..]`; returns the position after it.
+    const fn put(t: &mut [u8; 256 * 12], mut at: usize, v: usize) -> usize {
+        if v >= 100 {
+            t[at] = b'0' + (v / 100) as u8;
+            at += 1;
+        }
+        if v >= 10 {
+            t[at] = b'0' + (v / 10 % 10) as u8;
+            at += 1;
+        }
+        t[at] = b'0' + (v % 10) as u8;
+        at + 1
+    }
+    let mut t = [b' '; 256 * 12];
+    let mut lens = [0; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut at = 12 * b;
+        t[at] = b' ';
+        t[at + 1] = b'(';
+        at = put(&mut t, at + 2, b);
+        if b >= 128 {
+            t[at] = b',';
+            t[at + 1] = b' ';
+            t[at + 2] = b'-';
+            at = put(&mut t, at + 3, 256 - b);
+        }
+        t[at] = b')';
+        lens[b] = at + 1 - 12 * b;
+        b += 1;
+    }
+    (t, lens)
+};
+
+/// ` (N)` or ` (N, -M)` for every byte value: [`push_reading`] of a 1-byte payload as static
+/// strings, one copy instead of a number formatted and three pushes.
+static READING1: [&str; 256] = {
+    let (text, lens) = &READING1_TEXT;
+    let mut t = [""; 256];
+    let mut b = 0;
+    while b < 256 {
+        let (_, rest) = text.split_at(12 * b);
+        let (slot, _) = rest.split_at(lens[b]);
+        t[b] = match std::str::from_utf8(slot) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        b += 1;
+    }
+    t
+};
 
 /// Appends ` (unsigned)` or ` (unsigned, signed)`; returns where the unsigned number's text
 /// stands in `out`.
@@ -280,8 +349,8 @@ impl Mapper {
             // The default reading (`values::read_default`): the integer of 1, 2 or 4 bytes,
             // formatted once into the Data cell, which the Value column borrows.
             push_hex(&mut sc.data, payload);
-            if let Some((unsigned, signed)) = int_reading(payload) {
-                sc.value_at = Some(push_reading(&mut sc.data, unsigned, signed));
+            if let Some((at, unsigned)) = push_int_reading(&mut sc.data, payload) {
+                sc.value_at = Some(at);
                 sc.number = Some((unsigned as f64, command, ack));
             }
             return;
@@ -774,6 +843,21 @@ mod tests {
         let mut s = String::new();
         push_payload(&mut s, &[0xFF, 0xFF]);
         assert_eq!(s, "FF FF (65535, -1)");
+    }
+
+    #[test]
+    fn one_byte_readings_are_push_reading() {
+        for b in 0..=255u8 {
+            let (mut table, mut general) = ("AB".to_string(), "AB".to_string());
+            let Some((at, value)) = push_int_reading(&mut table, &[b]) else {
+                panic!("{b}: no reading");
+            };
+            let general_at = push_reading(&mut general, b as u64, b as i8 as i64);
+            assert_eq!(table, general, "{b}");
+            assert_eq!(at, general_at, "{b}");
+            assert_eq!(&table[at], b.to_string(), "{b}");
+            assert_eq!(value, b as u64);
+        }
     }
 
     #[test]
