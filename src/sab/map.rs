@@ -41,31 +41,31 @@ fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
 /// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
 /// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
 pub fn push_payload(out: &mut String, payload: &[u8]) {
-    push_hex(out, payload);
-    push_int_reading(out, payload);
+    push_data(out, payload);
 }
 
-/// Appends the integer reading of a 1-, 2- or 4-byte payload ([`push_reading`], a 1-byte
-/// one copied from [`READING1`]); returns where the unsigned number's text stands in `out`
-/// and its value, `None` (nothing appended) for other lengths. Inlined: most payloads have
-/// no reading, and the call would cost more than the length test.
+/// [`push_payload`]; returns where the reading's unsigned number stands in `out` and its
+/// value, `None` for a payload without a reading. A 1-byte payload's text is one copy from
+/// [`DATA1`]. Inlined: the call would cost more than the length test.
 #[inline(always)]
-fn push_int_reading(out: &mut String, payload: &[u8]) -> Option<(Range<usize>, u64)> {
+fn push_data(out: &mut String, payload: &[u8]) -> Option<(Range<usize>, u64)> {
     if let [b] = *payload {
-        let start = out.len() + 2;
-        out.push_str(READING1[b as usize]);
+        // After `XX (`.
+        let start = out.len() + 4;
+        out.push_str(DATA1[b as usize]);
         let digits = 1 + usize::from(b >= 10) + usize::from(b >= 100);
         return Some((start..start + digits, b as u64));
     }
+    push_hex(out, payload);
     let (unsigned, signed) = int_reading(payload)?;
     Some((push_reading(out, unsigned, signed), unsigned))
 }
 
-/// [`push_reading`]'s text of every 1-byte payload, 12 bytes a slot (` (128, -128)` is the
-/// longest); the rest of a slot is padding.
-const READING1_TEXT: ([u8; 256 * 12], [usize; 256]) = {
+/// [`push_payload`]'s text of every 1-byte payload, 16 bytes a slot (`80 (128, -128)` is the
+/// longest), and its length.
+const DATA1_TEXT: ([u8; 256 * 16], [usize; 256]) = {
     /// Writes `v` (below 1000) in decimal at `t[at..]`; returns the position after it.
-    const fn put(t: &mut [u8; 256 * 12], mut at: usize, v: usize) -> usize {
+    const fn put(t: &mut [u8; 256 * 16], mut at: usize, v: usize) -> usize {
         if v >= 100 {
             t[at] = b'0' + (v / 100) as u8;
             at += 1;
@@ -77,14 +77,24 @@ const READING1_TEXT: ([u8; 256 * 12], [usize; 256]) = {
         t[at] = b'0' + (v % 10) as u8;
         at + 1
     }
-    let mut t = [b' '; 256 * 12];
+    /// An upper-case hex digit.
+    const fn hex(nibble: usize) -> u8 {
+        if nibble < 10 {
+            b'0' + nibble as u8
+        } else {
+            b'A' + (nibble - 10) as u8
+        }
+    }
+    let mut t = [b' '; 256 * 16];
     let mut lens = [0; 256];
     let mut b = 0;
     while b < 256 {
-        let mut at = 12 * b;
-        t[at] = b' ';
-        t[at + 1] = b'(';
-        at = put(&mut t, at + 2, b);
+        let mut at = 16 * b;
+        t[at] = hex(b >> 4);
+        t[at + 1] = hex(b & 0x0F);
+        t[at + 2] = b' ';
+        t[at + 3] = b'(';
+        at = put(&mut t, at + 4, b);
         if b >= 128 {
             t[at] = b',';
             t[at + 1] = b' ';
@@ -92,20 +102,20 @@ const READING1_TEXT: ([u8; 256 * 12], [usize; 256]) = {
             at = put(&mut t, at + 3, 256 - b);
         }
         t[at] = b')';
-        lens[b] = at + 1 - 12 * b;
+        lens[b] = at + 1 - 16 * b;
         b += 1;
     }
     (t, lens)
 };
 
-/// ` (N)` or ` (N, -M)` for every byte value: [`push_reading`] of a 1-byte payload as static
-/// strings, one copy instead of a number formatted and three pushes.
-static READING1: [&str; 256] = {
-    let (text, lens) = &READING1_TEXT;
+/// `C6 (198, -58)`, `2A (42)`, … for every byte value: the Data cell of a 1-byte payload as
+/// static strings, one copy instead of the hex, a number formatted and three pushes.
+static DATA1: [&str; 256] = {
+    let (text, lens) = &DATA1_TEXT;
     let mut t = [""; 256];
     let mut b = 0;
     while b < 256 {
-        let (_, rest) = text.split_at(12 * b);
+        let (_, rest) = text.split_at(16 * b);
         let (slot, _) = rest.split_at(lens[b]);
         t[b] = match std::str::from_utf8(slot) {
             Ok(s) => s,
@@ -348,8 +358,7 @@ impl Mapper {
         let Some(declared) = values.declared(command, ack) else {
             // The default reading (`values::read_default`): the integer of 1, 2 or 4 bytes,
             // formatted once into the Data cell, which the Value column borrows.
-            push_hex(&mut sc.data, payload);
-            if let Some((at, unsigned)) = push_int_reading(&mut sc.data, payload) {
+            if let Some((at, unsigned)) = push_data(&mut sc.data, payload) {
                 sc.value_at = Some(at);
                 sc.number = Some((unsigned as f64, command, ack));
             }
@@ -846,12 +855,13 @@ mod tests {
     }
 
     #[test]
-    fn one_byte_readings_are_push_reading() {
+    fn one_byte_data_is_hex_and_push_reading() {
         for b in 0..=255u8 {
             let (mut table, mut general) = ("AB".to_string(), "AB".to_string());
-            let Some((at, value)) = push_int_reading(&mut table, &[b]) else {
+            let Some((at, value)) = push_data(&mut table, &[b]) else {
                 panic!("{b}: no reading");
             };
+            push_hex(&mut general, &[b]);
             let general_at = push_reading(&mut general, b as u64, b as i8 as i64);
             assert_eq!(table, general, "{b}");
             assert_eq!(at, general_at, "{b}");
