@@ -15,8 +15,8 @@ use crate::fmt::{
 };
 use std::ops::Range;
 
-use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
+use crate::row::{Latch, RowOut};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
@@ -287,9 +287,11 @@ impl Mapper {
         self.stats.chose(framing, reason);
     }
 
-    /// Writes one row; `out` is the decoder's [`crate::row::Latch`], which keeps a write error.
+    /// Writes one row; `out` is the decoder's [`Latch`], which keeps a write error. The
+    /// mapper takes the latch by its type, not as a `dyn RowOut`: its check is inlined here
+    /// and only the table's write remains a dynamic call.
     #[inline(always)]
-    fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
+    fn put(&mut self, p: RowParts<'_>, out: &mut Latch<'_>) {
         let sc = &mut self.scratch;
         if let Some(n) = self.framing_note.take() {
             if sc.note.is_empty() {
@@ -400,7 +402,7 @@ impl Mapper {
         }
     }
 
-    pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut dyn RowOut) {
+    pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut Latch<'_>) {
         let r = x.request;
         self.stats.timeouts += 1;
         self.stats.per[r.address as usize].timeouts += 1;
@@ -446,7 +448,7 @@ impl Mapper {
     }
 
     /// Handles one event of the active reassembler.
-    pub(super) fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) {
+    pub(super) fn event(&mut self, ev: &Event<'_>, out: &mut Latch<'_>) {
         let start = self.start_ns(ev);
         if let Some(x) = self.pairing.advance(start) {
             self.timeout_row(&x, ev.framing, out);
@@ -459,7 +461,7 @@ impl Mapper {
     }
 
     /// A valid frame; `start` in ns.
-    fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let (Some(header), Some(command)) = (ev.header(), ev.command()) else {
             return self.broken(ev, start / 1000, out);
         };
@@ -615,7 +617,7 @@ impl Mapper {
         );
     }
 
-    fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         st.bad_crc += 1;
         let sc = &mut self.scratch;
@@ -669,7 +671,7 @@ impl Mapper {
     }
 
     /// Garbage, truncated frames, runts, aborts, overlong frames.
-    fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         let sc = &mut self.scratch;
         sc.clear();
@@ -788,7 +790,7 @@ impl Mapper {
     }
 
     /// End of the capture at `now` (ns).
-    pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
+    pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut Latch<'_>) {
         if let Some(x) = self.pairing.finish(now) {
             self.timeout_row(&x, framing, out);
         }
