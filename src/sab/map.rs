@@ -10,9 +10,7 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{
-    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
-};
+use crate::fmt::{hex_0x, push_0x, push_0x16, push_hex, push_ms, push_ms_short, push_u64};
 use std::ops::Range;
 
 use crate::row::{Class, Part, Row};
@@ -23,16 +21,16 @@ const OVERLONG_DATA_MAX: usize = 64;
 
 /// The little-endian integer reading of a payload of 1, 2 or 4 bytes: (unsigned, signed).
 #[inline]
-fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
+fn int_reading(payload: &[u8]) -> Option<(u32, i32)> {
     Some(match *payload {
-        [a] => (a as u64, a as i8 as i64),
+        [a] => (a as u32, a as i8 as i32),
         [a, b] => {
             let v = u16::from_le_bytes([a, b]);
-            (v as u64, v as i16 as i64)
+            (v as u32, v as i16 as i32)
         }
         [a, b, c, d] => {
             let v = u32::from_le_bytes([a, b, c, d]);
-            (v as u64, v as i32 as i64)
+            (v, v as i32)
         }
         _ => return None,
     })
@@ -58,7 +56,7 @@ fn push_data(out: &mut String, payload: &[u8]) -> Option<(Range<usize>, u64)> {
     }
     push_hex(out, payload);
     let (unsigned, signed) = int_reading(payload)?;
-    Some((push_reading(out, unsigned, signed), unsigned))
+    Some((push_reading(out, unsigned, signed), unsigned as u64))
 }
 
 /// [`push_payload`]'s text of every 1-byte payload, 16 bytes a slot (`80 (128, -128)` is the
@@ -127,16 +125,18 @@ static DATA1: [&str; 256] = {
 };
 
 /// Appends ` (unsigned)` or ` (unsigned, signed)`; returns where the unsigned number's text
-/// stands in `out`.
+/// stands in `out`. The numbers are formatted as 32-bit ones (one buffer, itoa's 32-bit
+/// path).
 #[inline]
-fn push_reading(out: &mut String, unsigned: u64, signed: i64) -> Range<usize> {
+fn push_reading(out: &mut String, unsigned: u32, signed: i32) -> Range<usize> {
+    let mut digits = itoa::Buffer::new();
     out.push_str(" (");
     let start = out.len();
-    push_u64(out, unsigned);
+    out.push_str(digits.format(unsigned));
     let text = start..out.len();
     if signed < 0 {
         out.push_str(", ");
-        push_i64(out, signed);
+        out.push_str(digits.format(signed));
     }
     out.push(')');
     text
@@ -833,6 +833,11 @@ mod tests {
             &[1, 2, 3],
             &[0, 0, 0, 0x80],
             &[0xFF; 4],
+            &[0xFF, 0xFF, 0xFF, 0x7F],
+            &[0x00, 0xCA, 0x9A, 0x3B],
+            &[0xFF, 0xC9, 0x9A, 0x3B],
+            &[0x00, 0x80],
+            &[0xFF, 0x7F],
             &[1, 2, 3, 4, 5],
         ] {
             let mut data = String::new();
@@ -864,7 +869,7 @@ mod tests {
                 panic!("{b}: no reading");
             };
             push_hex(&mut general, &[b]);
-            let general_at = push_reading(&mut general, b as u64, b as i8 as i64);
+            let general_at = push_reading(&mut general, b as u32, b as i8 as i32);
             assert_eq!(table, general, "{b}");
             assert_eq!(at, general_at, "{b}");
             assert_eq!(&table[at], b.to_string(), "{b}");
