@@ -72,7 +72,7 @@ fn shadowed<A: Stepper, S: Stepper>(
     map: &mut Mapper,
     data: &[u8],
     time: Option<u64>,
-    out: &mut dyn RowOut,
+    out: &mut Latch<'_>,
 ) -> Option<usize> {
     let mut done = 0;
     for block in data.chunks(SHADOW_BLOCK) {
@@ -110,7 +110,7 @@ fn shadowed_bytes<A: Stepper, S: Stepper>(
     map: &mut Mapper,
     data: &[u8],
     time: Option<u64>,
-    out: &mut dyn RowOut,
+    out: &mut Latch<'_>,
 ) -> Option<usize> {
     for (i, &b) in data.iter().enumerate() {
         let mut active_valid = false;
@@ -296,7 +296,7 @@ impl SabDecoder {
     }
 
     /// Feeds one byte while detection is undecided.
-    fn step(&mut self, b: u8, time: Option<u64>, out: &mut dyn RowOut) {
+    fn step(&mut self, b: u8, time: Option<u64>, out: &mut Latch<'_>) {
         self.pos += 1;
         match &mut self.mode {
             Mode::Undecided(u) => {
@@ -323,7 +323,7 @@ impl SabDecoder {
 
     /// Feeds `data` to the chosen and the background reassembler; switches framing when the
     /// background one wins (see [`detect`]).
-    fn push_shadowed(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) {
+    fn push_shadowed(&mut self, data: &[u8], time: Option<u64>, out: &mut Latch<'_>) {
         let mut rest = data;
         while !rest.is_empty() {
             let Mode::Locked {
@@ -363,7 +363,7 @@ impl SabDecoder {
     }
 
     /// Ends detection: replays the held bytes through the chosen framing.
-    fn decide(&mut self, framing: Framing, reason: Reason, out: &mut dyn RowOut) {
+    fn decide(&mut self, framing: Framing, reason: Reason, out: &mut Latch<'_>) {
         let mut active = Reasm::new(framing, self.max_payload);
         let placeholder = Mode::Locked {
             active: Box::new(Reasm::new(framing, self.max_payload)),
@@ -404,7 +404,7 @@ impl Decoder for SabDecoder {
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
         let mut latch = Latch::new(out);
-        let out: &mut dyn RowOut = &mut latch;
+        let out = &mut latch;
         if time.is_some() {
             self.last_time = time;
         }
@@ -435,7 +435,7 @@ impl Decoder for SabDecoder {
 
     fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         let mut latch = Latch::new(out);
-        let out: &mut dyn RowOut = &mut latch;
+        let out = &mut latch;
         if let Mode::Undecided(u) = &self.mode
             && !u.held.is_empty()
             && u.held
@@ -465,7 +465,7 @@ impl Decoder for SabDecoder {
     /// request still waiting for a response. Decoding goes on with the next `push`.
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
         let mut latch = Latch::new(out);
-        let out: &mut dyn RowOut = &mut latch;
+        let out = &mut latch;
         if let Mode::Undecided(u) = &self.mode {
             let (s, h) = (u.sync_valid, u.hdlc_valid);
             if self.pos == 0 {

@@ -2,18 +2,60 @@
 
 use super::header::{self, Flags};
 
-/// Bytes a search looks at one by one before it hands the rest to `memchr`: runs inside
-/// frames are short (a few bytes, cheaper without its setup), runs of noise or of the other
-/// framing's traffic long.
+/// Bytes a search looks at itself before it hands the rest to `memchr`: runs inside frames
+/// are short (a few bytes, cheaper without its setup), runs of noise or of the other
+/// framing's traffic long. The head is read eight bytes at a time ([`zero_bytes`]).
 const SCAN_HEAD: usize = 16;
+
+/// `0x01` in every byte of a word.
+const LOW_BITS: u64 = 0x0101_0101_0101_0101;
+
+/// The bytes of `word` that are zero, as their high bits; a zero byte's borrow can also mark
+/// bytes above it, so only the lowest mark is exact (the first zero byte of a little-endian
+/// word), which is all the searches use.
+#[inline(always)]
+fn zero_bytes(word: u64) -> u64 {
+    word.wrapping_sub(LOW_BITS) & !word & (LOW_BITS << 7)
+}
+
+/// Searches the head of `hay` for the bytes that `is` accepts: the first byte alone (the
+/// usual answer: a 0x54 right after a SAB v1 frame, a flag right after a SAB2 frame's closing
+/// one), then a word at a time (`marks` flags the same bytes in a word, see [`zero_bytes`]),
+/// and byte by byte when fewer than eight bytes are left. `Ok` is the answer (the index of
+/// the first match, or none in a short `hay`); `Err(i)`: no match in the first `i` bytes, the
+/// rest (past [`SCAN_HEAD`]) is the caller's.
+#[inline(always)]
+fn scan_head(
+    hay: &[u8],
+    marks: impl Fn(u64) -> u64,
+    is: impl Fn(u8) -> bool,
+) -> Result<Option<usize>, usize> {
+    match hay.first() {
+        None => return Ok(None),
+        Some(&b) if is(b) => return Ok(Some(0)),
+        Some(_) => {}
+    }
+    let mut i = 0;
+    while i < SCAN_HEAD {
+        let Some(word) = hay[i..].first_chunk::<8>() else {
+            return Ok(hay[i..].iter().position(|&b| is(b)).map(|k| k + i));
+        };
+        let m = marks(u64::from_le_bytes(*word));
+        if m != 0 {
+            return Ok(Some(i + (m.trailing_zeros() / 8) as usize));
+        }
+        i += 8;
+    }
+    Err(i)
+}
 
 /// The index of the first `needle` in `hay`.
 #[inline(always)]
 pub(super) fn find(needle: u8, hay: &[u8]) -> Option<usize> {
-    let head = hay.len().min(SCAN_HEAD);
-    match hay[..head].iter().position(|&b| b == needle) {
-        Some(i) => Some(i),
-        None => find_tail(needle, &hay[head..]).map(|i| i + head),
+    let n = LOW_BITS * needle as u64;
+    match scan_head(hay, |w| zero_bytes(w ^ n), |b| b == needle) {
+        Ok(found) => found,
+        Err(head) => find_tail(needle, &hay[head..]).map(|i| i + head),
     }
 }
 
@@ -26,10 +68,11 @@ fn find_tail(needle: u8, hay: &[u8]) -> Option<usize> {
 /// The index of the first `a` or `b` in `hay`.
 #[inline(always)]
 pub(super) fn find2(a: u8, b: u8, hay: &[u8]) -> Option<usize> {
-    let head = hay.len().min(SCAN_HEAD);
-    match hay[..head].iter().position(|&x| x == a || x == b) {
-        Some(i) => Some(i),
-        None => find2_tail(a, b, &hay[head..]).map(|i| i + head),
+    let (na, nb) = (LOW_BITS * a as u64, LOW_BITS * b as u64);
+    let marks = |w: u64| zero_bytes(w ^ na) | zero_bytes(w ^ nb);
+    match scan_head(hay, marks, |x| x == a || x == b) {
+        Ok(found) => found,
+        Err(head) => find2_tail(a, b, &hay[head..]).map(|i| i + head),
     }
 }
 
@@ -281,6 +324,74 @@ impl From<&Event<'_>> for OwnedEvent {
             odd_escapes: e.odd_escapes,
             body_len: e.body_len,
             crc_with_sync: e.crc_with_sync,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Haystacks of every length up to 48 with needles, their neighbours and bytes whose
+    /// subtraction borrows (0x00, 0x01, 0x80, 0xFF) at every place, and xorshift noise.
+    fn haystacks(a: u8, b: u8) -> Vec<Vec<u8>> {
+        let mut out = Vec::new();
+        let fill = [0x00, 0x01, 0x80, 0xFF, a ^ 1, b ^ 0x80, a.wrapping_add(1)];
+        for len in 0..48 {
+            for &f in &fill {
+                out.push(vec![f; len]);
+                for at in 0..len {
+                    for &x in &[a, b, 0x00, 0x01, 0x80, 0xFF, a.wrapping_sub(1)] {
+                        let mut h = vec![f; len];
+                        h[at] = x;
+                        out.push(h.clone());
+                        if at + 1 < len {
+                            h[at + 1] = b;
+                            out.push(h);
+                        }
+                    }
+                }
+            }
+        }
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for i in 0..20_000 {
+            let len = i % 70;
+            out.push(
+                (0..len)
+                    .map(|_| {
+                        x ^= x << 13;
+                        x ^= x >> 7;
+                        x ^= x << 17;
+                        // Few distinct values, so needles turn up often.
+                        [a, b, 0x00, 0x80, 0xFF, a ^ 1, x as u8][(x >> 32) as usize % 7]
+                    })
+                    .collect(),
+            );
+        }
+        out
+    }
+
+    #[test]
+    fn word_searches_are_byte_searches() {
+        for (a, b) in [
+            (0x7E, 0x7D),
+            (0x54, 0x54),
+            (0x00, 0xFF),
+            (0x80, 0x7F),
+            (0x01, 0x00),
+        ] {
+            for hay in haystacks(a, b) {
+                assert_eq!(
+                    find(a, &hay),
+                    hay.iter().position(|&x| x == a),
+                    "find {a:#04x} in {hay:02x?}"
+                );
+                assert_eq!(
+                    find2(a, b, &hay),
+                    hay.iter().position(|&x| x == a || x == b),
+                    "find2 {a:#04x} {b:#04x} in {hay:02x?}"
+                );
+            }
         }
     }
 }

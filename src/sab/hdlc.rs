@@ -31,6 +31,9 @@ pub const STORE_MAX: usize = OVERHEAD + 255;
 /// Wire bytes kept at most for a row.
 pub const WIRE_MAX: usize = 2 + 2 * STORE_MAX;
 use crate::row::GARBAGE_ROW_MAX;
+/// Bytes between flags that [`Reassembler::unescape_run`] takes one by one (a usual frame's);
+/// longer runs go stretch by stretch.
+const SHORT_RUN: usize = 16;
 
 /// Slice-by-16 tables: every byte between two flags of either framing's traffic goes through
 /// this CRC (the background framing of the detection checks SAB v1 data with it too).
@@ -165,8 +168,16 @@ impl Reassembler {
     }
 
     /// The body bytes of `run` (no flag among them): [`Self::step_body`] for each, runs
-    /// without an escape copied whole.
+    /// without an escape copied whole when `run` is long.
     fn unescape_run(&mut self, run: &[u8]) {
+        if run.len() <= SHORT_RUN {
+            // A frame's body with an escape: byte by byte costs less than a search and a
+            // copy for each stretch between escapes.
+            for &b in run {
+                self.step_body(b);
+            }
+            return;
+        }
         let mut rest = run;
         while let Some((&first, tail)) = rest.split_first() {
             if self.escaped {
@@ -494,7 +505,9 @@ struct Run<'a> {
 }
 
 impl Run<'_> {
-    /// Emits the run's event, if it is one; true for a valid frame.
+    /// Emits the run's event, if it is one; true for a valid frame. Inlined into its three
+    /// callers: the event is then built in place and its unread fields are never written.
+    #[inline(always)]
     fn emit(&self, emit: &mut impl FnMut(&Event<'_>)) -> bool {
         let n = self.body_len;
         let stored = self.body.len();

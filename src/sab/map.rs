@@ -10,29 +10,27 @@ use super::pairing::{self, Answer, Expired, Lateness, Pairing, Why};
 use super::stats::Stats;
 use super::values::{Reading, Values};
 use super::{hdlc, sync};
-use crate::fmt::{
-    hex_0x, push_0x, push_0x16, push_hex, push_i64, push_ms, push_ms_short, push_u64,
-};
+use crate::fmt::{hex_0x, push_0x, push_0x16, push_hex, push_ms, push_ms_short, push_u64};
 use std::ops::Range;
 
-use crate::row::RowOut;
 use crate::row::{Class, Part, Row};
+use crate::row::{Latch, RowOut};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
 
 /// The little-endian integer reading of a payload of 1, 2 or 4 bytes: (unsigned, signed).
 #[inline]
-fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
+fn int_reading(payload: &[u8]) -> Option<(u32, i32)> {
     Some(match *payload {
-        [a] => (a as u64, a as i8 as i64),
+        [a] => (a as u32, a as i8 as i32),
         [a, b] => {
             let v = u16::from_le_bytes([a, b]);
-            (v as u64, v as i16 as i64)
+            (v as u32, v as i16 as i32)
         }
         [a, b, c, d] => {
             let v = u32::from_le_bytes([a, b, c, d]);
-            (v as u64, v as i32 as i64)
+            (v, v as i32)
         }
         _ => return None,
     })
@@ -41,23 +39,104 @@ fn int_reading(payload: &[u8]) -> Option<(u64, i64)> {
 /// Appends the payload in hex plus its little-endian integer reading for 1, 2 or 4 bytes
 /// (`AA BA (47786)`; with the signed reading when the top bit is set: `FF FF (65535, -1)`).
 pub fn push_payload(out: &mut String, payload: &[u8]) {
-    push_hex(out, payload);
-    if let Some((unsigned, signed)) = int_reading(payload) {
-        push_reading(out, unsigned, signed);
-    }
+    push_data(out, payload);
 }
 
+/// [`push_payload`]; returns where the reading's unsigned number stands in `out` and its
+/// value, `None` for a payload without a reading. A 1-byte payload's text is one copy from
+/// [`DATA1`]. Inlined: the call would cost more than the length test.
+#[inline(always)]
+fn push_data(out: &mut String, payload: &[u8]) -> Option<(Range<usize>, u64)> {
+    if let [b] = *payload {
+        // After `XX (`.
+        let start = out.len() + 4;
+        out.push_str(DATA1[b as usize]);
+        let digits = 1 + usize::from(b >= 10) + usize::from(b >= 100);
+        return Some((start..start + digits, b as u64));
+    }
+    push_hex(out, payload);
+    let (unsigned, signed) = int_reading(payload)?;
+    Some((push_reading(out, unsigned, signed), unsigned as u64))
+}
+
+/// [`push_payload`]'s text of every 1-byte payload, 16 bytes a slot (`80 (128, -128)` is the
+/// longest), and its length.
+const DATA1_TEXT: ([u8; 256 * 16], [usize; 256]) = {
+    /// Writes `v` (below 1000) in decimal at `t[at..]`; returns the position after it.
+    const fn put(t: &mut [u8; 256 * 16], mut at: usize, v: usize) -> usize {
+        if v >= 100 {
+            t[at] = b'0' + (v / 100) as u8;
+            at += 1;
+        }
+        if v >= 10 {
+            t[at] = b'0' + (v / 10 % 10) as u8;
+            at += 1;
+        }
+        t[at] = b'0' + (v % 10) as u8;
+        at + 1
+    }
+    /// An upper-case hex digit.
+    const fn hex(nibble: usize) -> u8 {
+        if nibble < 10 {
+            b'0' + nibble as u8
+        } else {
+            b'A' + (nibble - 10) as u8
+        }
+    }
+    let mut t = [b' '; 256 * 16];
+    let mut lens = [0; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut at = 16 * b;
+        t[at] = hex(b >> 4);
+        t[at + 1] = hex(b & 0x0F);
+        t[at + 2] = b' ';
+        t[at + 3] = b'(';
+        at = put(&mut t, at + 4, b);
+        if b >= 128 {
+            t[at] = b',';
+            t[at + 1] = b' ';
+            t[at + 2] = b'-';
+            at = put(&mut t, at + 3, 256 - b);
+        }
+        t[at] = b')';
+        lens[b] = at + 1 - 16 * b;
+        b += 1;
+    }
+    (t, lens)
+};
+
+/// `C6 (198, -58)`, `2A (42)`, … for every byte value: the Data cell of a 1-byte payload as
+/// static strings, one copy instead of the hex, a number formatted and three pushes.
+static DATA1: [&str; 256] = {
+    let (text, lens) = &DATA1_TEXT;
+    let mut t = [""; 256];
+    let mut b = 0;
+    while b < 256 {
+        let (_, rest) = text.split_at(16 * b);
+        let (slot, _) = rest.split_at(lens[b]);
+        t[b] = match std::str::from_utf8(slot) {
+            Ok(s) => s,
+            Err(_) => panic!("ASCII"),
+        };
+        b += 1;
+    }
+    t
+};
+
 /// Appends ` (unsigned)` or ` (unsigned, signed)`; returns where the unsigned number's text
-/// stands in `out`.
+/// stands in `out`. The numbers are formatted as 32-bit ones (one buffer, itoa's 32-bit
+/// path).
 #[inline]
-fn push_reading(out: &mut String, unsigned: u64, signed: i64) -> Range<usize> {
+fn push_reading(out: &mut String, unsigned: u32, signed: i32) -> Range<usize> {
+    let mut digits = itoa::Buffer::new();
     out.push_str(" (");
     let start = out.len();
-    push_u64(out, unsigned);
+    out.push_str(digits.format(unsigned));
     let text = start..out.len();
     if signed < 0 {
         out.push_str(", ");
-        push_i64(out, signed);
+        out.push_str(digits.format(signed));
     }
     out.push(')');
     text
@@ -208,9 +287,11 @@ impl Mapper {
         self.stats.chose(framing, reason);
     }
 
-    /// Writes one row; `out` is the decoder's [`crate::row::Latch`], which keeps a write error.
+    /// Writes one row; `out` is the decoder's [`Latch`], which keeps a write error. The
+    /// mapper takes the latch by its type, not as a `dyn RowOut`: its check is inlined here
+    /// and only the table's write remains a dynamic call.
     #[inline(always)]
-    fn put(&mut self, p: RowParts<'_>, out: &mut dyn RowOut) {
+    fn put(&mut self, p: RowParts<'_>, out: &mut Latch<'_>) {
         let sc = &mut self.scratch;
         if let Some(n) = self.framing_note.take() {
             if sc.note.is_empty() {
@@ -279,9 +360,8 @@ impl Mapper {
         let Some(declared) = values.declared(command, ack) else {
             // The default reading (`values::read_default`): the integer of 1, 2 or 4 bytes,
             // formatted once into the Data cell, which the Value column borrows.
-            push_hex(&mut sc.data, payload);
-            if let Some((unsigned, signed)) = int_reading(payload) {
-                sc.value_at = Some(push_reading(&mut sc.data, unsigned, signed));
+            if let Some((at, unsigned)) = push_data(&mut sc.data, payload) {
+                sc.value_at = Some(at);
                 sc.number = Some((unsigned as f64, command, ack));
             }
             return;
@@ -322,7 +402,7 @@ impl Mapper {
         }
     }
 
-    pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut dyn RowOut) {
+    pub(super) fn timeout_row(&mut self, x: &Expired, framing: Framing, out: &mut Latch<'_>) {
         let r = x.request;
         self.stats.timeouts += 1;
         self.stats.per[r.address as usize].timeouts += 1;
@@ -368,7 +448,7 @@ impl Mapper {
     }
 
     /// Handles one event of the active reassembler.
-    pub(super) fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) {
+    pub(super) fn event(&mut self, ev: &Event<'_>, out: &mut Latch<'_>) {
         let start = self.start_ns(ev);
         if let Some(x) = self.pairing.advance(start) {
             self.timeout_row(&x, ev.framing, out);
@@ -381,7 +461,7 @@ impl Mapper {
     }
 
     /// A valid frame; `start` in ns.
-    fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn frame(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let (Some(header), Some(command)) = (ev.header(), ev.command()) else {
             return self.broken(ev, start / 1000, out);
         };
@@ -537,7 +617,7 @@ impl Mapper {
         );
     }
 
-    fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         st.bad_crc += 1;
         let sc = &mut self.scratch;
@@ -591,7 +671,7 @@ impl Mapper {
     }
 
     /// Garbage, truncated frames, runts, aborts, overlong frames.
-    fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut dyn RowOut) {
+    fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         let sc = &mut self.scratch;
         sc.clear();
@@ -710,7 +790,7 @@ impl Mapper {
     }
 
     /// End of the capture at `now` (ns).
-    pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut dyn RowOut) {
+    pub(super) fn finish(&mut self, now: u64, framing: Framing, out: &mut Latch<'_>) {
         if let Some(x) = self.pairing.finish(now) {
             self.timeout_row(&x, framing, out);
         }
@@ -753,6 +833,11 @@ mod tests {
             &[1, 2, 3],
             &[0, 0, 0, 0x80],
             &[0xFF; 4],
+            &[0xFF, 0xFF, 0xFF, 0x7F],
+            &[0x00, 0xCA, 0x9A, 0x3B],
+            &[0xFF, 0xC9, 0x9A, 0x3B],
+            &[0x00, 0x80],
+            &[0xFF, 0x7F],
             &[1, 2, 3, 4, 5],
         ] {
             let mut data = String::new();
@@ -774,6 +859,22 @@ mod tests {
         let mut s = String::new();
         push_payload(&mut s, &[0xFF, 0xFF]);
         assert_eq!(s, "FF FF (65535, -1)");
+    }
+
+    #[test]
+    fn one_byte_data_is_hex_and_push_reading() {
+        for b in 0..=255u8 {
+            let (mut table, mut general) = ("AB".to_string(), "AB".to_string());
+            let Some((at, value)) = push_data(&mut table, &[b]) else {
+                panic!("{b}: no reading");
+            };
+            push_hex(&mut general, &[b]);
+            let general_at = push_reading(&mut general, b as u32, b as i8 as i32);
+            assert_eq!(table, general, "{b}");
+            assert_eq!(at, general_at, "{b}");
+            assert_eq!(&table[at], b.to_string(), "{b}");
+            assert_eq!(value, b as u64);
+        }
     }
 
     #[test]
