@@ -3,7 +3,7 @@
 //! row per PLC (bounded); every telegram goes through the shared mapper ([`super::map`]).
 
 use std::fmt::Write as _;
-use std::net::SocketAddr;
+use std::net::{SocketAddr, SocketAddrV4};
 
 use super::ether;
 use super::map::{Mapper, put_row};
@@ -20,6 +20,39 @@ use crate::stats::{Problems, Report};
 /// Addresses of PLCs beyond [`MAX_PLCS`] remembered to count them once.
 const MERGED_PLCS_KEPT: usize = 4_096;
 
+/// A conversation's ends, client and server: the key of [`EtherPairing`], looked up for every
+/// datagram. IPv4 ends (nearly every capture) are packed into one word each (address and
+/// port), which hash in two steps and compare in two; a pair of `SocketAddr`s hashed its
+/// variants, lengths and every address byte one by one and compared as enums (about 100
+/// instructions a packet for the lookup). Other ends keep their addresses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Ends {
+    V4 {
+        client: u64,
+        server: u64,
+    },
+    Other {
+        client: SocketAddr,
+        server: SocketAddr,
+    },
+}
+
+impl Ends {
+    fn new(client: SocketAddr, server: SocketAddr) -> Self {
+        /// Address and port in the low 48 bits: distinct ends give distinct words.
+        fn word(a: &SocketAddrV4) -> u64 {
+            u64::from(a.ip().to_bits()) << 16 | u64::from(a.port())
+        }
+        match (client, server) {
+            (SocketAddr::V4(c), SocketAddr::V4(s)) => Ends::V4 {
+                client: word(&c),
+                server: word(&s),
+            },
+            _ => Ends::Other { client, server },
+        }
+    }
+}
+
 struct Plc {
     name: String,
     stats: StationStats,
@@ -32,8 +65,8 @@ pub struct EtherDecoder {
 
 struct EtherCore {
     port: u16,
-    /// Conversations are keyed by (client, server); their tag is the PLC's index.
-    pairing: EtherPairing<(SocketAddr, SocketAddr)>,
+    /// Conversations are keyed by their ends; their tag is the PLC's index.
+    pairing: EtherPairing<Ends>,
     /// At most [`MAX_PLCS`] + 1 (the last one: every other PLC).
     plcs: Vec<Plc>,
     plc_index: pairing::FastMap<SocketAddr, usize>,
@@ -164,8 +197,9 @@ impl EtherCore {
     ) -> Result<(u32, usize), OutputError> {
         let mut expired = std::mem::take(&mut self.expired);
         let mut fresh = false;
+        let ends = Ends::new(client, server);
         let (conv, tag) = self.pairing.conversation(
-            (client, server),
+            ends,
             t,
             || {
                 fresh = true;
@@ -175,7 +209,7 @@ impl EtherCore {
         );
         let plc = if fresh {
             let i = self.plc(server);
-            self.pairing.set_tag((client, server), i as u32);
+            self.pairing.set_tag(ends, i as u32);
             i
         } else {
             tag as usize
@@ -546,5 +580,51 @@ impl Decoder for EtherDecoder {
 
     fn no_frames_hint(&self) -> &'static str {
         "no Ether-S-Bus datagram yet: check the UDP port (--udp-port) and the tcpdump filter"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::{Ipv4Addr, Ipv6Addr, SocketAddrV6};
+
+    /// Two pairs of ends make the same key exactly when they are the same addresses: IPv4
+    /// packed, IPv6 and mixed pairs kept, at the edges of every address byte and port.
+    #[test]
+    fn ends_are_equal_exactly_when_the_addresses_are() {
+        let mut addrs = Vec::new();
+        for ip in [
+            0u32,
+            1,
+            0xFF,
+            0x100,
+            0xC0A8_0164,
+            0x0A00_0005,
+            0xFFFF_FFFF,
+            0x8000_0000,
+        ] {
+            for port in [0u16, 1, 5050, 0x8000, 0xFFFF] {
+                addrs.push(SocketAddr::V4(SocketAddrV4::new(
+                    Ipv4Addr::from_bits(ip),
+                    port,
+                )));
+            }
+        }
+        for ip in [0u128, 1, 0xC0A8_0164, u128::MAX] {
+            for port in [0u16, 5050] {
+                let v6 = SocketAddrV6::new(Ipv6Addr::from_bits(ip), port, 0, 0);
+                addrs.push(SocketAddr::V6(v6));
+            }
+        }
+        let pairs: Vec<_> = addrs
+            .iter()
+            .flat_map(|&c| addrs.iter().step_by(3).map(move |&s| (c, s)))
+            .collect();
+        for &a in &pairs {
+            let ka = Ends::new(a.0, a.1);
+            for &b in &pairs {
+                assert_eq!(ka == Ends::new(b.0, b.1), a == b, "{a:?} {b:?}");
+            }
+        }
     }
 }
