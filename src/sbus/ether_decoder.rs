@@ -195,7 +195,6 @@ impl EtherCore {
         t: u64,
         out: &mut dyn RowOut,
     ) -> Result<(u32, usize), OutputError> {
-        let mut expired = std::mem::take(&mut self.expired);
         let mut fresh = false;
         let ends = Ends::new(client, server);
         let (conv, tag) = self.pairing.conversation(
@@ -205,7 +204,7 @@ impl EtherCore {
                 fresh = true;
                 u32::MAX
             },
-            &mut expired,
+            &mut self.expired,
         );
         let plc = if fresh {
             let i = self.plc(server);
@@ -214,17 +213,30 @@ impl EtherCore {
         } else {
             tag as usize
         };
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r.map(|_| (conv, plc))
+        self.timeout_rows(out).map(|_| (conv, plc))
     }
 
-    fn timeout_rows(&mut self, expired: &[Expired], out: &mut dyn RowOut) -> RowResult {
-        for e in expired {
-            self.timeout_row(&e.req, e.why, e.at, out)?;
+    /// Timeout rows for the requests the pairing gave up into `self.expired`. Nearly always
+    /// there are none: that test is inlined, the rows are written out of line.
+    #[inline]
+    fn timeout_rows(&mut self, out: &mut dyn RowOut) -> RowResult {
+        if self.expired.is_empty() {
+            Ok(())
+        } else {
+            self.write_timeout_rows(out)
         }
-        Ok(())
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn write_timeout_rows(&mut self, out: &mut dyn RowOut) -> RowResult {
+        let mut expired = std::mem::take(&mut self.expired);
+        let r = expired
+            .iter()
+            .try_for_each(|e| self.timeout_row(&e.req, e.why, e.at, out));
+        expired.clear();
+        self.expired = expired;
+        r
     }
 
     fn sync_forgotten(&mut self) {
@@ -308,12 +320,8 @@ impl EtherCore {
     }
 
     fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
-        let mut expired = std::mem::take(&mut self.expired);
-        self.pairing.expire(now, &mut expired);
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r
+        self.pairing.expire(now, &mut self.expired);
+        self.timeout_rows(out)
     }
 
     fn timeout_row(
@@ -456,12 +464,8 @@ impl EtherCore {
         let info = self.map.request(station, cmd, &tg[2..], st, &mut class);
         let mut req = Outstanding::new(info, t, true, Some(tele.seq));
         req.tag = plc as u32;
-        let mut expired = std::mem::take(&mut self.expired);
-        let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut expired);
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r?;
+        let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut self.expired);
+        self.timeout_rows(out)?;
         let st = &mut self.plcs[plc].stats;
         if let Some(g) = gap {
             st.seq_gaps += 1;
