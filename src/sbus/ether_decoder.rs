@@ -7,7 +7,9 @@ use std::net::{SocketAddr, SocketAddrV4};
 
 use super::ether;
 use super::map::{Mapper, put_row};
-use super::pairing::{self, EtherPairing, Expired, Outstanding, TableSizes, TimeoutWhy};
+use super::pairing::{
+    self, Conversation, EtherPairing, Expired, Outstanding, TableSizes, TimeoutWhy,
+};
 use super::stats::{self, MAX_PLCS, StationStats, Totals};
 use super::telegram;
 use super::{COLUMNS, DEFAULT_ETHER_TIMEOUT_MS, Options};
@@ -186,20 +188,23 @@ impl EtherCore {
         }
     }
 
-    /// The conversation of `client` and `server` at `t`: its id and PLC. The open request of a
-    /// conversation dropped to make room gets its Timeout row here.
+    /// The conversation of `client` and `server` at `t` and its PLC (`request`: the sequence of
+    /// a request the pairing will open, see [`EtherPairing::conversation`]). The open request
+    /// of a conversation dropped to make room gets its Timeout row here.
     fn conv(
         &mut self,
         client: SocketAddr,
         server: SocketAddr,
         t: u64,
+        request: Option<u16>,
         out: &mut dyn RowOut,
-    ) -> Result<(u32, usize), OutputError> {
+    ) -> Result<(Conversation, usize), OutputError> {
         let mut fresh = false;
         let ends = Ends::new(client, server);
-        let (conv, tag) = self.pairing.conversation(
+        let conv = self.pairing.conversation(
             ends,
             t,
+            request,
             || {
                 fresh = true;
                 u32::MAX
@@ -211,7 +216,7 @@ impl EtherCore {
             self.pairing.set_tag(ends, i as u32);
             i
         } else {
-            tag as usize
+            conv.tag as usize
         };
         self.timeout_rows(out).map(|_| (conv, plc))
     }
@@ -383,13 +388,15 @@ impl EtherCore {
         } else {
             (u.dst, u.src)
         };
-        let (conv, plc) = self.conv(client, server, t, out)?;
+        // A request with a good CRC and a station and command is opened in the pairing.
+        let opens = tele.at == telegram::AT_REQUEST && tele.crc_ok() && tele.telegram.len() >= 2;
+        let (conv, plc) = self.conv(client, server, t, opens.then_some(tele.seq), out)?;
         if plc >= MAX_PLCS {
             self.device.clear();
             let _ = write!(self.device, "{server}");
         }
         let (id, kind, class, sensor) = if !tele.crc_ok() {
-            self.bad_crc(&tele, conv, plc)
+            self.bad_crc(&tele, conv.id, plc)
         } else {
             let broken = match tele.at {
                 telegram::AT_REQUEST => tele.telegram.len() < 2,
@@ -402,7 +409,7 @@ impl EtherCore {
             if tele.at == telegram::AT_REQUEST {
                 self.request(&tele, conv, plc, t, out)?
             } else {
-                self.answer(&tele, conv, plc, t)
+                self.answer(&tele, conv.id, plc, t)
             }
         };
         let device = self.device(plc, &self.device);
@@ -446,7 +453,7 @@ impl EtherCore {
     fn request(
         &mut self,
         tele: &ether::EtherTele<'_>,
-        conv: u32,
+        conv: Conversation,
         plc: usize,
         t: u64,
         out: &mut dyn RowOut,
