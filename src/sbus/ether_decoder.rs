@@ -40,17 +40,20 @@ enum Ends {
 }
 
 impl Ends {
-    fn new(client: SocketAddr, server: SocketAddr) -> Self {
+    fn new(client: &SocketAddr, server: &SocketAddr) -> Self {
         /// Address and port in the low 48 bits: distinct ends give distinct words.
         fn word(a: &SocketAddrV4) -> u64 {
             u64::from(a.ip().to_bits()) << 16 | u64::from(a.port())
         }
         match (client, server) {
             (SocketAddr::V4(c), SocketAddr::V4(s)) => Ends::V4 {
-                client: word(&c),
-                server: word(&s),
+                client: word(c),
+                server: word(s),
             },
-            _ => Ends::Other { client, server },
+            _ => Ends::Other {
+                client: *client,
+                server: *server,
+            },
         }
     }
 }
@@ -193,8 +196,8 @@ impl EtherCore {
     /// of a conversation dropped to make room gets its Timeout row here.
     fn conv(
         &mut self,
-        client: SocketAddr,
-        server: SocketAddr,
+        client: &SocketAddr,
+        server: &SocketAddr,
         t: u64,
         request: Option<u16>,
         out: &mut dyn RowOut,
@@ -212,7 +215,7 @@ impl EtherCore {
             &mut self.expired,
         );
         let plc = if fresh {
-            let i = self.plc(server);
+            let i = self.plc(*server);
             self.pairing.set_tag(ends, i as u32);
             i
         } else {
@@ -263,7 +266,7 @@ impl EtherCore {
                 if u.src.port() != self.port && u.dst.port() != self.port {
                     return Ok(());
                 }
-                self.datagram(u, t, out)
+                self.datagram(&u, t, out)
             }
             ether::Extract::Fragment { src, dst, ports } => {
                 self.map.totals.fragments += 1;
@@ -344,7 +347,7 @@ impl EtherCore {
             .timeout(p, why, at, self.pairing.timeout, name, st, out)
     }
 
-    fn datagram(&mut self, u: ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
+    fn datagram(&mut self, u: &ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
         self.map.sc.clear();
         let tele = match ether::parse(u.payload) {
             Ok(tele) => tele,
@@ -384,9 +387,9 @@ impl EtherCore {
         }
         // The PLC is the server: the destination of a request, the source of an answer.
         let (client, server) = if tele.at == telegram::AT_REQUEST {
-            (u.src, u.dst)
+            (&u.src, &u.dst)
         } else {
-            (u.dst, u.src)
+            (&u.dst, &u.src)
         };
         // A request with a good CRC and a station and command is opened in the pairing.
         let opens = tele.at == telegram::AT_REQUEST && tele.crc_ok() && tele.telegram.len() >= 2;
@@ -632,9 +635,9 @@ mod tests {
             .flat_map(|&c| addrs.iter().step_by(3).map(move |&s| (c, s)))
             .collect();
         for &a in &pairs {
-            let ka = Ends::new(a.0, a.1);
+            let ka = Ends::new(&a.0, &a.1);
             for &b in &pairs {
-                assert_eq!(ka == Ends::new(b.0, b.1), a == b, "{a:?} {b:?}");
+                assert_eq!(ka == Ends::new(&b.0, &b.1), a == b, "{a:?} {b:?}");
             }
         }
     }
