@@ -331,14 +331,21 @@ impl PcapStream {
         };
         let mut at = 0;
         while let Some(r) = b.get(at..) {
-            if r.len() < 16 {
+            let Some(h) = r.first_chunk::<16>() else {
                 return Ok(if at == 0 {
                     Step::Need(16)
                 } else {
                     Step::Took(at)
                 });
-            }
-            let incl = rd32(&r[8..], big) as usize;
+            };
+            // The record header's four words in the file's byte order (one test of the order).
+            let word = |i: usize| [h[i], h[i + 1], h[i + 2], h[i + 3]];
+            let [secs, frac, incl, orig] = if big {
+                [0, 4, 8, 12].map(|i| u32::from_be_bytes(word(i)))
+            } else {
+                [0, 4, 8, 12].map(|i| u32::from_le_bytes(word(i)))
+            };
+            let incl = incl as usize;
             if incl > self.max_record {
                 if at > 0 {
                     return Ok(Step::Took(at));
@@ -355,9 +362,7 @@ impl PcapStream {
                     Step::Took(at)
                 });
             };
-            let secs = rd32(r, big) as i64;
-            let frac = rd32(&r[4..], big) as i64;
-            let orig = rd32(&r[12..], big);
+            let (secs, frac) = (secs as i64, frac as i64);
             let ts = secs * 1_000_000 + if nanos { frac / 1000 } else { frac };
             self.last_ts = ts;
             self.packets += 1;
