@@ -237,19 +237,13 @@ pub struct Conversation {
     pub last_seq: Option<u16>,
 }
 
-/// The key of a request: conversation and sequence in one word (hashed in one step, compared
-/// in one; distinct pairs give distinct words).
-fn req_key(conv: u32, seq: u16) -> u64 {
-    u64::from(conv) << 16 | u64::from(seq)
-}
-
 /// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
 /// and server addresses) and carry a tag for the decoder (the PLC's index). Every table is
 /// bounded: see [`MAX_OUTSTANDING`], [`MAX_CONVERSATIONS`] and [`CONVERSATION_IDLE`].
 #[derive(Debug)]
 pub struct EtherPairing<K> {
-    /// Waiting requests by (conversation, sequence), see [`req_key`].
-    table: Table<u64, Request>,
+    /// Waiting requests by (conversation, sequence).
+    table: Table<(u32, u16), Request>,
     convs: FastMap<K, Conv>,
     /// Every conversation once, in order of use when queued; an entry whose conversation was
     /// used since is queued again when it reaches the front (so the front is the least
@@ -381,7 +375,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             return;
         };
         if let Some(seq) = c.last_seq {
-            self.table.forget(req_key(c.id, seq), why, now, out);
+            self.table.forget((c.id, seq), why, now, out);
         }
     }
 
@@ -397,11 +391,11 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     ) -> (RequestKind, Option<SeqGap>) {
         let (last, conv) = (conv.last_seq, conv.id);
         if last == Some(seq)
-            && let Some(p) = self.table.previous(req_key(conv, seq)).copied()
+            && let Some(p) = self.table.previous((conv, seq)).copied()
         {
             let mut next = req;
             let kind = RequestKind::resend(&mut next, &p);
-            self.open(req_key(conv, seq), next, out);
+            self.open((conv, seq), next, out);
             return (kind, None);
         }
         let gap = match last {
@@ -413,18 +407,18 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             }
             _ => None,
         };
-        self.open(req_key(conv, seq), req, out);
+        self.open((conv, seq), req, out);
         (RequestKind::New, gap)
     }
 
-    fn open(&mut self, key: u64, req: Outstanding, out: &mut Vec<Expired>) {
+    fn open(&mut self, key: (u32, u16), req: Outstanding, out: &mut Vec<Expired>) {
         self.table.open(key, req, out);
         self.forgotten.requests = self.table.given_up;
     }
 
     /// An answer on conversation `conv` with sequence `seq` at `time`.
     pub fn answer(&mut self, conv: u32, seq: u16, time: u64) -> Answer {
-        match self.table.answer(req_key(conv, seq), time, self.timeout) {
+        match self.table.answer((conv, seq), time, self.timeout) {
             Some((req, reply, late)) => Answer::Paired {
                 req,
                 elapsed: reply.elapsed,
@@ -436,7 +430,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
 
     /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
     pub fn bad_answer(&mut self, conv: u32, seq: u16) {
-        if let Some(r) = self.table.get_mut(req_key(conv, seq)) {
+        if let Some(r) = self.table.get_mut((conv, seq)) {
             r.spoiled = true;
         }
     }
