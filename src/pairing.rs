@@ -19,6 +19,7 @@
 //! started; nothing here reads a clock, so the result does not depend on how often or when
 //! [`Table::expire`] is called, only on the times it is given.
 
+use std::collections::hash_map::Entry;
 use std::collections::{HashMap, VecDeque};
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 use std::ops::{Deref, DerefMut};
@@ -284,12 +285,22 @@ impl Hasher for FastHasher {
 /// `HashMap` with `FastHasher`.
 pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
-/// A deadline in the queue: `generation` tells whether the request it was made for is still
-/// the one open under `key`.
+/// A deadline in the queue: the slot of the request it was made for and that request's
+/// generation (the slot may have been freed or taken by a later request since).
 #[derive(Clone, Copy, Debug)]
-struct Deadline<K> {
+struct Deadline {
+    slot: u32,
+    generation: u32,
+}
+
+/// A place in [`Table`]'s slots: the request, its key (to remove it from the map when its
+/// deadline comes) and the generation of its deadline; `live`: it holds an open request.
+#[derive(Clone, Copy, Debug)]
+struct Slot<K, R> {
+    open: Open<R>,
     key: K,
     generation: u32,
+    live: bool,
 }
 
 /// Sizes of a [`Table`]'s parts (for tests of the bounds).
@@ -309,15 +320,17 @@ pub struct Sizes {
 /// Deadlines are queued in the order of the requests, so with one timeout they come due in
 /// that order; answered and repeated requests leave stale entries that are dropped lazily
 /// (at the front) or all at once when there are too many (so a capture with constant times,
-/// where nothing ever comes due, keeps the queue small too).
+/// where nothing ever comes due, keeps the queue small too). A deadline names its request's
+/// slot and generation, so the queue is checked (every packet looks at its front) without a
+/// lookup in the map: the map is asked only to open, answer or remove a request.
 #[derive(Debug)]
 pub struct Table<K, R> {
     /// Open requests by key: an index into `slots` (a compact map).
     map: FastMap<K, u32>,
-    /// The requests, with the generation of their deadline; `free` lists unused slots.
-    slots: Vec<(Open<R>, u32)>,
+    /// The requests; `free` lists the slots not `live`.
+    slots: Vec<Slot<K, R>>,
     free: Vec<u32>,
-    deadlines: VecDeque<Deadline<K>>,
+    deadlines: VecDeque<Deadline>,
     generation: u32,
     cap: usize,
     late: LateWindow<K, R>,
@@ -350,12 +363,13 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     /// The request open under `key`.
     pub fn get(&self, key: K) -> Option<&Open<R>> {
-        self.map.get(&key).map(|&i| &self.slots[i as usize].0)
+        let i = *self.map.get(&key)?;
+        self.slots.get(i as usize).map(|s| &s.open)
     }
 
     pub fn get_mut(&mut self, key: K) -> Option<&mut Open<R>> {
         let i = *self.map.get(&key)?;
-        Some(&mut self.slots[i as usize].0)
+        self.slots.get_mut(i as usize).map(|s| &mut s.open)
     }
 
     /// The latest request under `key`, open or expired (to recognise a retry).
@@ -365,15 +379,17 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     fn remove(&mut self, key: K) -> Option<Open<R>> {
         let i = self.map.remove(&key)?;
+        let s = self.slots.get_mut(i as usize)?;
+        s.live = false;
         self.free.push(i);
-        Some(self.slots[i as usize].0)
+        Some(s.open)
     }
 
-    /// Whether deadline `d` belongs to the request open now.
-    fn live(&self, d: &Deadline<K>) -> bool {
-        self.map
-            .get(&d.key)
-            .is_some_and(|&i| self.slots[i as usize].1 == d.generation)
+    /// The slot of deadline `d` when it belongs to the request open there now.
+    fn live(&self, d: &Deadline) -> Option<&Slot<K, R>> {
+        self.slots
+            .get(d.slot as usize)
+            .filter(|s| s.live && s.generation == d.generation)
     }
 
     /// Expires `open` for `why` at `at`: reported unless spoiled, then kept for late answers.
@@ -395,26 +411,42 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
     /// Opens `open` under `key` (a request sent again replaces the one open). When `cap`
     /// requests are open, the oldest are given up into `out`.
     pub fn open(&mut self, key: K, open: Open<R>, out: &mut Vec<Expired<R>>) {
-        if !self.map.contains_key(&key) {
+        if self.map.len() >= self.cap && !self.map.contains_key(&key) {
             while self.map.len() >= self.cap {
                 let Some(d) = self.deadlines.pop_front() else {
                     break;
                 };
-                if let Some(r) = self.live(&d).then(|| self.remove(d.key)).flatten() {
+                let Some(k) = self.live(&d).map(|s| s.key) else {
+                    continue;
+                };
+                if let Some(r) = self.remove(k) {
                     self.given_up += 1;
                     let at = open.time.max(r.time);
-                    self.expired(d.key, r, Reason::Overflow, at, out);
+                    self.expired(k, r, Reason::Overflow, at, out);
                 }
             }
         }
         self.generation = self.generation.wrapping_add(1);
-        let entry = (open, self.generation);
-        match self.map.get(&key) {
-            Some(&i) => self.slots[i as usize] = entry,
-            None => {
+        let entry = Slot {
+            open,
+            key,
+            generation: self.generation,
+            live: true,
+        };
+        let slot = match self.map.entry(key) {
+            Entry::Occupied(e) => {
+                let i = *e.get();
+                if let Some(s) = self.slots.get_mut(i as usize) {
+                    *s = entry;
+                }
+                i
+            }
+            Entry::Vacant(e) => {
                 let i = match self.free.pop() {
                     Some(i) => {
-                        self.slots[i as usize] = entry;
+                        if let Some(s) = self.slots.get_mut(i as usize) {
+                            *s = entry;
+                        }
                         i
                     }
                     None => {
@@ -422,16 +454,17 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
                         (self.slots.len() - 1) as u32
                     }
                 };
-                self.map.insert(key, i);
+                e.insert(i);
+                i
             }
-        }
+        };
         self.deadlines.push_back(Deadline {
-            key,
+            slot,
             generation: self.generation,
         });
         if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
             let mut deadlines = std::mem::take(&mut self.deadlines);
-            deadlines.retain(|d| self.live(d));
+            deadlines.retain(|d| self.live(d).is_some());
             self.deadlines = deadlines;
         }
     }
@@ -450,20 +483,18 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     /// Requests whose deadline passed at `now` go to `out`, oldest first, at their deadline.
     pub fn expire(&mut self, now: u64, timeout: u64, out: &mut Vec<Expired<R>>) {
-        while let Some(&d) = self.deadlines.front() {
-            if !self.live(&d) {
+        while let Some(d) = self.deadlines.front() {
+            let Some(s) = self.live(d) else {
                 self.deadlines.pop_front();
                 continue;
-            }
-            let at = self
-                .get(d.key)
-                .map_or(0, |r| r.time.saturating_add(timeout));
+            };
+            let (key, at) = (s.key, s.open.time.saturating_add(timeout));
             if at >= now {
                 break;
             }
             self.deadlines.pop_front();
-            if let Some(r) = self.remove(d.key) {
-                self.expired(d.key, r, Reason::Deadline, at, out);
+            if let Some(r) = self.remove(key) {
+                self.expired(key, r, Reason::Deadline, at, out);
             }
         }
     }
@@ -483,8 +514,8 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
     pub fn finish(&mut self) -> u64 {
         let mut n = 0;
         while let Some(d) = self.deadlines.pop_front() {
-            if self.live(&d)
-                && let Some(r) = self.remove(d.key)
+            if let Some(key) = self.live(&d).map(|s| s.key)
+                && let Some(r) = self.remove(key)
             {
                 n += u64::from(!r.spoiled);
             }
@@ -738,6 +769,143 @@ mod tests {
             )
         ) {
             prop_assert_eq!(run(&steps, false), run(&steps, true));
+        }
+
+        #[test]
+        fn table_does_what_the_model_does(
+            ops in prop::collection::vec((0u8..6, 0u8..6, 0u64..3_000), 0..120)
+        ) {
+            let mut t: Table<u8, u32> = Table::new(4, 3);
+            let mut m = Model::new(4, 3);
+            let (mut got, mut want) = (Vec::new(), Vec::new());
+            for (i, &(op, key, time)) in ops.iter().enumerate() {
+                let payload = i as u32;
+                match op {
+                    0 | 1 => {
+                        let o = Open::at(payload, time, true);
+                        t.open(key, o, &mut got);
+                        m.open(key, o, &mut want);
+                    }
+                    2 => prop_assert_eq!(t.answer(key, time, T), m.answer(key, time)),
+                    3 => {
+                        t.expire(time, T, &mut got);
+                        m.expire(time, &mut want);
+                    }
+                    4 => {
+                        t.forget(key, Reason::Dropped, time, &mut got);
+                        m.forget(key, time, &mut want);
+                    }
+                    _ => {
+                        if let Some(o) = t.get_mut(key) {
+                            o.spoiled = true;
+                        }
+                        if let Some(o) = m.get_mut(key) {
+                            o.spoiled = true;
+                        }
+                    }
+                }
+                prop_assert_eq!(&got, &want);
+                prop_assert_eq!(t.previous(key), m.previous(key));
+                prop_assert_eq!((t.sizes().open, t.given_up), (m.open.len(), m.given_up));
+            }
+            prop_assert_eq!(t.finish(), m.finish());
+        }
+    }
+
+    /// What [`Table`] does, the plain way: the open requests in the order of their latest
+    /// opening (its deadline queue without the stale entries), searched one by one.
+    struct Model {
+        open: Vec<(u8, Open<u32>)>,
+        cap: usize,
+        late: LateWindow<u8, u32>,
+        given_up: u64,
+    }
+
+    impl Model {
+        fn new(cap: usize, late: usize) -> Self {
+            Model {
+                open: Vec::new(),
+                cap,
+                late: LateWindow::new(late, Keep::Unanswered),
+                given_up: 0,
+            }
+        }
+
+        fn take(&mut self, key: u8) -> Option<Open<u32>> {
+            let i = self.open.iter().position(|e| e.0 == key)?;
+            Some(self.open.remove(i).1)
+        }
+
+        fn get_mut(&mut self, key: u8) -> Option<&mut Open<u32>> {
+            self.open.iter_mut().find(|e| e.0 == key).map(|e| &mut e.1)
+        }
+
+        fn previous(&self, key: u8) -> Option<&Open<u32>> {
+            let open = self.open.iter().find(|e| e.0 == key).map(|e| &e.1);
+            open.or_else(|| self.late.find(key))
+        }
+
+        fn expired(
+            &mut self,
+            key: u8,
+            mut o: Open<u32>,
+            why: Reason,
+            at: u64,
+            out: &mut Vec<Expired<u32>>,
+        ) {
+            o.reported = true;
+            if !o.spoiled {
+                out.push(Expired { req: o, why, at });
+            }
+            self.late.push(key, o, why);
+        }
+
+        fn open(&mut self, key: u8, o: Open<u32>, out: &mut Vec<Expired<u32>>) {
+            if self.take(key).is_none() {
+                while self.open.len() >= self.cap {
+                    let (k, r) = self.open.remove(0);
+                    self.given_up += 1;
+                    self.expired(k, r, Reason::Overflow, o.time.max(r.time), out);
+                }
+            }
+            self.open.push((key, o));
+        }
+
+        fn answer(&mut self, key: u8, at: u64) -> Option<(Open<u32>, Reply, bool)> {
+            let mut o = match self.take(key) {
+                Some(o) => o,
+                None => self.late.take(|k| *k == key)?.0,
+            };
+            let reply = o.answer(at, T);
+            Some((o, reply, reply.elapsed > T || o.reported))
+        }
+
+        fn expire(&mut self, now: u64, out: &mut Vec<Expired<u32>>) {
+            while let Some(&(k, r)) = self.open.first() {
+                let at = r.time.saturating_add(T);
+                if at >= now {
+                    break;
+                }
+                self.open.remove(0);
+                self.expired(k, r, Reason::Deadline, at, out);
+            }
+        }
+
+        fn forget(&mut self, key: u8, at: u64, out: &mut Vec<Expired<u32>>) {
+            if let Some(mut r) = self.take(key) {
+                r.reported = true;
+                if !r.spoiled {
+                    out.push(Expired {
+                        req: r,
+                        why: Reason::Dropped,
+                        at,
+                    });
+                }
+            }
+        }
+
+        fn finish(&mut self) -> u64 {
+            self.open.drain(..).filter(|e| !e.1.spoiled).count() as u64
         }
     }
 }

@@ -248,7 +248,7 @@ impl PcapStream {
             Format::Unknown => self.detect(b),
             Format::Pcap { header_done, .. } => {
                 if *header_done {
-                    self.pcap_record(b, emit)
+                    self.pcap_records(b, emit)
                 } else {
                     self.pcap_header(b)
                 }
@@ -310,7 +310,12 @@ impl PcapStream {
         Ok(Step::Took(24))
     }
 
-    fn pcap_record(
+    /// The classic pcap records at the start of `b`: every complete one, in one call (a read
+    /// of 256 KiB holds thousands, and a call per record matched the format and moved the
+    /// offset for each). Stops before a record that is incomplete or too long: that one comes
+    /// back as the first of the next call, which reports it as before (`Need`, or the error at
+    /// its offset).
+    fn pcap_records(
         &mut self,
         b: &[u8],
         emit: &mut impl FnMut(Packet<'_>),
@@ -322,37 +327,57 @@ impl PcapStream {
             ..
         } = self.format
         else {
-            unreachable!("pcap_record on a pcap stream")
+            unreachable!("pcap_records on a pcap stream")
         };
-        if b.len() < 16 {
-            return Ok(Step::Need(16));
-        }
-        let secs = rd32(b, big) as i64;
-        let frac = rd32(&b[4..], big) as i64;
-        let incl = rd32(&b[8..], big) as usize;
-        let orig = rd32(&b[12..], big);
-        if incl > self.max_record {
-            return Err(PcapError::BadLength {
-                offset: self.offset,
-                len: incl as u64,
+        let mut at = 0;
+        while let Some(r) = b.get(at..) {
+            let Some(h) = r.first_chunk::<16>() else {
+                return Ok(if at == 0 {
+                    Step::Need(16)
+                } else {
+                    Step::Took(at)
+                });
+            };
+            // The record header's four words in the file's byte order (one test of the order).
+            let word = |i: usize| [h[i], h[i + 1], h[i + 2], h[i + 3]];
+            let [secs, frac, incl, orig] = if big {
+                [0, 4, 8, 12].map(|i| u32::from_be_bytes(word(i)))
+            } else {
+                [0, 4, 8, 12].map(|i| u32::from_le_bytes(word(i)))
+            };
+            let incl = incl as usize;
+            if incl > self.max_record {
+                if at > 0 {
+                    return Ok(Step::Took(at));
+                }
+                return Err(PcapError::BadLength {
+                    offset: self.offset,
+                    len: incl as u64,
+                });
+            }
+            let Some(data) = r.get(16..16 + incl) else {
+                return Ok(if at == 0 {
+                    Step::Need(16 + incl)
+                } else {
+                    Step::Took(at)
+                });
+            };
+            let (secs, frac) = (secs as i64, frac as i64);
+            let ts = secs * 1_000_000 + if nanos { frac / 1000 } else { frac };
+            self.last_ts = ts;
+            self.packets += 1;
+            let time = self.time(ts);
+            emit(Packet {
+                ts_micros: ts,
+                time,
+                link_type,
+                data,
+                orig_len: orig,
+                interface: 0,
             });
+            at += 16 + incl;
         }
-        if b.len() < 16 + incl {
-            return Ok(Step::Need(16 + incl));
-        }
-        let ts = secs * 1_000_000 + if nanos { frac / 1000 } else { frac };
-        self.last_ts = ts;
-        self.packets += 1;
-        let time = self.time(ts);
-        emit(Packet {
-            ts_micros: ts,
-            time,
-            link_type,
-            data: &b[16..16 + incl],
-            orig_len: orig,
-            interface: 0,
-        });
-        Ok(Step::Took(16 + incl))
+        Ok(Step::Took(at))
     }
 
     fn pcapng_block(

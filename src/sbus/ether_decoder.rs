@@ -3,11 +3,13 @@
 //! row per PLC (bounded); every telegram goes through the shared mapper ([`super::map`]).
 
 use std::fmt::Write as _;
-use std::net::SocketAddr;
+use std::net::{SocketAddr, SocketAddrV4};
 
 use super::ether;
 use super::map::{Mapper, put_row};
-use super::pairing::{self, EtherPairing, Expired, Outstanding, TableSizes, TimeoutWhy};
+use super::pairing::{
+    self, Conversation, EtherPairing, Expired, Outstanding, TableSizes, TimeoutWhy,
+};
 use super::stats::{self, MAX_PLCS, StationStats, Totals};
 use super::telegram;
 use super::{COLUMNS, DEFAULT_ETHER_TIMEOUT_MS, Options};
@@ -19,6 +21,42 @@ use crate::stats::{Problems, Report};
 
 /// Addresses of PLCs beyond [`MAX_PLCS`] remembered to count them once.
 const MERGED_PLCS_KEPT: usize = 4_096;
+
+/// A conversation's ends, client and server: the key of [`EtherPairing`], looked up for every
+/// datagram. IPv4 ends (nearly every capture) are packed into one word each (address and
+/// port), which hash in two steps and compare in two; a pair of `SocketAddr`s hashed its
+/// variants, lengths and every address byte one by one and compared as enums (about 100
+/// instructions a packet for the lookup). Other ends keep their addresses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Ends {
+    V4 {
+        client: u64,
+        server: u64,
+    },
+    Other {
+        client: SocketAddr,
+        server: SocketAddr,
+    },
+}
+
+impl Ends {
+    fn new(client: &SocketAddr, server: &SocketAddr) -> Self {
+        /// Address and port in the low 48 bits: distinct ends give distinct words.
+        fn word(a: &SocketAddrV4) -> u64 {
+            u64::from(a.ip().to_bits()) << 16 | u64::from(a.port())
+        }
+        match (client, server) {
+            (SocketAddr::V4(c), SocketAddr::V4(s)) => Ends::V4 {
+                client: word(c),
+                server: word(s),
+            },
+            _ => Ends::Other {
+                client: *client,
+                server: *server,
+            },
+        }
+    }
+}
 
 struct Plc {
     name: String,
@@ -32,8 +70,8 @@ pub struct EtherDecoder {
 
 struct EtherCore {
     port: u16,
-    /// Conversations are keyed by (client, server); their tag is the PLC's index.
-    pairing: EtherPairing<(SocketAddr, SocketAddr)>,
+    /// Conversations are keyed by their ends; their tag is the PLC's index.
+    pairing: EtherPairing<Ends>,
     /// At most [`MAX_PLCS`] + 1 (the last one: every other PLC).
     plcs: Vec<Plc>,
     plc_index: pairing::FastMap<SocketAddr, usize>,
@@ -153,44 +191,60 @@ impl EtherCore {
         }
     }
 
-    /// The conversation of `client` and `server` at `t`: its id and PLC. The open request of a
-    /// conversation dropped to make room gets its Timeout row here.
+    /// The conversation of `client` and `server` at `t` and its PLC (`request`: the sequence of
+    /// a request the pairing will open, see [`EtherPairing::conversation`]). The open request
+    /// of a conversation dropped to make room gets its Timeout row here.
     fn conv(
         &mut self,
-        client: SocketAddr,
-        server: SocketAddr,
+        client: &SocketAddr,
+        server: &SocketAddr,
         t: u64,
+        request: Option<u16>,
         out: &mut dyn RowOut,
-    ) -> Result<(u32, usize), OutputError> {
-        let mut expired = std::mem::take(&mut self.expired);
+    ) -> Result<(Conversation, usize), OutputError> {
         let mut fresh = false;
-        let (conv, tag) = self.pairing.conversation(
-            (client, server),
+        let ends = Ends::new(client, server);
+        let conv = self.pairing.conversation(
+            ends,
             t,
+            request,
             || {
                 fresh = true;
                 u32::MAX
             },
-            &mut expired,
+            &mut self.expired,
         );
         let plc = if fresh {
-            let i = self.plc(server);
-            self.pairing.set_tag((client, server), i as u32);
+            let i = self.plc(*server);
+            self.pairing.set_tag(ends, i as u32);
             i
         } else {
-            tag as usize
+            conv.tag as usize
         };
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r.map(|_| (conv, plc))
+        self.timeout_rows(out).map(|_| (conv, plc))
     }
 
-    fn timeout_rows(&mut self, expired: &[Expired], out: &mut dyn RowOut) -> RowResult {
-        for e in expired {
-            self.timeout_row(&e.req, e.why, e.at, out)?;
+    /// Timeout rows for the requests the pairing gave up into `self.expired`. Nearly always
+    /// there are none: that test is inlined, the rows are written out of line.
+    #[inline]
+    fn timeout_rows(&mut self, out: &mut dyn RowOut) -> RowResult {
+        if self.expired.is_empty() {
+            Ok(())
+        } else {
+            self.write_timeout_rows(out)
         }
-        Ok(())
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn write_timeout_rows(&mut self, out: &mut dyn RowOut) -> RowResult {
+        let mut expired = std::mem::take(&mut self.expired);
+        let r = expired
+            .iter()
+            .try_for_each(|e| self.timeout_row(&e.req, e.why, e.at, out));
+        expired.clear();
+        self.expired = expired;
+        r
     }
 
     fn sync_forgotten(&mut self) {
@@ -212,7 +266,7 @@ impl EtherCore {
                 if u.src.port() != self.port && u.dst.port() != self.port {
                     return Ok(());
                 }
-                self.datagram(u, t, out)
+                self.datagram(&u, t, out)
             }
             ether::Extract::Fragment { src, dst, ports } => {
                 self.map.totals.fragments += 1;
@@ -274,12 +328,8 @@ impl EtherCore {
     }
 
     fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
-        let mut expired = std::mem::take(&mut self.expired);
-        self.pairing.expire(now, &mut expired);
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r
+        self.pairing.expire(now, &mut self.expired);
+        self.timeout_rows(out)
     }
 
     fn timeout_row(
@@ -297,7 +347,7 @@ impl EtherCore {
             .timeout(p, why, at, self.pairing.timeout, name, st, out)
     }
 
-    fn datagram(&mut self, u: ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
+    fn datagram(&mut self, u: &ether::Udp<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
         self.map.sc.clear();
         let tele = match ether::parse(u.payload) {
             Ok(tele) => tele,
@@ -337,17 +387,19 @@ impl EtherCore {
         }
         // The PLC is the server: the destination of a request, the source of an answer.
         let (client, server) = if tele.at == telegram::AT_REQUEST {
-            (u.src, u.dst)
+            (&u.src, &u.dst)
         } else {
-            (u.dst, u.src)
+            (&u.dst, &u.src)
         };
-        let (conv, plc) = self.conv(client, server, t, out)?;
+        // A request with a good CRC and a station and command is opened in the pairing.
+        let opens = tele.at == telegram::AT_REQUEST && tele.crc_ok() && tele.telegram.len() >= 2;
+        let (conv, plc) = self.conv(client, server, t, opens.then_some(tele.seq), out)?;
         if plc >= MAX_PLCS {
             self.device.clear();
             let _ = write!(self.device, "{server}");
         }
         let (id, kind, class, sensor) = if !tele.crc_ok() {
-            self.bad_crc(&tele, conv, plc)
+            self.bad_crc(&tele, conv.id, plc)
         } else {
             let broken = match tele.at {
                 telegram::AT_REQUEST => tele.telegram.len() < 2,
@@ -360,7 +412,7 @@ impl EtherCore {
             if tele.at == telegram::AT_REQUEST {
                 self.request(&tele, conv, plc, t, out)?
             } else {
-                self.answer(&tele, conv, plc, t)
+                self.answer(&tele, conv.id, plc, t)
             }
         };
         let device = self.device(plc, &self.device);
@@ -404,7 +456,7 @@ impl EtherCore {
     fn request(
         &mut self,
         tele: &ether::EtherTele<'_>,
-        conv: u32,
+        conv: Conversation,
         plc: usize,
         t: u64,
         out: &mut dyn RowOut,
@@ -422,12 +474,8 @@ impl EtherCore {
         let info = self.map.request(station, cmd, &tg[2..], st, &mut class);
         let mut req = Outstanding::new(info, t, true, Some(tele.seq));
         req.tag = plc as u32;
-        let mut expired = std::mem::take(&mut self.expired);
-        let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut expired);
-        let r = self.timeout_rows(&expired, out);
-        expired.clear();
-        self.expired = expired;
-        r?;
+        let (kind, gap) = self.pairing.request(conv, tele.seq, req, &mut self.expired);
+        self.timeout_rows(out)?;
         let st = &mut self.plcs[plc].stats;
         if let Some(g) = gap {
             st.seq_gaps += 1;
@@ -546,5 +594,51 @@ impl Decoder for EtherDecoder {
 
     fn no_frames_hint(&self) -> &'static str {
         "no Ether-S-Bus datagram yet: check the UDP port (--udp-port) and the tcpdump filter"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::{Ipv4Addr, Ipv6Addr, SocketAddrV6};
+
+    /// Two pairs of ends make the same key exactly when they are the same addresses: IPv4
+    /// packed, IPv6 and mixed pairs kept, at the edges of every address byte and port.
+    #[test]
+    fn ends_are_equal_exactly_when_the_addresses_are() {
+        let mut addrs = Vec::new();
+        for ip in [
+            0u32,
+            1,
+            0xFF,
+            0x100,
+            0xC0A8_0164,
+            0x0A00_0005,
+            0xFFFF_FFFF,
+            0x8000_0000,
+        ] {
+            for port in [0u16, 1, 5050, 0x8000, 0xFFFF] {
+                addrs.push(SocketAddr::V4(SocketAddrV4::new(
+                    Ipv4Addr::from_bits(ip),
+                    port,
+                )));
+            }
+        }
+        for ip in [0u128, 1, 0xC0A8_0164, u128::MAX] {
+            for port in [0u16, 5050] {
+                let v6 = SocketAddrV6::new(Ipv6Addr::from_bits(ip), port, 0, 0);
+                addrs.push(SocketAddr::V6(v6));
+            }
+        }
+        let pairs: Vec<_> = addrs
+            .iter()
+            .flat_map(|&c| addrs.iter().step_by(3).map(move |&s| (c, s)))
+            .collect();
+        for &a in &pairs {
+            let ka = Ends::new(&a.0, &a.1);
+            for &b in &pairs {
+                assert_eq!(ka == Ends::new(&b.0, &b.1), a == b, "{a:?} {b:?}");
+            }
+        }
     }
 }

@@ -224,6 +224,17 @@ struct Conv {
     time: u64,
     /// The stamp of its entry in the use queue (older than `stamp` when used since).
     queued: u64,
+    /// The sequence of its last request (see [`EtherPairing::conversation`]).
+    last_seq: Option<u16>,
+}
+
+/// A conversation as [`EtherPairing::conversation`] finds it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Conversation {
+    pub id: u32,
+    pub tag: u32,
+    /// The sequence of its last request before this packet (for [`EtherPairing::request`]).
+    pub last_seq: Option<u16>,
 }
 
 /// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
@@ -234,8 +245,6 @@ pub struct EtherPairing<K> {
     /// Waiting requests by (conversation, sequence).
     table: Table<(u32, u16), Request>,
     convs: FastMap<K, Conv>,
-    /// The last sequence of each conversation (by id; a cheaper key than the addresses).
-    last_seq: FastMap<u32, u16>,
     /// Every conversation once, in order of use when queued; an entry whose conversation was
     /// used since is queued again when it reaches the front (so the front is the least
     /// recently used one).
@@ -263,7 +272,6 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         EtherPairing {
             table: Table::new(MAX_OUTSTANDING, LATE_KEPT),
             convs: FastMap::default(),
-            last_seq: FastMap::default(),
             lru: VecDeque::new(),
             next_sweep: 0,
             next_conv: 0,
@@ -277,7 +285,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     pub fn sizes(&self) -> TableSizes {
         let t = self.table.sizes();
         TableSizes {
-            conversations: self.convs.len().max(self.last_seq.len()),
+            conversations: self.convs.len(),
             outstanding: t.open,
             deadlines: t.deadlines,
             late: t.late,
@@ -289,22 +297,33 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         CONVERSATION_IDLE.max(self.timeout.saturating_mul(2))
     }
 
-    /// The conversation `key` at `now`: its id and tag (`tag()` for a new one). When the table
-    /// is full the least recently used conversation is dropped and its open request goes to
-    /// `out`.
+    /// The conversation `key` at `now`: its id, its tag (`tag()` for a new one) and the
+    /// sequence of its last request. `request`: the sequence of this packet when it is a request
+    /// that [`Self::request`] will open next; it becomes the conversation's last one here, so
+    /// that the request needs no second lookup. When the table is full the least recently used
+    /// conversation is dropped and its open request goes to `out`.
     pub fn conversation(
         &mut self,
         key: K,
         now: u64,
+        request: Option<u16>,
         tag: impl FnOnce() -> u32,
         out: &mut Vec<Expired>,
-    ) -> (u32, u32) {
+    ) -> Conversation {
         self.stamp += 1;
         let stamp = self.stamp;
         if let Some(c) = self.convs.get_mut(&key) {
             c.stamp = stamp;
             c.time = now;
-            return (c.id, c.tag);
+            let last_seq = c.last_seq;
+            if request.is_some() {
+                c.last_seq = request;
+            }
+            return Conversation {
+                id: c.id,
+                tag: c.tag,
+                last_seq,
+            };
         }
         while self.convs.len() >= MAX_CONVERSATIONS {
             let Some((k, s)) = self.lru.pop_front() else {
@@ -332,10 +351,15 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             stamp,
             time: now,
             queued: stamp,
+            last_seq: request,
         };
         self.convs.insert(key, c);
         self.lru.push_back((key, stamp));
-        (id, c.tag)
+        Conversation {
+            id,
+            tag: c.tag,
+            last_seq: None,
+        }
     }
 
     /// Sets the tag of conversation `key`.
@@ -350,22 +374,22 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let Some(c) = self.convs.remove(&key) else {
             return;
         };
-        if let Some(seq) = self.last_seq.remove(&c.id) {
+        if let Some(seq) = c.last_seq {
             self.table.forget((c.id, seq), why, now, out);
         }
     }
 
-    /// A request with sequence `seq` on conversation `conv` (an id from
-    /// [`Self::conversation`], just now). When more than [`MAX_OUTSTANDING`] requests wait,
-    /// the oldest go to `out`.
+    /// A request with sequence `seq` on conversation `conv`, as [`Self::conversation`] found
+    /// it just now (given `Some(seq)`). When more than [`MAX_OUTSTANDING`] requests wait, the
+    /// oldest go to `out`.
     pub fn request(
         &mut self,
-        conv: u32,
+        conv: Conversation,
         seq: u16,
         req: Outstanding,
         out: &mut Vec<Expired>,
     ) -> (RequestKind, Option<SeqGap>) {
-        let last = self.last_seq.insert(conv, seq);
+        let (last, conv) = (conv.last_seq, conv.id);
         if last == Some(seq)
             && let Some(p) = self.table.previous((conv, seq)).copied()
         {
@@ -526,24 +550,29 @@ mod tests {
         let mut p: EtherPairing<u8> = EtherPairing::new(1_000_000);
         let mut out = Vec::new();
         let r = |t| Outstanding::new(info(75), t, true, None);
-        let (c0, _) = p.conversation(0, 0, || 0, &mut out);
-        assert_eq!(p.request(c0, 1, r(0), &mut out), (RequestKind::New, None));
-        let (c1, _) = p.conversation(1, 10, || 0, &mut out);
-        assert_eq!(p.request(c1, 1, r(10), &mut out), (RequestKind::New, None));
+        // A request on conversation `key` at `t`: its conversation's id, how it relates.
+        let req = |p: &mut EtherPairing<u8>, key, t, seq, out: &mut Vec<_>| {
+            let c = p.conversation(key, t, Some(seq), || 0, out);
+            (c.id, p.request(c, seq, r(t), out))
+        };
+        let (c0, k) = req(&mut p, 0, 0, 1, &mut out);
+        assert_eq!(k, (RequestKind::New, None));
+        let (c1, k) = req(&mut p, 1, 10, 1, &mut out);
+        assert_eq!(k, (RequestKind::New, None));
         assert!(matches!(
             p.answer(c1, 1, 50),
             Answer::Paired { elapsed: 40, .. }
         ));
         assert_eq!(
-            p.request(c0, 1, r(500), &mut out),
-            (RequestKind::Retry { n: 1, since: 500 }, None)
+            req(&mut p, 0, 500, 1, &mut out),
+            (c0, (RequestKind::Retry { n: 1, since: 500 }, None))
         );
         assert!(matches!(
             p.answer(c0, 1, 600),
             Answer::Paired { elapsed: 100, .. }
         ));
         assert_eq!(p.answer(c0, 1, 700), Answer::NoRequest);
-        let (k, gap) = p.request(c0, 5, r(800), &mut out);
+        let (_, (k, gap)) = req(&mut p, 0, 800, 5, &mut out);
         assert_eq!(k, RequestKind::New);
         assert_eq!(gap, Some(SeqGap { missing: Some(3) }));
         p.expire(1_000_000, &mut out);
@@ -561,9 +590,9 @@ mod tests {
         p.expire(70_000_000, &mut out);
         assert_eq!(p.sizes().conversations, 0);
         assert_eq!(p.forgotten.expired, 2);
-        let (c2, _) = p.conversation(0, 70_000_001, || 0, &mut out);
+        let (c2, (_, gap)) = req(&mut p, 0, 70_000_001, 9, &mut out);
         assert_ne!(c2, c0);
-        assert_eq!(p.request(c2, 9, r(70_000_001), &mut out).1, None);
+        assert_eq!(gap, None);
         assert!(out.is_empty());
     }
 }

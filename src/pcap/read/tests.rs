@@ -111,6 +111,90 @@ fn classic_pcap_both_orders_and_nanos() {
     assert_eq!(p, vec![(10_999_999, 101, vec![7, 8], 0)]);
 }
 
+/// Classic pcap records are read many at a time from a read: the same packets, times and
+/// errors (with the offset of the bad record) whatever the size of the pieces the input comes
+/// in, down to single bytes, in both byte orders and with nanosecond stamps.
+#[test]
+fn classic_pcap_records_in_any_chunks() {
+    let lens = [0usize, 1, 5, 16, 17, 60, 3, 100, 2];
+    for (magic, big) in [
+        (0xA1B2_C3D4u32, false),
+        (0xA1B2_C3D4, true),
+        (0xA1B2_3C4D, false),
+    ] {
+        let u32b = |v: u32| {
+            if big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            }
+        };
+        let mut f = Vec::new();
+        f.extend_from_slice(&u32b(magic));
+        f.extend_from_slice(&[0; 12]);
+        f.extend_from_slice(&u32b(65_535));
+        f.extend_from_slice(&u32b(1));
+        let mut want = Vec::new();
+        for (i, &n) in lens.iter().enumerate() {
+            let data: Vec<u8> = (0..n).map(|b| (b * 7 + i) as u8).collect();
+            let (secs, frac) = (1_000 + i as u32, 999_000 * i as u32);
+            f.extend_from_slice(&u32b(secs));
+            f.extend_from_slice(&u32b(frac));
+            f.extend_from_slice(&u32b(n as u32));
+            f.extend_from_slice(&u32b(n as u32 + 4));
+            f.extend_from_slice(&data);
+            let frac = if magic == 0xA1B2_3C4D {
+                frac / 1000
+            } else {
+                frac
+            };
+            want.push((secs as i64 * 1_000_000 + frac as i64, data));
+        }
+        // A record longer than the stream accepts, then one cut short.
+        let bad_at = f.len() as u64;
+        f.extend_from_slice(&[0; 8]);
+        f.extend_from_slice(&u32b(101));
+        f.extend_from_slice(&[0; 4]);
+        let run = |cut: usize, bytes: &[u8]| {
+            let mut s = PcapStream::with_max_record(100);
+            let mut got = Vec::new();
+            let mut r = Ok(());
+            for c in bytes.chunks(cut) {
+                r = s.push(c, &mut |p| got.push((p.ts_micros, p.data.to_vec())));
+                if r.is_err() {
+                    break;
+                }
+            }
+            if r.is_ok() {
+                r = s.finish();
+            }
+            (got, r)
+        };
+        for cut in 1..=f.len() {
+            let (got, r) = run(cut, &f);
+            assert_eq!(got, want, "cut {cut}");
+            let len = 101;
+            assert_eq!(
+                r,
+                Err(PcapError::BadLength {
+                    offset: bad_at,
+                    len
+                }),
+                "cut {cut}"
+            );
+            let (got, r) = run(cut, &f[..bad_at as usize - 1]);
+            assert_eq!(got, want[..lens.len() - 1], "cut {cut}");
+            let missing = 1;
+            let offset = bad_at - 18;
+            assert_eq!(
+                r,
+                Err(PcapError::Truncated { offset, missing }),
+                "cut {cut}"
+            );
+        }
+    }
+}
+
 #[test]
 fn pcapng_sections_resolutions_and_blocks() {
     let mut f = shb_le();
