@@ -313,9 +313,15 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    // A capture reader hands on its input bytes for --record, and for the wrong-protocol check
-    // after the run (which looks at the first megabytes only).
-    let keep_input = args.live.record.is_some() || !matches!(input, Input::Device(_));
+    // A capture reader hands on its input bytes for --record (all of them), and for the
+    // wrong-protocol check after the run (which looks at the first ADVICE_BYTES only).
+    let keep_input = if args.live.record.is_some() {
+        u64::MAX
+    } else if matches!(input, Input::Device(_)) {
+        0
+    } else {
+        crate::detect::ADVICE_BYTES as u64
+    };
     let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
@@ -579,12 +585,12 @@ fn check_top(args: &CaptureArgs, record_to_stdout: bool) -> Result<(), Failure> 
 }
 
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
-/// also hands on its input bytes (for `--record`).
+/// also hands on up to this many of its input bytes (for `--record`, the wrong-protocol check).
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
     reconnect: bool,
-    keep_input: bool,
+    keep_input: u64,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {

@@ -28,16 +28,18 @@ pub struct CaptureReader {
     name: String,
     stream: PcapStream,
     buf: Vec<u8>,
-    /// Hand on the input bytes too (for `--record`).
-    keep_input: bool,
+    /// How many more of the input's bytes to hand on with the packets (all of them for
+    /// `--record`, the first few KiB for the wrong-protocol check after the run).
+    keep_input: u64,
     anchored: bool,
     /// A parse failure to send before anything else.
     error: Option<PcapError>,
 }
 
 impl CaptureReader {
-    /// `keep_input`: every read also hands on the bytes as read (for a recording of the input).
-    pub fn new(opened: Opened, keep_input: bool) -> Self {
+    /// `keep_input`: the reads also hand on the bytes as read, up to this many in all (for a
+    /// recording of the input, `u64::MAX`; 0: none).
+    pub fn new(opened: Opened, keep_input: u64) -> Self {
         CaptureReader {
             prefix: Some(opened.prefix),
             reader: opened.reader,
@@ -90,12 +92,10 @@ impl ChunkReader for CaptureReader {
                     let _ = tx.send(Message::Anchor(a));
                 }
             }
-            if !packets.is_empty() || self.keep_input {
-                let input = if self.keep_input {
-                    self.buf[..n].to_vec()
-                } else {
-                    Vec::new()
-                };
+            if !packets.is_empty() || self.keep_input > 0 {
+                let keep = usize::try_from(self.keep_input).map_or(n, |k| k.min(n));
+                self.keep_input -= keep as u64;
+                let input = self.buf[..keep].to_vec();
                 return Ok(Some(Chunk::Packets(Captured { packets, input })));
             }
         }
@@ -108,7 +108,7 @@ mod tests {
     use crate::pcap::write;
 
     /// Every message the reader sends, in order, with packets as (time, bytes).
-    fn messages(bytes: Vec<u8>, keep_input: bool) -> Vec<String> {
+    fn messages(bytes: Vec<u8>, keep_input: u64) -> Vec<String> {
         let opened = Opened {
             kind: crate::protocol::Kind::Pcap,
             prefix: Vec::new(),
@@ -143,17 +143,50 @@ mod tests {
         write::record(&mut f, 2_000_000, b"cut");
         f.truncate(f.len() - 1);
         assert_eq!(
-            messages(f.clone(), false),
+            messages(f.clone(), 0),
             [
                 "anchor Instant(1970-01-01T00:00:01Z)",
                 "packets [(0, [97, 98]), (250000, [99])] input 0",
                 "error the capture ends inside the record at byte 59 (1 bytes missing)",
             ]
         );
-        let kept = messages(f.clone(), true);
+        let kept = messages(f.clone(), u64::MAX);
         assert_eq!(
             kept[1],
             format!("packets [(0, [97, 98]), (250000, [99])] input {}", f.len())
         );
+        // At most 30 bytes handed on, whatever was read.
+        let some = messages(f.clone(), 30);
+        assert_eq!(some[1], "packets [(0, [97, 98]), (250000, [99])] input 30");
+    }
+
+    /// A capture larger than one read: the input is handed on up to the limit and no further,
+    /// batch after batch, and every packet still comes.
+    #[test]
+    fn kept_input_stops_at_its_limit() {
+        let mut f = Vec::new();
+        write::header(&mut f, 1);
+        let records = 3 * READ_SIZE / 116;
+        for i in 0..records {
+            write::record(&mut f, i as i64, &[i as u8; 100]);
+        }
+        for (limit, want) in [(0, 0), (1000, 1000), (READ_SIZE as u64 + 7, READ_SIZE + 7)] {
+            let opened = Opened {
+                kind: crate::protocol::Kind::Pcap,
+                prefix: Vec::new(),
+                reader: Box::new(io::Cursor::new(f.clone())),
+                name: "c.pcap".into(),
+            };
+            let (tx, _rx) = std::sync::mpsc::sync_channel(1000);
+            let mut r = CaptureReader::new(opened, limit);
+            let (mut input, mut packets) = (0, 0);
+            while let Some(c) = r.next_batch(&tx).unwrap() {
+                if let Chunk::Packets(c) = c {
+                    input += c.input.len();
+                    packets += c.packets.iter().count();
+                }
+            }
+            assert_eq!((input, packets), (want, records), "limit {limit}");
+        }
     }
 }
