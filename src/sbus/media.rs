@@ -52,14 +52,14 @@ impl MediaSpans {
 
 /// The letter of the media whose element names are that letter and a decimal address (`R`,
 /// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
-fn medium_letter(elem: Elem) -> Option<char> {
+fn medium_letter(elem: Elem) -> Option<u8> {
     match elem {
-        Elem::Register => Some('R'),
-        Elem::Flag => Some('F'),
-        Elem::Input => Some('I'),
-        Elem::Output => Some('O'),
-        Elem::Timer => Some('T'),
-        Elem::Counter => Some('C'),
+        Elem::Register => Some(b'R'),
+        Elem::Flag => Some(b'F'),
+        Elem::Input => Some(b'I'),
+        Elem::Output => Some(b'O'),
+        Elem::Timer => Some(b'T'),
+        Elem::Counter => Some(b'C'),
         _ => None,
     }
 }
@@ -72,7 +72,7 @@ pub(super) fn push_words(
     data: &[u8],
     media: Option<&mut MediaSpans>,
 ) -> usize {
-    let mut media = MediaSpans::begin(media, out);
+    let media = MediaSpans::begin(media, out);
     let Some(letter) = medium_letter(elem) else {
         // Data-block, byte and other elements: named by the general path, never recorded.
         for (i, w) in data.chunks_exact(4).enumerate() {
@@ -88,44 +88,23 @@ pub(super) fn push_words(
         }
         return 0;
     };
-    let unsigned = elem.is_unsigned();
-    let mut list = ListText::new(out);
-    let mut name = DecCounter::new(addr);
-    for (i, w) in data.chunks_exact(4).enumerate() {
-        let v = be(w);
-        let (base, p, w) = list.room();
-        let (start, eq) = name.put(w, i == 0, letter);
-        let mut k = eq + 1;
-        let value = if unsigned {
-            k += put_u32(&mut w[k..], v);
-            v as f64
-        } else {
-            let s = v as i32;
-            if s < 0 {
-                w[k] = b'-';
-                k += 1;
-            }
-            k += put_u32(&mut w[k..], s.unsigned_abs());
-            s as f64
-        };
-        list.n = p + k;
-        if let Some(m) = media.as_deref_mut() {
-            m.record(base, start..k, eq, value);
-        }
-    }
-    list.flush();
-    if let Some(m) = media {
-        m.len = Some(out.len());
-    }
-    first_name(data.len() >= 4, addr)
-}
-
-/// The length of a list's first name (`R57`: 3) when the list has one, else 0.
-fn first_name(any: bool, addr: u32) -> usize {
-    if any {
-        1 + addr.checked_ilog10().unwrap_or(0) as usize + 1
-    } else {
-        0
+    let signed = !elem.is_unsigned();
+    let words = data
+        .chunks_exact(4)
+        .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
+    // `-` is written before every number and kept only when the number is negative.
+    let text = move |v: u32, w: &mut [u8; VALUE_ROOM]| {
+        let neg = signed && (v as i32) < 0;
+        let magnitude = if neg { (v as i32).unsigned_abs() } else { v };
+        w[0] = b'-';
+        let k = usize::from(neg);
+        let n = k + put_u32(&mut w[k..], magnitude);
+        let value = if signed { v as i32 as f64 } else { v as f64 };
+        (n, value)
+    };
+    match media {
+        Some(m) => write_list(out, letter, addr, words, m, text),
+        None => write_list(out, letter, addr, words, Unrecorded, text),
     }
 }
 
@@ -138,7 +117,7 @@ pub(super) fn push_bits(
     data: &[u8],
     media: Option<&mut MediaSpans>,
 ) -> usize {
-    let mut media = MediaSpans::begin(media, out);
+    let media = MediaSpans::begin(media, out);
     let n = bits.min(data.len() as u32 * 8);
     let Some(letter) = medium_letter(elem) else {
         for i in 0..n {
@@ -155,29 +134,95 @@ pub(super) fn push_bits(
         }
         return 0;
     };
-    let mut list = ListText::new(out);
-    let mut name = DecCounter::new(addr);
-    for i in 0..n {
-        let bit = data[(i / 8) as usize] >> (i % 8) & 1;
-        let (base, p, w) = list.room();
-        let (start, eq) = name.put(w, i == 0, letter);
-        w[eq + 1] = b'0' + bit;
-        let k = eq + 2;
-        list.n = p + k;
-        if let Some(m) = media.as_deref_mut() {
-            m.record(base, start..k, eq, bit as f64);
-        }
+    let bits = (0..n).map(|i| u32::from(data[(i / 8) as usize] >> (i % 8) & 1));
+    let text = |bit: u32, w: &mut [u8; VALUE_ROOM]| {
+        w[0] = b'0' + bit as u8;
+        (1, bit as f64)
+    };
+    match media {
+        Some(m) => write_list(out, letter, addr, bits, m, text),
+        None => write_list(out, letter, addr, bits, Unrecorded, text),
     }
-    list.flush();
-    if let Some(m) = media {
-        m.len = Some(out.len());
-    }
-    first_name(n > 0, addr)
 }
 
-/// Room a list element needs at most: a blank, the letter, 10 address digits, `=`, a sign
-/// and 10 value digits.
+/// Where the numbers of a list go as they are written: into [`MediaSpans`] or nowhere (a
+/// type per choice, so that the list's loop asks nothing per element).
+trait Record {
+    /// One number written at `base + span` (its `=` at `base + eq`).
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64);
+    /// The list is complete: the cell is `len` bytes long.
+    fn done(&mut self, len: usize);
+}
+
+impl Record for &mut MediaSpans {
+    #[inline(always)]
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
+        MediaSpans::record(self, base, span, eq, value);
+    }
+
+    fn done(&mut self, len: usize) {
+        self.len = Some(len);
+    }
+}
+
+/// Nothing recorded (a list after other text, or a caller that wants no parts).
+struct Unrecorded;
+
+impl Record for Unrecorded {
+    #[inline(always)]
+    fn record(&mut self, _: usize, _: std::ops::Range<usize>, _: usize, _: f64) {}
+
+    fn done(&mut self, _: usize) {}
+}
+
+/// Writes the list `R57=v0 R58=v1 …` (the medium's `letter`, addresses counted up from
+/// `addr`, wrapping like `u32::wrapping_add`) with each value's `text` (it returns the text's
+/// length and the number), recording every number in `rec`. Returns the length of the first
+/// name (`R57`: 3), or 0 for an empty list.
+///
+/// Every element is written with the blank before it (`" R58=…"`, a copy of [`Names`]'s text);
+/// the first element's blank is then left out of the cell ([`ListText`] starts past it).
+#[inline(always)]
+fn write_list<R: Record>(
+    out: &mut String,
+    letter: u8,
+    addr: u32,
+    values: impl Iterator<Item = u32>,
+    mut rec: R,
+    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+) -> usize {
+    let mut list = ListText::new(out);
+    let was = list.out.len();
+    let mut names = Names::new(letter, addr);
+    let first = names.len - 2;
+    for v in values {
+        let (at, p, w) = list.room();
+        w[..NAME_ROOM].copy_from_slice(&names.text);
+        // in `w`: the blank, the name, `=` at `eq`, the value
+        let eq = names.len - 1;
+        let value_at: &mut [u8; VALUE_ROOM] = (&mut w[eq + 1..eq + 1 + VALUE_ROOM])
+            .try_into()
+            .expect("VALUE_ROOM bytes");
+        let (n, value) = text(v, value_at);
+        let end = eq + 1 + n;
+        list.n = p + end;
+        rec.record(at, 0..end - 1, eq - 1, value);
+        names.step();
+    }
+    list.flush();
+    let len = list.out.len();
+    rec.done(len);
+    if len > was { first } else { 0 }
+}
+
+/// Room of an element's name text: a blank, the letter, 10 address digits and `=` (13), copied
+/// as 16 bytes.
+const NAME_ROOM: usize = 16;
+/// Room a value's text may use ([`put_u32`] may write up to 10 bytes, a sign before them).
+const VALUE_ROOM: usize = 12;
+/// Room a list element needs at most: the name's copy, or the name (13) and the value.
 const ELEM_ROOM: usize = 32;
+const _: () = assert!(NAME_ROOM <= ELEM_ROOM && 13 + VALUE_ROOM <= ELEM_ROOM);
 /// The stack block a list is gathered in before it is appended to the cell.
 const LIST_BLOCK: usize = 512;
 
@@ -186,96 +231,100 @@ const LIST_BLOCK: usize = 512;
 /// and separator. Everything written into it is ASCII.
 struct ListText<'o> {
     out: &'o mut String,
-    buf: [u8; LIST_BLOCK],
+    buf: Block,
+    /// Where the block's text starts: [`FIRST`] in the first block (past the first element's
+    /// blank, which is not part of the cell), then 0.
+    from: usize,
     /// Bytes of `buf` in use.
     n: usize,
 }
+
+/// The list's block, aligned so that the text appended from it starts at a word boundary:
+/// `str::from_utf8` checks ASCII a word at a time from there, and byte by byte before it.
+#[repr(align(16))]
+struct Block([u8; LIST_BLOCK]);
+
+/// Where the first block's text starts: the first element's blank stands just before it.
+const FIRST: usize = 8;
 
 impl<'o> ListText<'o> {
     fn new(out: &'o mut String) -> Self {
         ListText {
             out,
-            buf: [0; LIST_BLOCK],
-            n: 0,
+            buf: Block([0; LIST_BLOCK]),
+            from: FIRST,
+            n: FIRST - 1,
         }
     }
 
-    /// Room for one element: its offset in the cell and in the block, and the bytes from
-    /// there (the caller sets `n` past what it wrote). Appends the block first when the room
-    /// is not there.
-    #[inline]
+    /// Room for one element (its blank, name and value): where the name (`buf[p + 1]`) will
+    /// stand in the cell, `p`, and the bytes from there (the caller sets `n` past what it
+    /// wrote). Appends the block first when the room is not there.
+    #[inline(always)]
     fn room(&mut self) -> (usize, usize, &mut [u8; ELEM_ROOM]) {
         if self.n > LIST_BLOCK - ELEM_ROOM {
             self.flush();
         }
         let p = self.n;
-        let at = self.out.len() + p;
-        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf[p..p + ELEM_ROOM])
+        let at = self.out.len() + p + 1 - self.from;
+        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf.0[p..p + ELEM_ROOM])
             .try_into()
             .expect("ELEM_ROOM bytes");
         (at, p, w)
     }
 
     fn flush(&mut self) {
-        let text = std::str::from_utf8(&self.buf[..self.n]).expect("list text is ASCII");
+        let text = self.buf.0.get(self.from..self.n).unwrap_or_default();
+        let text = std::str::from_utf8(text).expect("list text is ASCII");
         self.out.push_str(text);
+        self.from = 0;
         self.n = 0;
     }
 }
 
-/// The addresses of a list: a number kept as its decimal text and counted up in place.
-struct DecCounter {
-    value: u32,
-    /// The digits, left-aligned (room to copy the whole array at once).
-    digits: [u8; 16],
+/// The name part of a list's elements, `" R57="` (a blank, the letter, the address's digits,
+/// `=`), counted up in place: a list's addresses are consecutive.
+struct Names {
+    text: [u8; NAME_ROOM],
+    /// Bytes of `text` in use.
     len: usize,
+    addr: u32,
 }
 
-impl DecCounter {
-    fn new(value: u32) -> Self {
-        let mut digits = [0u8; 16];
-        let len = put_u32(&mut digits, value);
-        DecCounter { value, digits, len }
+impl Names {
+    fn new(letter: u8, addr: u32) -> Self {
+        let mut text = [b' '; NAME_ROOM];
+        text[1] = letter;
+        let n = put_u32(&mut text[2..], addr);
+        text[2 + n] = b'=';
+        Names {
+            text,
+            len: 3 + n,
+            addr,
+        }
     }
 
-    /// The next number (wrapping like `u32::wrapping_add`).
-    #[inline]
-    fn step(&mut self) {
-        if self.value == u32::MAX {
-            *self = DecCounter::new(0);
-            return;
-        }
-        let mut i = self.len;
-        while i > 0 {
-            i -= 1;
-            if self.digits[i] != b'9' {
-                self.digits[i] += 1;
-                self.value = self.value.wrapping_add(1);
-                return;
-            }
-            self.digits[i] = b'0';
-        }
-        // all nines: one digit more
-        *self = DecCounter::new(self.value.wrapping_add(1));
-    }
-
-    /// Writes a list element's name and `=` at the start of `w`: a blank first unless it is the
-    /// `first` element (and then the next number), the `letter`, the digits. Returns where the
-    /// name starts and where the `=` is.
+    /// The next address (wrapping like `u32::wrapping_add`): the last digit counted up, a
+    /// carry over the nines before it; written again when the number gets one digit longer
+    /// or wraps to 0.
     #[inline(always)]
-    fn put(&mut self, w: &mut [u8], first: bool, letter: char) -> (usize, usize) {
-        let mut k = 0;
-        if !first {
-            w[0] = b' ';
-            k = 1;
-            self.step();
+    fn step(&mut self) {
+        self.addr = self.addr.wrapping_add(1);
+        let mut i = self.len - 2;
+        while self.addr != 0 {
+            match self.text.get_mut(i) {
+                Some(d) if (b'0'..=b'8').contains(d) => {
+                    *d += 1;
+                    return;
+                }
+                Some(d) if *d == b'9' && i > 2 => {
+                    *d = b'0';
+                    i -= 1;
+                }
+                _ => break,
+            }
         }
-        let start = k;
-        w[k] = letter as u8;
-        w[k + 1..k + 17].copy_from_slice(&self.digits);
-        k += 1 + self.len;
-        w[k] = b'=';
-        (start, k)
+        *self = Names::new(self.text[1], self.addr);
     }
 }
 
