@@ -52,7 +52,7 @@ impl MediaSpans {
 
 /// The letter of the media whose element names are that letter and a decimal address (`R`,
 /// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
-fn medium_letter(elem: Elem) -> Option<u8> {
+pub(super) fn medium_letter(elem: Elem) -> Option<u8> {
     match elem {
         Elem::Register => Some(b'R'),
         Elem::Flag => Some(b'F'),

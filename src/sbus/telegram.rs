@@ -2,7 +2,8 @@
 //! request and response contents into the table's `Sensor #` and `Data` text.
 
 use super::commands::{self, Command, Elem, Expect, Layout};
-use super::media::{MediaSpans, push_bits, push_words};
+use super::media::{MediaSpans, medium_letter, push_bits, push_words};
+use crate::digits::put_u32;
 use crate::fmt::{push_hex, push_i64, push_u64};
 
 /// Frame-sync byte of the serial data mode.
@@ -237,7 +238,8 @@ pub(super) fn push_value(out: &mut String, elem: Elem, v: u32) {
 }
 
 /// The `Sensor #` of a read (`R57`) and its range in the Data cell (`R57..R63`), which starts
-/// with the same name: formatted once, copied once.
+/// with the same name: formatted once, copied once. A medium's range is written as one piece
+/// ([`media_range`]).
 fn push_name_and_range(
     name: &mut String,
     data: &mut String,
@@ -246,10 +248,40 @@ fn push_name_and_range(
     addr: u32,
     count: u32,
 ) {
+    if let Some(letter) = medium_letter(elem) {
+        let mut buf = RangeText([0; 32]);
+        let (text, first) = media_range(&mut buf, letter, addr, count);
+        data.push_str(text);
+        name.push_str(text.get(..first).unwrap_or_default());
+        return;
+    }
     let from = name.len();
     push_elem(name, elem, block, addr);
     data.push_str(&name[from..]);
     push_range_end(data, elem, block, addr, count);
+}
+
+/// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
+/// boundary (byte by byte up to one, otherwise).
+#[repr(align(8))]
+struct RangeText([u8; 32]);
+
+/// A medium's range `R57..R63` (`R57` alone for one element), as [`push_elem`] and
+/// [`push_range_end`] write it: the letter and digits gathered in `buf` and checked as UTF-8
+/// once (a push and a formatted number per name cost more). Returns the text and the length
+/// of its first name.
+fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str, usize) {
+    let w = &mut buf.0;
+    w[0] = letter;
+    let first = 1 + put_u32(&mut w[1..], addr);
+    let mut n = first;
+    if count > 1 {
+        w[n..n + 3].copy_from_slice(&[b'.', b'.', letter]);
+        n += 3;
+        n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
+    }
+    let text = std::str::from_utf8(&w[..n]).expect("a range is ASCII");
+    (text, first)
 }
 
 /// What follows the first name in a range: `..R63`, ` n=8`, or nothing for one element.
@@ -626,6 +658,45 @@ mod tests {
         assert_eq!(d, "2026-11-21 23:56:50 week 47 day 06");
         let (s, d, _) = req(1, 0x25, "06 00 0C 00 05 61 62 0A");
         assert_eq!((s.as_str(), d.as_str()), ("X12", "pos 5: ab\\x0A"));
+    }
+
+    /// A medium's range written in one piece against the general path (a name and the range's
+    /// end): addresses at the digit-count edges, counts that wrap the address, one element.
+    #[test]
+    fn media_ranges_are_the_general_text() {
+        let media = [
+            Elem::Register,
+            Elem::Flag,
+            Elem::Input,
+            Elem::Output,
+            Elem::Timer,
+            Elem::Counter,
+        ];
+        let mut addrs: Vec<u32> = (0..10)
+            .flat_map(|p| [10u32.pow(p) - 1, 10u32.pow(p)])
+            .collect();
+        addrs.extend([0, 57, 65535, 99_999_999, u32::MAX - 1, u32::MAX]);
+        let mut x = 0x2545_F491u32;
+        for _ in 0..2000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            addrs.push(x >> (x % 32));
+        }
+        let counts = [0u32, 1, 2, 3, 10, 128, 256, 65536, u32::MAX];
+        for elem in media {
+            for &addr in &addrs {
+                for count in counts {
+                    let (mut name, mut data) = (String::from("s"), String::from("d"));
+                    push_name_and_range(&mut name, &mut data, elem, 0, addr, count);
+                    let mut want = String::from("d");
+                    push_elem(&mut want, elem, 0, addr);
+                    push_range_end(&mut want, elem, 0, addr, count);
+                    assert_eq!(data, want, "{elem:?} {addr} {count}");
+                    assert_eq!(name, format!("s{}{addr}", elem.prefix()));
+                }
+            }
+        }
     }
 
     #[test]
