@@ -19,6 +19,9 @@ pub(crate) struct MediaSpans {
     /// Each number of the list; empty when the list names no medium (`DB4000[2]=5`): the
     /// rule of the parts (`[RFIOTC][0-9]+=[+-]?[0-9]+` per token) then gives none.
     pub spans: Vec<MediaSpan>,
+    /// The block the recorded lists are gathered in, kept from list to list (a list on the
+    /// stack would clear its 512 bytes first).
+    block: Box<Block>,
 }
 
 /// One `name=number` of a media list: byte offsets in the Data cell.
@@ -28,18 +31,6 @@ impl MediaSpans {
     pub fn clear(&mut self) {
         self.len = None;
         self.spans.clear();
-    }
-
-    /// Records one number written at `base + span` (its `=` at `base + eq`).
-    #[inline(always)]
-    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
-        let at = base as u32;
-        self.spans.push(MediaSpan {
-            start: at + span.start as u32,
-            eq: at + eq as u32,
-            end: at + span.end as u32,
-            value,
-        });
     }
 
     /// Recording for a list written into `out`: only when the list is the whole cell.
@@ -102,10 +93,7 @@ pub(super) fn push_words(
         let value = if signed { v as i32 as f64 } else { v as f64 };
         (n, value)
     };
-    match media {
-        Some(m) => write_list(out, letter, addr, words, m, text),
-        None => write_list(out, letter, addr, words, Unrecorded, text),
-    }
+    write_recorded(out, media, letter, addr, words, text)
 }
 
 /// `F0=1 F1=0 …`: element 0 is bit 0 of the first byte.
@@ -139,29 +127,55 @@ pub(super) fn push_bits(
         w[0] = b'0' + bit as u8;
         (1, bit as f64)
     };
+    write_recorded(out, media, letter, addr, bits, text)
+}
+
+/// [`write_list`] recording into `media` (in its block), or into nothing (in a block of its
+/// own) when there is nothing to record.
+#[inline(always)]
+fn write_recorded(
+    out: &mut String,
+    media: Option<&mut MediaSpans>,
+    letter: u8,
+    addr: u32,
+    values: impl Iterator<Item = u32>,
+    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+) -> usize {
     match media {
-        Some(m) => write_list(out, letter, addr, bits, m, text),
-        None => write_list(out, letter, addr, bits, Unrecorded, text),
+        Some(m) => {
+            let first = write_list(out, &mut m.block, letter, addr, values, &mut m.spans, text);
+            m.len = Some(out.len());
+            first
+        }
+        None => write_list(
+            out,
+            &mut Block::default(),
+            letter,
+            addr,
+            values,
+            Unrecorded,
+            text,
+        ),
     }
 }
 
-/// Where the numbers of a list go as they are written: into [`MediaSpans`] or nowhere (a
-/// type per choice, so that the list's loop asks nothing per element).
+/// Where the numbers of a list go as they are written: into [`MediaSpans::spans`] or nowhere
+/// (a type per choice, so that the list's loop asks nothing per element).
 trait Record {
     /// One number written at `base + span` (its `=` at `base + eq`).
     fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64);
-    /// The list is complete: the cell is `len` bytes long.
-    fn done(&mut self, len: usize);
 }
 
-impl Record for &mut MediaSpans {
+impl Record for &mut Vec<MediaSpan> {
     #[inline(always)]
     fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
-        MediaSpans::record(self, base, span, eq, value);
-    }
-
-    fn done(&mut self, len: usize) {
-        self.len = Some(len);
+        let at = base as u32;
+        self.push(MediaSpan {
+            start: at + span.start as u32,
+            eq: at + eq as u32,
+            end: at + span.end as u32,
+            value,
+        });
     }
 }
 
@@ -171,8 +185,6 @@ struct Unrecorded;
 impl Record for Unrecorded {
     #[inline(always)]
     fn record(&mut self, _: usize, _: std::ops::Range<usize>, _: usize, _: f64) {}
-
-    fn done(&mut self, _: usize) {}
 }
 
 /// Writes the list `R57=v0 R58=v1 …` (the medium's `letter`, addresses counted up from
@@ -185,13 +197,14 @@ impl Record for Unrecorded {
 #[inline(always)]
 fn write_list<R: Record>(
     out: &mut String,
+    block: &mut Block,
     letter: u8,
     addr: u32,
     values: impl Iterator<Item = u32>,
     mut rec: R,
     text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
 ) -> usize {
-    let mut list = ListText::new(out);
+    let mut list = ListText::new(out, block);
     let was = list.out.len();
     let mut names = Names::new(letter, addr);
     let first = names.len - 2;
@@ -210,9 +223,7 @@ fn write_list<R: Record>(
         names.step();
     }
     list.flush();
-    let len = list.out.len();
-    rec.done(len);
-    if len > was { first } else { 0 }
+    if list.out.len() > was { first } else { 0 }
 }
 
 /// Room of an element's name text: a blank, the letter, 10 address digits and `=` (13), copied
@@ -226,12 +237,12 @@ const _: () = assert!(NAME_ROOM <= ELEM_ROOM && 13 + VALUE_ROOM <= ELEM_ROOM);
 /// The stack block a list is gathered in before it is appended to the cell.
 const LIST_BLOCK: usize = 512;
 
-/// A media list's text (`R0=1 R1=-2`), gathered in a stack block and appended to the cell one
+/// A media list's text (`R0=1 R1=-2`), gathered in a block and appended to the cell one
 /// block at a time: one copy and one ASCII check per block instead of a push per name, number
 /// and separator. Everything written into it is ASCII.
 struct ListText<'o> {
     out: &'o mut String,
-    buf: Block,
+    buf: &'o mut Block,
     /// Where the block's text starts: [`FIRST`] in the first block (past the first element's
     /// blank, which is not part of the cell), then 0.
     from: usize,
@@ -241,17 +252,25 @@ struct ListText<'o> {
 
 /// The list's block, aligned so that the text appended from it starts at a word boundary:
 /// `str::from_utf8` checks ASCII a word at a time from there, and byte by byte before it.
+/// A list reads only what it wrote: the bytes a block starts with do not matter.
+#[derive(Clone, Debug)]
 #[repr(align(16))]
 struct Block([u8; LIST_BLOCK]);
+
+impl Default for Block {
+    fn default() -> Self {
+        Block([0; LIST_BLOCK])
+    }
+}
 
 /// Where the first block's text starts: the first element's blank stands just before it.
 const FIRST: usize = 8;
 
 impl<'o> ListText<'o> {
-    fn new(out: &'o mut String) -> Self {
+    fn new(out: &'o mut String, buf: &'o mut Block) -> Self {
         ListText {
             out,
-            buf: Block([0; LIST_BLOCK]),
+            buf,
             from: FIRST,
             n: FIRST - 1,
         }
