@@ -34,7 +34,10 @@ impl MediaSpans {
     }
 
     /// Recording for a list written into `out`: only when the list is the whole cell.
-    fn begin<'m>(media: Option<&'m mut MediaSpans>, out: &str) -> Option<&'m mut MediaSpans> {
+    pub(super) fn begin<'m>(
+        media: Option<&'m mut MediaSpans>,
+        out: &str,
+    ) -> Option<&'m mut MediaSpans> {
         let m = media.filter(|_| out.is_empty())?;
         m.clear();
         Some(m)
@@ -79,19 +82,21 @@ pub(super) fn push_words(
         }
         return 0;
     };
-    let signed = !elem.is_unsigned();
+    // the bit that makes a value negative: the sign bit of an `i32`, none for unsigned media
+    let sign_bit = if elem.is_unsigned() { 0 } else { 1 << 31 };
     let words = data
         .chunks_exact(4)
         .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
     // `-` is written before every number and kept only when the number is negative.
     let text = move |v: u32, w: &mut [u8; VALUE_ROOM]| {
-        let neg = signed && (v as i32) < 0;
-        let magnitude = if neg { (v as i32).unsigned_abs() } else { v };
+        let neg = v & sign_bit != 0;
+        // |v as i32| (2^31 for i32::MIN)
+        let magnitude = if neg { v.wrapping_neg() } else { v };
         w[0] = b'-';
         let k = usize::from(neg);
         let n = k + put_u32(&mut w[k..], magnitude);
-        let value = if signed { v as i32 as f64 } else { v as f64 };
-        (n, value)
+        let value = f64::from(magnitude);
+        (n, if neg { -value } else { value })
     };
     write_recorded(out, media, letter, addr, words, text)
 }

@@ -239,7 +239,9 @@ pub(super) fn push_value(out: &mut String, elem: Elem, v: u32) {
 
 /// The `Sensor #` of a read (`R57`) and its range in the Data cell (`R57..R63`), which starts
 /// with the same name: formatted once, copied once. A medium's range is written as one piece
-/// ([`media_range`]).
+/// ([`media_range`]). A range names no number (`R57..R63`, `0x000010 n=8`: no token is a
+/// medium's `name=number`): recorded in `media` as a list of none when it is the whole cell,
+/// so that the row need not read the cell back to find that.
 fn push_name_and_range(
     name: &mut String,
     data: &mut String,
@@ -247,18 +249,23 @@ fn push_name_and_range(
     block: u16,
     addr: u32,
     count: u32,
+    media: Option<&mut MediaSpans>,
 ) {
+    let media = MediaSpans::begin(media, data);
     if let Some(letter) = medium_letter(elem) {
         let mut buf = RangeText([0; 32]);
         let (text, first) = media_range(&mut buf, letter, addr, count);
         data.push_str(text);
         name.push_str(text.get(..first).unwrap_or_default());
-        return;
+    } else {
+        let from = name.len();
+        push_elem(name, elem, block, addr);
+        data.push_str(&name[from..]);
+        push_range_end(data, elem, block, addr, count);
     }
-    let from = name.len();
-    push_elem(name, elem, block, addr);
-    data.push_str(&name[from..]);
-    push_range_end(data, elem, block, addr, count);
+    if let Some(m) = media {
+        m.len = Some(data.len());
+    }
 }
 
 /// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
@@ -400,7 +407,7 @@ pub(crate) fn describe_request_media(
     match command.layout {
         ReadWords(e) | ReadBits(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
-            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count, media);
         }
         ReadDb if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -412,12 +419,13 @@ pub(crate) fn describe_request_media(
                 info.block,
                 info.addr,
                 info.count,
+                media,
             );
         }
         ReadProg(_) | ReadBytes if body.len() >= 4 => {
             let e = command.layout.elem().unwrap_or(Elem::Byte);
             info.addr = be(&body[1..4]);
-            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count, media);
         }
         ReadText if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -430,7 +438,15 @@ pub(crate) fn describe_request_media(
         }
         ReadEeprom if body.len() >= 4 => {
             info.addr = be(&body[2..4]);
-            push_name_and_range(sensor_no, data, Elem::Eeprom, 0, info.addr, info.count);
+            push_name_and_range(
+                sensor_no,
+                data,
+                Elem::Eeprom,
+                0,
+                info.addr,
+                info.count,
+                media,
+            );
         }
         WriteWords(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
@@ -688,7 +704,7 @@ mod tests {
             for &addr in &addrs {
                 for count in counts {
                     let (mut name, mut data) = (String::from("s"), String::from("d"));
-                    push_name_and_range(&mut name, &mut data, elem, 0, addr, count);
+                    push_name_and_range(&mut name, &mut data, elem, 0, addr, count, None);
                     let mut want = String::from("d");
                     push_elem(&mut want, elem, 0, addr);
                     push_range_end(&mut want, elem, 0, addr, count);
