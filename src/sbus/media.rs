@@ -298,12 +298,25 @@ impl<'o> ListText<'o> {
     }
 
     fn flush(&mut self) {
-        let text = self.buf.0.get(self.from..self.n).unwrap_or_default();
-        let text = std::str::from_utf8(text).expect("list text is ASCII");
-        self.out.push_str(text);
+        let from = self.buf.0.get(self.from..).unwrap_or_default();
+        self.out.push_str(ascii_text(from, self.n.saturating_sub(self.from)));
         self.from = 0;
         self.n = 0;
     }
+}
+
+/// The first `len` bytes of `block` (at most all of it) as text, for a block that holds ASCII
+/// only (what a list or a range writes, and the zeros it started with): `str::from_utf8`
+/// checks 16 bytes a step from a word boundary and the rest byte by byte, so the block is
+/// checked up to the next multiple of 16 bytes, which costs less than the text's tail alone.
+/// Should the bytes after the text not be ASCII, the text alone is checked.
+pub(super) fn ascii_text(block: &[u8], len: usize) -> &str {
+    let text = block.get(..len).unwrap_or(block);
+    let padded = block.get(..len.next_multiple_of(16)).unwrap_or(block);
+    std::str::from_utf8(padded)
+        .ok()
+        .and_then(|all| all.get(..text.len()))
+        .unwrap_or_else(|| std::str::from_utf8(text).expect("the text is ASCII"))
 }
 
 /// The name part of a list's elements, `" R57="` (a blank, the letter, the address's digits,
@@ -623,6 +636,28 @@ mod tests {
         telegram::describe_response_media(&t.info, b"R1=5", sensor, &mut data, Some(&mut media));
         assert_eq!(recorded(&data, &media), None);
         assert_eq!(parts(&data).len(), 1);
+    }
+
+    /// The padded check against the text checked alone: every length, blocks that are ASCII
+    /// after the text and blocks that are not.
+    #[test]
+    fn ascii_text_is_the_text_alone() {
+        let mut block = [0u8; 80];
+        for (i, b) in block.iter_mut().enumerate() {
+            *b = b' ' + (i % 90) as u8;
+        }
+        for after in [None, Some(0xC3u8), Some(0xFF), Some(0x80)] {
+            for len in 0..=block.len() + 3 {
+                let mut b = block;
+                if let Some(x) = after {
+                    for k in (len..b.len()).step_by(5) {
+                        b[k] = x;
+                    }
+                }
+                let want = std::str::from_utf8(&b[..len.min(b.len())]).unwrap();
+                assert_eq!(ascii_text(&b, len), want, "{len} {after:?}");
+            }
+        }
     }
 
     /// The block-wise list writer against the text written piece by piece with `format!`:

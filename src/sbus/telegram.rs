@@ -2,7 +2,7 @@
 //! request and response contents into the table's `Sensor #` and `Data` text.
 
 use super::commands::{self, Command, Elem, Expect, Layout};
-use super::media::{MediaSpans, medium_letter, push_bits, push_words};
+use super::media::{MediaSpans, ascii_text, medium_letter, push_bits, push_words};
 use crate::digits::put_u32;
 use crate::fmt::{push_hex, push_i64, push_u64};
 
@@ -287,8 +287,7 @@ fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str,
         n += 3;
         n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
     }
-    let text = std::str::from_utf8(&w[..n]).expect("a range is ASCII");
-    (text, first)
+    (ascii_text(w, n), first)
 }
 
 /// What follows the first name in a range: `..R63`, ` n=8`, or nothing for one element.
