@@ -19,6 +19,9 @@ pub(crate) struct MediaSpans {
     /// Each number of the list; empty when the list names no medium (`DB4000[2]=5`): the
     /// rule of the parts (`[RFIOTC][0-9]+=[+-]?[0-9]+` per token) then gives none.
     pub spans: Vec<MediaSpan>,
+    /// The block the recorded lists are gathered in, kept from list to list (a list on the
+    /// stack would clear its 512 bytes first).
+    block: Box<Block>,
 }
 
 /// One `name=number` of a media list: byte offsets in the Data cell.
@@ -30,20 +33,11 @@ impl MediaSpans {
         self.spans.clear();
     }
 
-    /// Records one number written at `base + span` (its `=` at `base + eq`).
-    #[inline(always)]
-    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
-        let at = base as u32;
-        self.spans.push(MediaSpan {
-            start: at + span.start as u32,
-            eq: at + eq as u32,
-            end: at + span.end as u32,
-            value,
-        });
-    }
-
     /// Recording for a list written into `out`: only when the list is the whole cell.
-    fn begin<'m>(media: Option<&'m mut MediaSpans>, out: &str) -> Option<&'m mut MediaSpans> {
+    pub(super) fn begin<'m>(
+        media: Option<&'m mut MediaSpans>,
+        out: &str,
+    ) -> Option<&'m mut MediaSpans> {
         let m = media.filter(|_| out.is_empty())?;
         m.clear();
         Some(m)
@@ -52,14 +46,14 @@ impl MediaSpans {
 
 /// The letter of the media whose element names are that letter and a decimal address (`R`,
 /// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
-fn medium_letter(elem: Elem) -> Option<char> {
+pub(super) fn medium_letter(elem: Elem) -> Option<u8> {
     match elem {
-        Elem::Register => Some('R'),
-        Elem::Flag => Some('F'),
-        Elem::Input => Some('I'),
-        Elem::Output => Some('O'),
-        Elem::Timer => Some('T'),
-        Elem::Counter => Some('C'),
+        Elem::Register => Some(b'R'),
+        Elem::Flag => Some(b'F'),
+        Elem::Input => Some(b'I'),
+        Elem::Output => Some(b'O'),
+        Elem::Timer => Some(b'T'),
+        Elem::Counter => Some(b'C'),
         _ => None,
     }
 }
@@ -72,7 +66,7 @@ pub(super) fn push_words(
     data: &[u8],
     media: Option<&mut MediaSpans>,
 ) -> usize {
-    let mut media = MediaSpans::begin(media, out);
+    let media = MediaSpans::begin(media, out);
     let Some(letter) = medium_letter(elem) else {
         // Data-block, byte and other elements: named by the general path, never recorded.
         for (i, w) in data.chunks_exact(4).enumerate() {
@@ -88,45 +82,23 @@ pub(super) fn push_words(
         }
         return 0;
     };
-    let unsigned = elem.is_unsigned();
-    let mut list = ListText::new(out);
-    let mut name = DecCounter::new(addr);
-    for (i, w) in data.chunks_exact(4).enumerate() {
-        let v = be(w);
-        let (base, p, w) = list.room();
-        let (start, eq) = name.put(w, i == 0, letter);
-        let mut k = eq + 1;
-        let value = if unsigned {
-            k += put_u32(&mut w[k..], v);
-            v as f64
-        } else {
-            let s = v as i32;
-            if s < 0 {
-                w[k] = b'-';
-                k += 1;
-            }
-            k += put_u32(&mut w[k..], s.unsigned_abs());
-            s as f64
-        };
-        list.n = p + k;
-        if let Some(m) = media.as_deref_mut() {
-            m.record(base, start..k, eq, value);
-        }
-    }
-    list.flush();
-    if let Some(m) = media {
-        m.len = Some(out.len());
-    }
-    first_name(data.len() >= 4, addr)
-}
-
-/// The length of a list's first name (`R57`: 3) when the list has one, else 0.
-fn first_name(any: bool, addr: u32) -> usize {
-    if any {
-        1 + addr.checked_ilog10().unwrap_or(0) as usize + 1
-    } else {
-        0
-    }
+    // the bit that makes a value negative: the sign bit of an `i32`, none for unsigned media
+    let sign_bit = if elem.is_unsigned() { 0 } else { 1 << 31 };
+    let words = data
+        .chunks_exact(4)
+        .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
+    // `-` is written before every number and kept only when the number is negative.
+    let text = move |v: u32, w: &mut [u8; VALUE_ROOM]| {
+        let neg = v & sign_bit != 0;
+        // |v as i32| (2^31 for i32::MIN)
+        let magnitude = if neg { v.wrapping_neg() } else { v };
+        w[0] = b'-';
+        let k = usize::from(neg);
+        let n = k + put_u32(&mut w[k..], magnitude);
+        let value = f64::from(magnitude);
+        (n, if neg { -value } else { value })
+    };
+    write_recorded(out, media, letter, addr, words, text)
 }
 
 /// `F0=1 F1=0 …`: element 0 is bit 0 of the first byte.
@@ -138,7 +110,7 @@ pub(super) fn push_bits(
     data: &[u8],
     media: Option<&mut MediaSpans>,
 ) -> usize {
-    let mut media = MediaSpans::begin(media, out);
+    let media = MediaSpans::begin(media, out);
     let n = bits.min(data.len() as u32 * 8);
     let Some(letter) = medium_letter(elem) else {
         for i in 0..n {
@@ -155,127 +127,241 @@ pub(super) fn push_bits(
         }
         return 0;
     };
-    let mut list = ListText::new(out);
-    let mut name = DecCounter::new(addr);
-    for i in 0..n {
-        let bit = data[(i / 8) as usize] >> (i % 8) & 1;
-        let (base, p, w) = list.room();
-        let (start, eq) = name.put(w, i == 0, letter);
-        w[eq + 1] = b'0' + bit;
-        let k = eq + 2;
-        list.n = p + k;
-        if let Some(m) = media.as_deref_mut() {
-            m.record(base, start..k, eq, bit as f64);
-        }
-    }
-    list.flush();
-    if let Some(m) = media {
-        m.len = Some(out.len());
-    }
-    first_name(n > 0, addr)
+    let bits = (0..n).map(|i| u32::from(data[(i / 8) as usize] >> (i % 8) & 1));
+    let text = |bit: u32, w: &mut [u8; VALUE_ROOM]| {
+        w[0] = b'0' + bit as u8;
+        (1, bit as f64)
+    };
+    write_recorded(out, media, letter, addr, bits, text)
 }
 
-/// Room a list element needs at most: a blank, the letter, 10 address digits, `=`, a sign
-/// and 10 value digits.
+/// [`write_list`] recording into `media` (in its block), or into nothing (in a block of its
+/// own) when there is nothing to record.
+#[inline(always)]
+fn write_recorded(
+    out: &mut String,
+    media: Option<&mut MediaSpans>,
+    letter: u8,
+    addr: u32,
+    values: impl Iterator<Item = u32>,
+    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+) -> usize {
+    match media {
+        Some(m) => {
+            let first = write_list(out, &mut m.block, letter, addr, values, &mut m.spans, text);
+            m.len = Some(out.len());
+            first
+        }
+        None => write_list(
+            out,
+            &mut Block::default(),
+            letter,
+            addr,
+            values,
+            Unrecorded,
+            text,
+        ),
+    }
+}
+
+/// Where the numbers of a list go as they are written: into [`MediaSpans::spans`] or nowhere
+/// (a type per choice, so that the list's loop asks nothing per element).
+trait Record {
+    /// One number written at `base + span` (its `=` at `base + eq`).
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64);
+}
+
+impl Record for &mut Vec<MediaSpan> {
+    #[inline(always)]
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, value: f64) {
+        let at = base as u32;
+        self.push(MediaSpan {
+            start: at + span.start as u32,
+            eq: at + eq as u32,
+            end: at + span.end as u32,
+            value,
+        });
+    }
+}
+
+/// Nothing recorded (a list after other text, or a caller that wants no parts).
+struct Unrecorded;
+
+impl Record for Unrecorded {
+    #[inline(always)]
+    fn record(&mut self, _: usize, _: std::ops::Range<usize>, _: usize, _: f64) {}
+}
+
+/// Writes the list `R57=v0 R58=v1 …` (the medium's `letter`, addresses counted up from
+/// `addr`, wrapping like `u32::wrapping_add`) with each value's `text` (it returns the text's
+/// length and the number), recording every number in `rec`. Returns the length of the first
+/// name (`R57`: 3), or 0 for an empty list.
+///
+/// Every element is written with the blank before it (`" R58=…"`, a copy of [`Names`]'s text);
+/// the first element's blank is then left out of the cell ([`ListText`] starts past it).
+#[inline(always)]
+fn write_list<R: Record>(
+    out: &mut String,
+    block: &mut Block,
+    letter: u8,
+    addr: u32,
+    values: impl Iterator<Item = u32>,
+    mut rec: R,
+    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+) -> usize {
+    let mut list = ListText::new(out, block);
+    let was = list.out.len();
+    let mut names = Names::new(letter, addr);
+    let first = names.len - 2;
+    for v in values {
+        let (at, p, w) = list.room();
+        w[..NAME_ROOM].copy_from_slice(&names.text);
+        // in `w`: the blank, the name, `=` at `eq`, the value
+        let eq = names.len - 1;
+        let value_at: &mut [u8; VALUE_ROOM] = (&mut w[eq + 1..eq + 1 + VALUE_ROOM])
+            .try_into()
+            .expect("VALUE_ROOM bytes");
+        let (n, value) = text(v, value_at);
+        let end = eq + 1 + n;
+        list.n = p + end;
+        rec.record(at, 0..end - 1, eq - 1, value);
+        names.step();
+    }
+    list.flush();
+    if list.out.len() > was { first } else { 0 }
+}
+
+/// Room of an element's name text: a blank, the letter, 10 address digits and `=` (13), copied
+/// as 16 bytes.
+const NAME_ROOM: usize = 16;
+/// Room a value's text may use ([`put_u32`] may write up to 10 bytes, a sign before them).
+const VALUE_ROOM: usize = 12;
+/// Room a list element needs at most: the name's copy, or the name (13) and the value.
 const ELEM_ROOM: usize = 32;
+const _: () = assert!(NAME_ROOM <= ELEM_ROOM && 13 + VALUE_ROOM <= ELEM_ROOM);
 /// The stack block a list is gathered in before it is appended to the cell.
 const LIST_BLOCK: usize = 512;
 
-/// A media list's text (`R0=1 R1=-2`), gathered in a stack block and appended to the cell one
+/// A media list's text (`R0=1 R1=-2`), gathered in a block and appended to the cell one
 /// block at a time: one copy and one ASCII check per block instead of a push per name, number
 /// and separator. Everything written into it is ASCII.
 struct ListText<'o> {
     out: &'o mut String,
-    buf: [u8; LIST_BLOCK],
+    buf: &'o mut Block,
+    /// Where the block's text starts: [`FIRST`] in the first block (past the first element's
+    /// blank, which is not part of the cell), then 0.
+    from: usize,
     /// Bytes of `buf` in use.
     n: usize,
 }
 
+/// The list's block, aligned so that the text appended from it starts at a word boundary:
+/// `str::from_utf8` checks ASCII a word at a time from there, and byte by byte before it.
+/// A list reads only what it wrote: the bytes a block starts with do not matter.
+#[derive(Clone, Debug)]
+#[repr(align(16))]
+struct Block([u8; LIST_BLOCK]);
+
+impl Default for Block {
+    fn default() -> Self {
+        Block([0; LIST_BLOCK])
+    }
+}
+
+/// Where the first block's text starts: the first element's blank stands just before it.
+const FIRST: usize = 8;
+
 impl<'o> ListText<'o> {
-    fn new(out: &'o mut String) -> Self {
+    fn new(out: &'o mut String, buf: &'o mut Block) -> Self {
         ListText {
             out,
-            buf: [0; LIST_BLOCK],
-            n: 0,
+            buf,
+            from: FIRST,
+            n: FIRST - 1,
         }
     }
 
-    /// Room for one element: its offset in the cell and in the block, and the bytes from
-    /// there (the caller sets `n` past what it wrote). Appends the block first when the room
-    /// is not there.
-    #[inline]
+    /// Room for one element (its blank, name and value): where the name (`buf[p + 1]`) will
+    /// stand in the cell, `p`, and the bytes from there (the caller sets `n` past what it
+    /// wrote). Appends the block first when the room is not there.
+    #[inline(always)]
     fn room(&mut self) -> (usize, usize, &mut [u8; ELEM_ROOM]) {
         if self.n > LIST_BLOCK - ELEM_ROOM {
             self.flush();
         }
         let p = self.n;
-        let at = self.out.len() + p;
-        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf[p..p + ELEM_ROOM])
+        let at = self.out.len() + p + 1 - self.from;
+        let w: &mut [u8; ELEM_ROOM] = (&mut self.buf.0[p..p + ELEM_ROOM])
             .try_into()
             .expect("ELEM_ROOM bytes");
         (at, p, w)
     }
 
     fn flush(&mut self) {
-        let text = std::str::from_utf8(&self.buf[..self.n]).expect("list text is ASCII");
-        self.out.push_str(text);
+        let from = self.buf.0.get(self.from..).unwrap_or_default();
+        self.out.push_str(ascii_text(from, self.n.saturating_sub(self.from)));
+        self.from = 0;
         self.n = 0;
     }
 }
 
-/// The addresses of a list: a number kept as its decimal text and counted up in place.
-struct DecCounter {
-    value: u32,
-    /// The digits, left-aligned (room to copy the whole array at once).
-    digits: [u8; 16],
-    len: usize,
+/// The first `len` bytes of `block` (at most all of it) as text, for a block that holds ASCII
+/// only (what a list or a range writes, and the zeros it started with): `str::from_utf8`
+/// checks 16 bytes a step from a word boundary and the rest byte by byte, so the block is
+/// checked up to the next multiple of 16 bytes, which costs less than the text's tail alone.
+/// Should the bytes after the text not be ASCII, the text alone is checked.
+pub(super) fn ascii_text(block: &[u8], len: usize) -> &str {
+    let text = block.get(..len).unwrap_or(block);
+    let padded = block.get(..len.next_multiple_of(16)).unwrap_or(block);
+    std::str::from_utf8(padded)
+        .ok()
+        .and_then(|all| all.get(..text.len()))
+        .unwrap_or_else(|| std::str::from_utf8(text).expect("the text is ASCII"))
 }
 
-impl DecCounter {
-    fn new(value: u32) -> Self {
-        let mut digits = [0u8; 16];
-        let len = put_u32(&mut digits, value);
-        DecCounter { value, digits, len }
+/// The name part of a list's elements, `" R57="` (a blank, the letter, the address's digits,
+/// `=`), counted up in place: a list's addresses are consecutive.
+struct Names {
+    text: [u8; NAME_ROOM],
+    /// Bytes of `text` in use.
+    len: usize,
+    addr: u32,
+}
+
+impl Names {
+    fn new(letter: u8, addr: u32) -> Self {
+        let mut text = [b' '; NAME_ROOM];
+        text[1] = letter;
+        let n = put_u32(&mut text[2..], addr);
+        text[2 + n] = b'=';
+        Names {
+            text,
+            len: 3 + n,
+            addr,
+        }
     }
 
-    /// The next number (wrapping like `u32::wrapping_add`).
-    #[inline]
-    fn step(&mut self) {
-        if self.value == u32::MAX {
-            *self = DecCounter::new(0);
-            return;
-        }
-        let mut i = self.len;
-        while i > 0 {
-            i -= 1;
-            if self.digits[i] != b'9' {
-                self.digits[i] += 1;
-                self.value = self.value.wrapping_add(1);
-                return;
-            }
-            self.digits[i] = b'0';
-        }
-        // all nines: one digit more
-        *self = DecCounter::new(self.value.wrapping_add(1));
-    }
-
-    /// Writes a list element's name and `=` at the start of `w`: a blank first unless it is the
-    /// `first` element (and then the next number), the `letter`, the digits. Returns where the
-    /// name starts and where the `=` is.
+    /// The next address (wrapping like `u32::wrapping_add`): the last digit counted up, a
+    /// carry over the nines before it; written again when the number gets one digit longer
+    /// or wraps to 0.
     #[inline(always)]
-    fn put(&mut self, w: &mut [u8], first: bool, letter: char) -> (usize, usize) {
-        let mut k = 0;
-        if !first {
-            w[0] = b' ';
-            k = 1;
-            self.step();
+    fn step(&mut self) {
+        self.addr = self.addr.wrapping_add(1);
+        let mut i = self.len - 2;
+        while self.addr != 0 {
+            match self.text.get_mut(i) {
+                Some(d) if (b'0'..=b'8').contains(d) => {
+                    *d += 1;
+                    return;
+                }
+                Some(d) if *d == b'9' && i > 2 => {
+                    *d = b'0';
+                    i -= 1;
+                }
+                _ => break,
+            }
         }
-        let start = k;
-        w[k] = letter as u8;
-        w[k + 1..k + 17].copy_from_slice(&self.digits);
-        k += 1 + self.len;
-        w[k] = b'=';
-        (start, k)
+        *self = Names::new(self.text[1], self.addr);
     }
 }
 
@@ -550,6 +636,28 @@ mod tests {
         telegram::describe_response_media(&t.info, b"R1=5", sensor, &mut data, Some(&mut media));
         assert_eq!(recorded(&data, &media), None);
         assert_eq!(parts(&data).len(), 1);
+    }
+
+    /// The padded check against the text checked alone: every length, blocks that are ASCII
+    /// after the text and blocks that are not.
+    #[test]
+    fn ascii_text_is_the_text_alone() {
+        let mut block = [0u8; 80];
+        for (i, b) in block.iter_mut().enumerate() {
+            *b = b' ' + (i % 90) as u8;
+        }
+        for after in [None, Some(0xC3u8), Some(0xFF), Some(0x80)] {
+            for len in 0..=block.len() + 3 {
+                let mut b = block;
+                if let Some(x) = after {
+                    for k in (len..b.len()).step_by(5) {
+                        b[k] = x;
+                    }
+                }
+                let want = std::str::from_utf8(&b[..len.min(b.len())]).unwrap();
+                assert_eq!(ascii_text(&b, len), want, "{len} {after:?}");
+            }
+        }
     }
 
     /// The block-wise list writer against the text written piece by piece with `format!`:

@@ -2,7 +2,8 @@
 //! request and response contents into the table's `Sensor #` and `Data` text.
 
 use super::commands::{self, Command, Elem, Expect, Layout};
-use super::media::{MediaSpans, push_bits, push_words};
+use super::media::{MediaSpans, ascii_text, medium_letter, push_bits, push_words};
+use crate::digits::put_u32;
 use crate::fmt::{push_hex, push_i64, push_u64};
 
 /// Frame-sync byte of the serial data mode.
@@ -237,7 +238,10 @@ pub(super) fn push_value(out: &mut String, elem: Elem, v: u32) {
 }
 
 /// The `Sensor #` of a read (`R57`) and its range in the Data cell (`R57..R63`), which starts
-/// with the same name: formatted once, copied once.
+/// with the same name: formatted once, copied once. A medium's range is written as one piece
+/// ([`media_range`]). A range names no number (`R57..R63`, `0x000010 n=8`: no token is a
+/// medium's `name=number`): recorded in `media` as a list of none when it is the whole cell,
+/// so that the row need not read the cell back to find that.
 fn push_name_and_range(
     name: &mut String,
     data: &mut String,
@@ -245,11 +249,45 @@ fn push_name_and_range(
     block: u16,
     addr: u32,
     count: u32,
+    media: Option<&mut MediaSpans>,
 ) {
-    let from = name.len();
-    push_elem(name, elem, block, addr);
-    data.push_str(&name[from..]);
-    push_range_end(data, elem, block, addr, count);
+    let media = MediaSpans::begin(media, data);
+    if let Some(letter) = medium_letter(elem) {
+        let mut buf = RangeText([0; 32]);
+        let (text, first) = media_range(&mut buf, letter, addr, count);
+        data.push_str(text);
+        name.push_str(text.get(..first).unwrap_or_default());
+    } else {
+        let from = name.len();
+        push_elem(name, elem, block, addr);
+        data.push_str(&name[from..]);
+        push_range_end(data, elem, block, addr, count);
+    }
+    if let Some(m) = media {
+        m.len = Some(data.len());
+    }
+}
+
+/// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
+/// boundary (byte by byte up to one, otherwise).
+#[repr(align(8))]
+struct RangeText([u8; 32]);
+
+/// A medium's range `R57..R63` (`R57` alone for one element), as [`push_elem`] and
+/// [`push_range_end`] write it: the letter and digits gathered in `buf` and checked as UTF-8
+/// once (a push and a formatted number per name cost more). Returns the text and the length
+/// of its first name.
+fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str, usize) {
+    let w = &mut buf.0;
+    w[0] = letter;
+    let first = 1 + put_u32(&mut w[1..], addr);
+    let mut n = first;
+    if count > 1 {
+        w[n..n + 3].copy_from_slice(&[b'.', b'.', letter]);
+        n += 3;
+        n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
+    }
+    (ascii_text(w, n), first)
 }
 
 /// What follows the first name in a range: `..R63`, ` n=8`, or nothing for one element.
@@ -368,7 +406,7 @@ pub(crate) fn describe_request_media(
     match command.layout {
         ReadWords(e) | ReadBits(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
-            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count, media);
         }
         ReadDb if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -380,12 +418,13 @@ pub(crate) fn describe_request_media(
                 info.block,
                 info.addr,
                 info.count,
+                media,
             );
         }
         ReadProg(_) | ReadBytes if body.len() >= 4 => {
             let e = command.layout.elem().unwrap_or(Elem::Byte);
             info.addr = be(&body[1..4]);
-            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count);
+            push_name_and_range(sensor_no, data, e, 0, info.addr, info.count, media);
         }
         ReadText if body.len() >= 5 => {
             info.block = be(&body[1..3]) as u16;
@@ -398,7 +437,15 @@ pub(crate) fn describe_request_media(
         }
         ReadEeprom if body.len() >= 4 => {
             info.addr = be(&body[2..4]);
-            push_name_and_range(sensor_no, data, Elem::Eeprom, 0, info.addr, info.count);
+            push_name_and_range(
+                sensor_no,
+                data,
+                Elem::Eeprom,
+                0,
+                info.addr,
+                info.count,
+                media,
+            );
         }
         WriteWords(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
@@ -626,6 +673,45 @@ mod tests {
         assert_eq!(d, "2026-11-21 23:56:50 week 47 day 06");
         let (s, d, _) = req(1, 0x25, "06 00 0C 00 05 61 62 0A");
         assert_eq!((s.as_str(), d.as_str()), ("X12", "pos 5: ab\\x0A"));
+    }
+
+    /// A medium's range written in one piece against the general path (a name and the range's
+    /// end): addresses at the digit-count edges, counts that wrap the address, one element.
+    #[test]
+    fn media_ranges_are_the_general_text() {
+        let media = [
+            Elem::Register,
+            Elem::Flag,
+            Elem::Input,
+            Elem::Output,
+            Elem::Timer,
+            Elem::Counter,
+        ];
+        let mut addrs: Vec<u32> = (0..10)
+            .flat_map(|p| [10u32.pow(p) - 1, 10u32.pow(p)])
+            .collect();
+        addrs.extend([0, 57, 65535, 99_999_999, u32::MAX - 1, u32::MAX]);
+        let mut x = 0x2545_F491u32;
+        for _ in 0..2000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            addrs.push(x >> (x % 32));
+        }
+        let counts = [0u32, 1, 2, 3, 10, 128, 256, 65536, u32::MAX];
+        for elem in media {
+            for &addr in &addrs {
+                for count in counts {
+                    let (mut name, mut data) = (String::from("s"), String::from("d"));
+                    push_name_and_range(&mut name, &mut data, elem, 0, addr, count, None);
+                    let mut want = String::from("d");
+                    push_elem(&mut want, elem, 0, addr);
+                    push_range_end(&mut want, elem, 0, addr, count);
+                    assert_eq!(data, want, "{elem:?} {addr} {count}");
+                    assert_eq!(name, format!("s{}{addr}", elem.prefix()));
+                }
+            }
+        }
     }
 
     #[test]
