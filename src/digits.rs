@@ -1,12 +1,9 @@
 //! Decimal digits of integers without a division per digit: eight digits at a time with
-//! multiplications (the Counter's and Millis' cells, S-Bus media lists).
+//! multiplications (S-Bus media lists and ranges).
 //!
-//! The writers put the digits at the start of a byte slice that has room for the longest
-//! number (10 bytes for a `u32`, 20 for a `u64`), may write over the bytes of that room after
-//! the number, and return the number's length.
-
-/// Room [`put_u64`] needs.
-pub const U64_ROOM: usize = 20;
+//! The writer puts the digits at the start of a byte slice that has room for the longest
+//! number (10 bytes for a `u32`), may write over the bytes of that room after the number, and
+//! returns the number's length.
 
 const ZEROS: u64 = 0x3030_3030_3030_3030;
 
@@ -69,45 +66,6 @@ fn eight_digits(v: u32) -> u64 {
     tens
 }
 
-/// Writes `v` (below 100) in decimal at the start of `w` (at least 2 bytes long); returns its
-/// length. One table lookup: for the small numbers (IDs, stations) that most cells hold.
-#[inline(always)]
-pub fn put_below_100(w: &mut [u8], v: u8) -> usize {
-    let i = 2 * usize::from(v % 100);
-    w[..2].copy_from_slice(&DEC2[i..i + 2]);
-    if v < 10 {
-        w[0] = w[1];
-        1
-    } else {
-        2
-    }
-}
-
-/// Writes `v` in decimal at the start of `w` (at least [`U64_ROOM`] bytes long; bytes after
-/// the number may be overwritten too); returns its length.
-#[inline]
-pub fn put_u64(w: &mut [u8], v: u64) -> usize {
-    const E8: u64 = 100_000_000;
-    match u32::try_from(v) {
-        Ok(v) => put_u32(w, v),
-        Err(_) if v < E8 * E8 => {
-            // below 10^16: the top (below 10^8) and eight digits
-            let k = put_u32(w, (v / E8) as u32);
-            w[k..k + 8].copy_from_slice(&(eight_digits((v % E8) as u32) | ZEROS).to_le_bytes());
-            k + 8
-        }
-        Err(_) => {
-            // the top (at most 1844) and sixteen digits
-            let k = put_u32(w, (v / (E8 * E8)) as u32);
-            let low = v % (E8 * E8);
-            w[k..k + 8].copy_from_slice(&(eight_digits((low / E8) as u32) | ZEROS).to_le_bytes());
-            w[k + 8..k + 16]
-                .copy_from_slice(&(eight_digits((low % E8) as u32) | ZEROS).to_le_bytes());
-            k + 16
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,24 +94,6 @@ mod tests {
         for v in samples().map(|v| v as u32) {
             let mut b = [b'#'; 10];
             let n = put_u32(&mut b, v);
-            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
-        }
-    }
-
-    #[test]
-    fn small_numbers_are_the_decimal_text() {
-        for v in 0..100u8 {
-            let mut b = [b'#'; 2];
-            let n = put_below_100(&mut b, v);
-            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
-        }
-    }
-
-    #[test]
-    fn u64_digits_are_the_decimal_text() {
-        for v in samples() {
-            let mut b = [b'#'; U64_ROOM];
-            let n = put_u64(&mut b, v);
             assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
         }
     }

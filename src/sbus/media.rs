@@ -299,7 +299,8 @@ impl<'o> ListText<'o> {
 
     fn flush(&mut self) {
         let from = self.buf.0.get(self.from..).unwrap_or_default();
-        self.out.push_str(ascii_text(from, self.n.saturating_sub(self.from)));
+        self.out
+            .push_str(ascii_text(from, self.n.saturating_sub(self.from)));
         self.from = 0;
         self.n = 0;
     }

@@ -8,7 +8,6 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
-use crate::digits::{U64_ROOM, put_below_100, put_u64};
 use crate::row::{Part, PartSpan, Parts};
 
 const SPACES: [u8; 32] = [b' '; 32];
@@ -329,18 +328,14 @@ impl W<'_> {
         }
     }
 
-    /// A number in decimal, its digits written in place ([`crate::digits`]; the room of the
-    /// longest number must be there, or the line is written again into more).
+    /// A number in decimal. (`itoa`: the SWAR digits of [`crate::digits`] here took fewer
+    /// instructions but more time, docs/performance.md, fifth pass.)
     #[inline(always)]
     pub fn dec(&mut self, n: u64) {
-        match self.buf.get_mut(self.pos..self.pos + U64_ROOM) {
-            Some(room) => {
-                self.pos += match u8::try_from(n) {
-                    Ok(small) if small < 100 => put_below_100(room, small),
-                    _ => put_u64(room, n),
-                }
-            }
-            None => self.over = true,
+        // `u32` arithmetic where it fits: cheaper than `u64`.
+        match u32::try_from(n) {
+            Ok(n) => self.put(itoa::Buffer::new().format(n).as_bytes()),
+            Err(_) => self.put(itoa::Buffer::new().format(n).as_bytes()),
         }
     }
 }
