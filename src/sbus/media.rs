@@ -44,6 +44,17 @@ impl MediaSpans {
     }
 }
 
+/// The media [`medium_letter`] names (for tests that go through all of them).
+#[cfg(test)]
+pub(super) const LETTERED: [Elem; 6] = [
+    Elem::Register,
+    Elem::Flag,
+    Elem::Input,
+    Elem::Output,
+    Elem::Timer,
+    Elem::Counter,
+];
+
 /// The letter of the media whose element names are that letter and a decimal address (`R`,
 /// `F`, `I`, `O`, `T`, `C`): the ones a row's numbers are named after.
 pub(super) fn medium_letter(elem: Elem) -> Option<u8> {
@@ -666,14 +677,7 @@ mod tests {
     /// longer than a block, and a cell that already holds text (nothing recorded then).
     #[test]
     fn lists_match_the_text_written_piece_by_piece() {
-        let media = [
-            Elem::Register,
-            Elem::Flag,
-            Elem::Input,
-            Elem::Output,
-            Elem::Timer,
-            Elem::Counter,
-        ];
+        let media = LETTERED;
         let values: Vec<u32> = vec![
             0,
             1,

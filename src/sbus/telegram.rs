@@ -679,14 +679,7 @@ mod tests {
     /// end): addresses at the digit-count edges, counts that wrap the address, one element.
     #[test]
     fn media_ranges_are_the_general_text() {
-        let media = [
-            Elem::Register,
-            Elem::Flag,
-            Elem::Input,
-            Elem::Output,
-            Elem::Timer,
-            Elem::Counter,
-        ];
+        let media = super::super::media::LETTERED;
         let mut addrs: Vec<u32> = (0..10)
             .flat_map(|p| [10u32.pow(p) - 1, 10u32.pow(p)])
             .collect();
