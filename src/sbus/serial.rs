@@ -326,6 +326,46 @@ mod testing {
         }
     }
 
+    /// A framer as the tests drive it (data mode's and break mode's, whose own methods these
+    /// are).
+    pub(super) trait Framer {
+        fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>));
+        fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>));
+    }
+
+    impl Framer for super::data::DataFramer {
+        fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+            super::data::DataFramer::push(self, data, time, emit)
+        }
+        fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+            super::data::DataFramer::finish(self, emit)
+        }
+    }
+
+    impl Framer for super::break_mode::BreakFramer {
+        fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+            super::break_mode::BreakFramer::push(self, data, time, emit)
+        }
+        fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+            super::break_mode::BreakFramer::finish(self, emit)
+        }
+    }
+
+    /// Feeds `segments` (bytes, time) to `f`; returns the events before `finish` and all
+    /// events.
+    pub(super) fn feed(
+        f: &mut impl Framer,
+        segments: &[(Vec<u8>, Option<u64>)],
+    ) -> (usize, Vec<Ev>) {
+        let mut evs = Vec::new();
+        for (bytes, time) in segments {
+            f.push(bytes, *time, &mut |e| evs.push(Ev::of(e)));
+        }
+        let before = evs.len();
+        f.finish(&mut |e| evs.push(Ev::of(e)));
+        (before, evs)
+    }
+
     /// Splits timed segments into single bytes that keep their segment's time.
     pub(super) fn bytewise(segments: &[(Vec<u8>, Option<u64>)]) -> Vec<(Vec<u8>, Option<u64>)> {
         segments

@@ -1,20 +1,9 @@
 //! Unit tests of the break/parity-mode framer: events out for bytes in.
 
-use super::super::testing::{Ev, T, bytewise};
+use super::super::testing::{Ev, T, bytewise, feed};
 use super::*;
 use crate::sbus::telegram::{CrcBasis, encode_break_request, encode_break_response};
 use crate::sbus::tests::{SMode, session};
-
-/// Feeds `segments` (bytes, time); returns the events before `finish` and all events.
-fn feed(f: &mut BreakFramer, segments: &[(Vec<u8>, Option<u64>)]) -> (usize, Vec<Ev>) {
-    let mut evs = Vec::new();
-    for (bytes, time) in segments {
-        f.push(bytes, *time, &mut |e| evs.push(Ev::of(e)));
-    }
-    let before = evs.len();
-    f.finish(&mut |e| evs.push(Ev::of(e)));
-    (before, evs)
-}
 
 /// SM0 without times.
 fn run(bytes: &[u8]) -> Vec<Ev> {

@@ -1,21 +1,10 @@
 //! Unit tests of the data-mode framer: events out for bytes in.
 
-use super::super::testing::{Ev, T, bytewise};
+use super::super::testing::{Ev, T, bytewise, feed};
 use super::*;
 use crate::row::GARBAGE_ROW_MAX;
 use crate::sbus::telegram::{encode_data, encode_secure};
 use crate::sbus::tests::{SMode, session};
-
-/// Feeds `segments` (bytes, time); returns the events before `finish` and all events.
-fn feed(f: &mut DataFramer, segments: &[(Vec<u8>, Option<u64>)]) -> (usize, Vec<Ev>) {
-    let mut evs = Vec::new();
-    for (bytes, time) in segments {
-        f.push(bytes, *time, &mut |e| evs.push(Ev::of(e)));
-    }
-    let before = evs.len();
-    f.finish(&mut |e| evs.push(Ev::of(e)));
-    (before, evs)
-}
 
 fn run(bytes: &[u8]) -> (usize, Vec<Ev>) {
     feed(&mut DataFramer::new(None), &[(bytes.to_vec(), None)])
