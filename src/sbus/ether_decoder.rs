@@ -391,8 +391,15 @@ impl EtherCore {
         } else {
             (&u.dst, &u.src)
         };
-        // A request with a good CRC and a station and command is opened in the pairing.
-        let opens = tele.at == telegram::AT_REQUEST && tele.crc_ok() && tele.telegram.len() >= 2;
+        // Whether the telegram has the length its attribute asks for (a request its station
+        // and command, an ACK/NAK its code). A good request of that shape is opened in the
+        // pairing ([`EtherCore::request`]), which the conversation is told beforehand.
+        let shaped = match tele.at {
+            telegram::AT_REQUEST => tele.telegram.len() >= 2,
+            telegram::AT_ACKNAK => tele.telegram.len() == 2,
+            _ => true,
+        };
+        let opens = tele.at == telegram::AT_REQUEST && tele.crc_ok() && shaped;
         let (conv, plc) = self.conv(client, server, t, opens.then_some(tele.seq), out)?;
         if plc >= MAX_PLCS {
             self.device.clear();
@@ -401,12 +408,7 @@ impl EtherCore {
         let (id, kind, class, sensor) = if !tele.crc_ok() {
             self.bad_crc(&tele, conv.id, plc)
         } else {
-            let broken = match tele.at {
-                telegram::AT_REQUEST => tele.telegram.len() < 2,
-                telegram::AT_ACKNAK => tele.telegram.len() != 2,
-                _ => false,
-            };
-            if !broken {
+            if shaped {
                 self.map.totals.valid += 1;
             }
             if tele.at == telegram::AT_REQUEST {
