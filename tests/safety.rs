@@ -179,6 +179,116 @@ fn record_and_output_onto_one_file_are_refused() {
     refused(&out, &x, b"keep");
 }
 
+/// Runs `cmd` (standard input from `stdin`, written and closed by a thread; standard output to
+/// `stdout`) and returns its output; kills it and fails when it has not exited within 10 s (a
+/// run that writes into its own input pipe never ends).
+fn output_within_10s(
+    cmd: &mut std::process::Command,
+    stdin: Option<Vec<u8>>,
+    stdout: Stdio,
+) -> Output {
+    use std::io::Write;
+    use std::time::{Duration, Instant};
+    let mut child = cmd
+        .stdin(if stdin.is_some() {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        })
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    if let Some(bytes) = stdin {
+        let mut pipe = child.stdin.take().unwrap();
+        // busnoop may refuse before reading anything: a broken pipe is fine.
+        std::thread::spawn(move || pipe.write_all(&bytes));
+    }
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("busnoop did not exit within 10 s: {cmd:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A refused run: exit code 2 and one line naming the clash and what writing would do.
+fn refused_saying(out: &Output, consequence: &str) {
+    no_panic(out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("same file"), "{err}");
+    assert!(err.contains(consequence), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+}
+
+#[test]
+fn output_into_the_input_pipe_is_refused() {
+    // `… | busnoop sport - -o /dev/stdin`: the output would be the pipe busnoop reads, which
+    // then never ends (busnoop holds its write end) and carries busnoop's own rows back in.
+    let sample = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    for args in [
+        ["sport", "-", "-o", "/dev/stdin"],
+        ["sport", "-", "--record", "/dev/stdin"],
+    ] {
+        let out = output_within_10s(busnoop().args(args), Some(sample.clone()), Stdio::piped());
+        refused_saying(&out, "its own output");
+    }
+
+    // A named pipe given as the input and as the output.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let out = output_within_10s(
+        busnoop().arg("sport").arg(&fifo).arg("-o").arg(&fifo),
+        None,
+        Stdio::piped(),
+    );
+    refused_saying(&out, "its own output");
+}
+
+#[test]
+fn output_onto_the_serial_port_is_refused() {
+    // `busnoop sport /dev/ttyUSB0 -o /dev/ttyUSB0` (or `> /dev/ttyUSB0`, or `--record` there)
+    // would transmit the table on the bus: a passive sniffer never sends a byte.
+    let _lock = common::pty::lock();
+    let mut bus = common::pty::bus();
+    let dev = bus.path.clone();
+    for opt in ["-o", "--record"] {
+        let out = output_within_10s(
+            busnoop().arg("sport").arg(&dev).arg(opt).arg(&dev),
+            None,
+            Stdio::piped(),
+        );
+        refused_saying(&out, "transmit");
+    }
+    let tty = std::fs::OpenOptions::new().write(true).open(&dev).unwrap();
+    let out = output_within_10s(busnoop().arg("sport").arg(&dev), None, tty.into());
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("transmit"),
+        "{}",
+        text(&out.stderr)
+    );
+    // Nothing reached the bus side.
+    serialport::SerialPort::set_timeout(&mut bus.master, std::time::Duration::from_millis(200))
+        .unwrap();
+    let mut buf = [0u8; 64];
+    let got = std::io::Read::read(&mut bus.master, &mut buf);
+    assert!(
+        !matches!(got, Ok(n) if n > 0),
+        "busnoop wrote to the bus: {got:?} {:?}",
+        &buf[..*got.as_ref().unwrap_or(&0)]
+    );
+}
+
 #[test]
 fn unrelated_outputs_still_work() {
     // The check must not refuse what is fine: the same /dev/null twice, stdin and stdout on one

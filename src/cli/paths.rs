@@ -1,5 +1,6 @@
 //! Never write to a path that is also an input: device and inode of the source, `-o` and
-//! `--record`, compared before anything is opened for writing.
+//! `--record` (the device number of a serial port), compared before anything is opened for
+//! writing.
 
 use std::path::{Path, PathBuf};
 
@@ -12,20 +13,37 @@ use crate::source::Input;
 enum FileId {
     /// An existing regular file: device and inode (so symlinks and hard links compare equal).
     Inode(u64, u64),
+    /// A pipe or FIFO, the same way (`/dev/stdin` names the pipe standard input reads).
+    Pipe(u64, u64),
     /// A file that does not exist yet: its absolute name, with the directory's links resolved.
     Name(PathBuf),
+    /// A character device, by its device number: only for a serial port given as the input
+    /// and the outputs compared with it.
+    Device(u64),
 }
 
 impl FileId {
-    /// Regular files only: special files (/dev/null, a terminal, a pipe) may well be shared.
-    fn of_metadata(m: &std::fs::Metadata) -> Option<FileId> {
-        use std::os::unix::fs::MetadataExt;
-        m.is_file().then(|| FileId::Inode(m.dev(), m.ino()))
+    /// Regular files and pipes; character devices only with `devices`: a terminal or
+    /// `/dev/null` may well be shared by outputs, or by an input on standard input and the
+    /// table. `/dev/null` is never anything (reading it gives nothing, writing it keeps
+    /// nothing).
+    fn of_metadata(m: &std::fs::Metadata, devices: bool) -> Option<FileId> {
+        use std::os::unix::fs::{FileTypeExt, MetadataExt};
+        let t = m.file_type();
+        if t.is_file() {
+            Some(FileId::Inode(m.dev(), m.ino()))
+        } else if t.is_fifo() {
+            Some(FileId::Pipe(m.dev(), m.ino()))
+        } else if devices && t.is_char_device() && !is_dev_null(m) {
+            Some(FileId::Device(m.rdev()))
+        } else {
+            None
+        }
     }
 
-    fn of_path(p: &Path) -> Option<FileId> {
+    fn of_path(p: &Path, devices: bool) -> Option<FileId> {
         match std::fs::metadata(p) {
-            Ok(m) => FileId::of_metadata(&m),
+            Ok(m) => FileId::of_metadata(&m, devices),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 // A dangling symlink would be created at its target: no name to compare.
                 if std::fs::symlink_metadata(p).is_ok() {
@@ -43,49 +61,81 @@ impl FileId {
     }
 
     /// The file behind an open descriptor (standard input or output).
-    fn of_fd(fd: std::os::fd::BorrowedFd<'_>) -> Option<FileId> {
+    fn of_fd(fd: std::os::fd::BorrowedFd<'_>, devices: bool) -> Option<FileId> {
         let file = std::fs::File::from(fd.try_clone_to_owned().ok()?);
-        FileId::of_metadata(&file.metadata().ok()?)
+        FileId::of_metadata(&file.metadata().ok()?, devices)
+    }
+
+    /// What writing into the input through this file would do.
+    fn consequence(&self) -> &'static str {
+        match self {
+            FileId::Pipe(..) => "feed busnoop its own output",
+            FileId::Device(_) => "transmit on the bus busnoop listens to (busnoop never sends)",
+            FileId::Inode(..) | FileId::Name(_) => "destroy the capture",
+        }
     }
 }
 
+/// Whether `m` is the device `/dev/null` is.
+fn is_dev_null(m: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata("/dev/null").is_ok_and(|null| null.rdev() == m.rdev())
+}
+
 /// Refuses, before anything is opened for writing, an output (`-o`, standard output) or a
-/// recording that is the input file itself (by device and inode: symlinks, hard links and
-/// `- < file` included), or an output and a recording that are one file.
+/// recording that is the input itself: the input file (by device and inode: symlinks, hard
+/// links and `- < file` included), the pipe or FIFO it comes through (`… | busnoop sport - -o
+/// /dev/stdin` would feed busnoop its own rows and never end), or the serial port it listens
+/// to (writing there would send on the bus). Also an output and a recording that are one file.
 pub(super) fn check_distinct(
     input: &Input,
     output: Option<&Path>,
     record: Option<&Path>,
 ) -> Result<(), Failure> {
     use std::os::fd::AsFd;
-    let stdout_id = || FileId::of_fd(std::io::stdout().as_fd());
+    // A serial port is compared with the outputs by its device number: writing there would
+    // send on the bus. Other character devices (a terminal, /dev/null) may be shared.
+    let devices = matches!(input, Input::Device(_));
+    let stdout_id = || FileId::of_fd(std::io::stdout().as_fd(), devices);
     let (source, source_name) = match input {
         Input::Stdin => (
-            FileId::of_fd(std::io::stdin().as_fd()),
+            FileId::of_fd(std::io::stdin().as_fd(), false),
             "standard input (the input)".to_string(),
         ),
-        Input::File(p) => (FileId::of_path(p), format!("the input {}", p.display())),
-        Input::Device(_) => (None, String::new()),
+        Input::File(p) => (
+            FileId::of_path(p, false),
+            format!("the input {}", p.display()),
+        ),
+        Input::Device(p) => (
+            FileId::of_path(p, true),
+            format!("the input {}", p.display()),
+        ),
     };
     let (out, out_name) = match output {
-        Some(p) => (FileId::of_path(p), format!("-o {}", p.display())),
+        Some(p) => (FileId::of_path(p, devices), format!("-o {}", p.display())),
         None => (stdout_id(), "standard output".to_string()),
     };
     let (rec, rec_name) = match record {
         Some(p) if is_dash(p) => (stdout_id(), "--record - (standard output)".to_string()),
-        Some(p) => (FileId::of_path(p), format!("--record {}", p.display())),
+        Some(p) => (
+            FileId::of_path(p, devices),
+            format!("--record {}", p.display()),
+        ),
         None => (None, String::new()),
     };
     let same = |a: &Option<FileId>, b: &Option<FileId>| a.is_some() && a == b;
     for (id, name) in [(&out, &out_name), (&rec, &rec_name)] {
-        if same(&source, id) {
+        if let Some(s) = source.as_ref().filter(|_| same(&source, id)) {
             return Err(Failure::Usage(format!(
-                "{name} is the same file as {source_name}: writing it would destroy the \
-                 capture; write somewhere else"
+                "{name} is the same file as {source_name}: writing it would {}; write \
+                 somewhere else",
+                s.consequence()
             )));
         }
     }
-    if same(&out, &rec) {
+    // Two outputs on one serial port are refused above already; on one terminal they are not
+    // a clash.
+    if same(&out, &rec) && !matches!(out, Some(FileId::Device(_))) {
         return Err(Failure::Usage(format!(
             "{out_name} and {rec_name} are the same file; give them different names"
         )));
