@@ -24,8 +24,9 @@
 //! classic pcap as tcpdump writes it (snap length 262144), `FILE.pcapng` a section header
 //! naming busnoop, an interface description per interface of the input and enhanced packet
 //! blocks. A nanosecond capture keeps its nanoseconds (a nanosecond pcap, `if_tsresol` 9).
-//! Raw bytes cannot hold packets: those names are refused ([`format_for`]), and `--record -`
-//! writes the packets as classic pcap, as `tcpdump -w -` does.
+//! Raw bytes cannot hold packets: `.bin` and `.raw` are refused for them ([`format_for`]), and
+//! `--record -` (or a device or FIFO named without an extension) writes the packets as classic
+//! pcap, as `tcpdump -w -` does.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -161,15 +162,19 @@ impl RecordFormat {
 
 /// The format of a recording of `content` at `path` (`None`: standard output): by the name
 /// ([`RecordFormat::for_path`]); on standard output a line's raw bytes, or a capture's packets
-/// as classic pcap (what `tcpdump -w -` writes, for the same pipes). Packets have no raw
-/// form: a raw name for them is a usage error that names the formats that hold them, before
-/// anything is written.
+/// as classic pcap (what `tcpdump -w -` writes, for the same pipes), and so on a device or FIFO
+/// named without an extension (`--record >(tshark -r -)`). Packets have no raw form: `.bin`
+/// or `.raw` for them is a usage error that names the formats that hold them, before anything
+/// is written.
 pub fn format_for(path: Option<&Path>, content: Content) -> Result<RecordFormat, Failure> {
     let format = match path {
         Some(p) => RecordFormat::for_path(p)?,
         None => content.on_stdout(),
     };
     if let (Some(p), RecordFormat::Raw, Content::Packets) = (path, format, content) {
+        if p.extension().is_none() {
+            return Ok(content.on_stdout());
+        }
         return Err(Failure::Usage(format!(
             "--record {}: the input is a network capture, whose packets have no raw form; \
              record them as FILE.pcap or FILE.pcapng",
@@ -617,6 +622,11 @@ mod tests {
         for name in ["a.bin", "a.raw", "/dev/null"] {
             let path = Path::new(name);
             assert_eq!(format_for(Some(path), line).unwrap(), RecordFormat::Raw);
+            if name == "/dev/null" {
+                // A device or FIFO is a stream, like standard output.
+                assert_eq!(format_for(Some(path), packets).unwrap(), RecordFormat::Pcap);
+                continue;
+            }
             let Err(Failure::Usage(m)) = format_for(Some(path), packets) else {
                 panic!("{name} accepted for packets")
             };

@@ -190,20 +190,24 @@ fn a_broken_capture_is_recorded_up_to_its_last_whole_packet() {
     assert!(whole.starts_with(&recorded));
 }
 
+/// `--record -`, and a FIFO named without an extension (`--record >(tshark -r -)`; here the
+/// pipe of standard output as /dev/stdout): classic pcap.
 #[test]
 fn record_to_standard_output_writes_the_packets_as_pcap() {
     let dir = tempfile::tempdir().unwrap();
     let input = fixture("sbus-digimat.pcap");
     let table = dir.path().join("t.tsv");
-    let out = busnoop()
-        .arg("sbus")
-        .arg(&input)
-        .args(["--record", "-", "-o"])
-        .arg(&table)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
-    assert_eq!(out.stdout, std::fs::read(&input).unwrap());
+    for target in ["-", "/dev/stdout"] {
+        let out = busnoop()
+            .arg("sbus")
+            .arg(&input)
+            .args(["--record", target, "-o"])
+            .arg(&table)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        assert_eq!(out.stdout, std::fs::read(&input).unwrap(), "{target}");
+    }
 }
 
 /// The run was refused with a one-line usage error containing every one of `words`, wrote
