@@ -19,7 +19,8 @@
 //!   [`sport`] (FrSky S.Port), [`sbus`] (Saia S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB
 //!   v1 and SAB2);
 //! * capture files: [`pcap`] (reading pcap/pcapng, writing pcap and per-frame exports),
-//!   [`Recorder`] (busnoop's recordings), [`edgetx`] (EdgeTX/OpenTX debug-log lines);
+//!   [`Recorder`] (busnoop's recordings of a line's bytes or a capture's packets,
+//!   [`RecordContent`]), [`edgetx`] (EdgeTX/OpenTX debug-log lines);
 //! * hex and number formatting shared by the table ([`fmt`]);
 //! * what a run reports: [`Report`] and [`Problems`] (statistics as values), [`Failure`]
 //!   (the one-line message and exit code of a failed run).
@@ -66,6 +67,6 @@ mod top;
 
 pub use cli::main;
 pub use exit::Failure;
-pub use record::Recorder;
+pub use record::{Content as RecordContent, Recorder};
 pub use source::{READ_SIZE, edgetx};
 pub use stats::{Problems, Report};

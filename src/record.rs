@@ -17,6 +17,16 @@
 //!   capture (no times). So does a name without an extension that is a device or a FIFO
 //!   (`/dev/null`); any other name is refused ([`RecordFormat::for_path`]), so that a typo never
 //!   writes a format the user did not ask for.
+//!
+//! A network capture (pcap or pcapng input, [`Content::Packets`]) is recorded as its packets:
+//! the input's link type, each packet's time, bytes and length on the wire, so that the
+//! recording replays to the same rows and Wireshark shows the same traffic. `FILE.pcap` is a
+//! classic pcap as tcpdump writes it (snap length 262144), `FILE.pcapng` a section header
+//! naming busnoop, an interface description per interface of the input and enhanced packet
+//! blocks. A nanosecond capture keeps its nanoseconds (a nanosecond pcap, `if_tsresol` 9).
+//! Raw bytes cannot hold packets: `.bin` and `.raw` are refused for them ([`format_for`]), and
+//! `--record -` (or a device or FIFO named without an extension) writes the packets as classic
+//! pcap, as `tcpdump -w -` does.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -25,7 +35,7 @@ use std::path::{Path, PathBuf};
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
-use crate::pcap::{self, linktype, rtac};
+use crate::pcap::{self, Packet, linktype, rtac};
 use crate::time::Anchor;
 
 /// The pcapng `if_description` of a line: `FrSky S.Port, 57600 baud 8N1`.
@@ -48,7 +58,7 @@ pub struct Recorder {
     path: Option<PathBuf>,
     out: BufWriter<Box<dyn Write>>,
     format: RecordFormat,
-    timed: bool,
+    content: Content,
     anchor: Option<DateTime<Utc>>,
     /// The pcap record being written.
     scratch: Vec<u8>,
@@ -56,6 +66,56 @@ pub struct Recorder {
     interface: (Option<String>, Option<String>),
     /// When the adapter went away (µs of the capture), for the gap's comment.
     down_since: Option<u64>,
+    /// Packets: the interfaces described so far (a pcapng's interface ID is the position here;
+    /// a classic pcap has the one of its header). Empty until the first packet.
+    links: Vec<Link>,
+    /// Packets: the capture's link type as its headers told, for the header of a recording of
+    /// a capture without packets.
+    link_type: Option<u32>,
+    /// Packets: a packet a classic pcap cannot hold (another link type than its header's) was
+    /// left out; the user is told once.
+    left_out: bool,
+    /// A warning for the user, once (see [`Recorder::take_warning`]).
+    warning: Option<String>,
+}
+
+/// What a recording holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// The bytes of a serial line (or of a file or stream of them), with their arrival times
+    /// when `timed`.
+    Line { timed: bool },
+    /// The packets of a network capture (a pcap or pcapng input).
+    Packets,
+}
+
+impl Content {
+    /// The format of `--record -`: a line's raw bytes, a capture's packets as classic pcap.
+    fn on_stdout(self) -> RecordFormat {
+        match self {
+            Content::Line { .. } => RecordFormat::Raw,
+            Content::Packets => RecordFormat::Pcap,
+        }
+    }
+}
+
+/// An interface of a recording of packets: the input's interface (its pcapng interface ID),
+/// link type and whether its time stamps are finer than microseconds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Link {
+    interface: u32,
+    link_type: u32,
+    nanos: bool,
+}
+
+impl Link {
+    fn of(p: &Packet<'_>) -> Link {
+        Link {
+            interface: p.interface,
+            link_type: p.link_type,
+            nanos: p.nanos.is_some(),
+        }
+    }
 }
 
 /// The format of a recording, from its file name.
@@ -100,36 +160,65 @@ impl RecordFormat {
     }
 }
 
+/// The format of a recording of `content` at `path` (`None`: standard output): by the name
+/// ([`RecordFormat::for_path`]); on standard output a line's raw bytes, or a capture's packets
+/// as classic pcap (what `tcpdump -w -` writes, for the same pipes), and so on a device or FIFO
+/// named without an extension (`--record >(tshark -r -)`). Packets have no raw form: `.bin`
+/// or `.raw` for them is a usage error that names the formats that hold them, before anything
+/// is written.
+pub fn format_for(path: Option<&Path>, content: Content) -> Result<RecordFormat, Failure> {
+    let format = match path {
+        Some(p) => RecordFormat::for_path(p)?,
+        None => content.on_stdout(),
+    };
+    if let (Some(p), RecordFormat::Raw, Content::Packets) = (path, format, content) {
+        if p.extension().is_none() {
+            return Ok(content.on_stdout());
+        }
+        return Err(Failure::Usage(format!(
+            "--record {}: the input is a network capture, whose packets have no raw form; \
+             record them as FILE.pcap or FILE.pcapng",
+            p.display()
+        )));
+    }
+    Ok(format)
+}
+
 impl Recorder {
-    /// Creates the recording; `timed` says whether the source has arrival times.
-    pub fn create(path: &Path, timed: bool) -> Result<Recorder, Failure> {
-        let format = RecordFormat::for_path(path)?;
+    /// Creates the recording of `content` (its format checked first, [`format_for`]).
+    pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
+        let format = format_for(Some(path), content)?;
         let file = File::create(path).map_err(|e| {
             Failure::Output(format!("cannot create recording {}: {e}", path.display()))
         })?;
-        Ok(Recorder {
-            path: Some(path.to_owned()),
-            out: BufWriter::with_capacity(64 * 1024, Box::new(file)),
-            format,
-            timed,
-            anchor: None,
-            scratch: Vec::new(),
-            interface: (None, None),
-            down_since: None,
-        })
+        Ok(Self::new(Some(path), Box::new(file), format, content))
     }
 
-    /// Records the raw bytes on standard output (`--record -`).
-    pub fn stdout(timed: bool) -> Recorder {
+    /// Records on standard output (`--record -`): a line's raw bytes, a capture's packets as
+    /// classic pcap ([`format_for`]).
+    pub fn stdout(content: Content) -> Recorder {
+        Self::new(None, Box::new(io::stdout()), content.on_stdout(), content)
+    }
+
+    fn new(
+        path: Option<&Path>,
+        out: Box<dyn Write>,
+        format: RecordFormat,
+        content: Content,
+    ) -> Recorder {
         Recorder {
-            path: None,
-            out: BufWriter::with_capacity(64 * 1024, Box::new(io::stdout())),
-            format: RecordFormat::Raw,
-            timed,
+            path: path.map(Path::to_owned),
+            out: BufWriter::with_capacity(64 * 1024, out),
+            format,
+            content,
             anchor: None,
             scratch: Vec::new(),
             interface: (None, None),
             down_since: None,
+            links: Vec::new(),
+            link_type: None,
+            left_out: false,
+            warning: None,
         }
     }
 
@@ -154,14 +243,19 @@ impl Recorder {
         }
     }
 
-    /// The wall-clock time of the capture's start; writes the pcap headers.
+    /// The wall-clock time of the capture's start; writes the pcap headers of a line's
+    /// recording (packets carry their own times; their headers come with the first one).
     pub fn start(&mut self, anchor: Option<Anchor>) -> Result<(), Failure> {
+        let timed = match self.content {
+            Content::Line { timed } => timed,
+            Content::Packets => return Ok(()),
+        };
         if self.anchor.is_some() {
             return Ok(());
         }
         let t = anchor.map_or_else(Utc::now, Anchor::as_utc);
         self.anchor = Some(t);
-        let start = if self.timed {
+        let start = if timed {
             rtac::START
         } else {
             rtac::START_UNTIMED
@@ -189,6 +283,10 @@ impl Recorder {
 
     /// Bytes that arrived at `micros`.
     pub fn data(&mut self, bytes: &[u8], micros: Option<u64>) -> Result<(), Failure> {
+        if self.content == Content::Packets {
+            // Network captures come as packets only (`source::capture`).
+            return Err(Failure::Internal("bytes for a recording of packets".into()));
+        }
         self.start(None)?;
         let r = match self.format {
             RecordFormat::Raw => self.out.write_all(bytes),
@@ -203,10 +301,10 @@ impl Recorder {
 
     /// The adapter went away (`up = false`) or came back.
     pub fn link(&mut self, up: bool, micros: u64) -> Result<(), Failure> {
-        self.start(None)?;
-        if self.format == RecordFormat::Raw {
+        if self.format == RecordFormat::Raw || self.content == Content::Packets {
             return Ok(());
         }
+        self.start(None)?;
         let comment = if up {
             let gap = self.down_since.take().map(|d| micros.saturating_sub(d));
             match gap {
@@ -250,9 +348,115 @@ impl Recorder {
         r.map_err(|e| self.fail(e))
     }
 
+    /// The capture's link type as its headers told (`None`: not yet), for the header of a
+    /// recording of a capture without packets ([`Recorder::finish`]).
+    pub fn capture_link_type(&mut self, link_type: Option<u32>) {
+        self.link_type = self.link_type.or(link_type);
+    }
+
+    /// Records a packet of a network capture: the headers first when it is the first packet
+    /// (or, in pcapng, the first of its interface), then the packet, in one write so that the
+    /// file never ends inside a record. A classic pcap holds one link type: a packet of another
+    /// is left out, with a warning ([`Recorder::take_warning`]).
+    pub fn packet(&mut self, p: &Packet<'_>) -> Result<(), Failure> {
+        self.scratch.clear();
+        let link = Link::of(p);
+        let at = match self.format {
+            RecordFormat::Pcapng => match self.links.iter().position(|l| *l == link) {
+                Some(at) => at,
+                None => self.describe_link(link),
+            },
+            RecordFormat::Pcap => match self.links.first() {
+                None => self.describe_link(link),
+                Some(l) if l.link_type == p.link_type => 0,
+                Some(l) => {
+                    self.leave_out(l.link_type, p.link_type);
+                    return Ok(());
+                }
+            },
+            // Refused by `format_for`.
+            RecordFormat::Raw => return Ok(()),
+        };
+        let nanos = self.links.get(at).is_some_and(|l| l.nanos);
+        match self.format {
+            RecordFormat::Pcapng => {
+                pcap::write_ng::captured(&mut self.scratch, at as u32, p, nanos)
+            }
+            _ => pcap::write::packet(&mut self.scratch, p, nanos),
+        }
+        let r = self.out.write_all(&self.scratch);
+        r.map_err(|e| self.fail(e))
+    }
+
+    /// Appends to the scratch the headers a recording of packets needs for a new `link`: the
+    /// file header (classic pcap), the section header before the first interface and the
+    /// interface's description (pcapng). Returns the interface's position.
+    fn describe_link(&mut self, link: Link) -> usize {
+        let snaplen = pcap::write::SNAPLEN_PACKETS;
+        if self.format == RecordFormat::Pcapng {
+            if self.links.is_empty() {
+                pcap::write_ng::section_header(&mut self.scratch);
+            }
+            pcap::write_ng::interface_block(
+                &mut self.scratch,
+                link.link_type as u16,
+                snaplen,
+                link.nanos,
+                None,
+                None,
+            );
+        } else {
+            pcap::write::file_header(&mut self.scratch, link.link_type, snaplen, link.nanos);
+        }
+        self.links.push(link);
+        self.links.len() - 1
+    }
+
+    /// A packet of `other` link type does not fit a classic pcap of `link_type`: the user is
+    /// told once.
+    fn leave_out(&mut self, link_type: u32, other: u32) {
+        if !self.left_out {
+            let name = self
+                .path
+                .as_deref()
+                .map_or("-".into(), |p| p.display().to_string());
+            self.warning = Some(format!(
+                "--record {name}: a classic pcap holds one link type ({link_type}); packets of \
+                 link type {other} are left out of it (a .pcapng recording keeps them all)"
+            ));
+        }
+        self.left_out = true;
+    }
+
+    /// The warning to show the user, once.
+    pub fn take_warning(&mut self) -> Option<String> {
+        self.warning.take()
+    }
+
     /// Writes everything buffered to the file.
     pub fn flush(&mut self) -> Result<(), Failure> {
         self.out.flush().map_err(|e| self.fail(e))
+    }
+
+    /// The end of the run: a recording of a capture without packets gets the headers of the
+    /// capture's link type (a capture, like tcpdump's of a quiet interface), then everything
+    /// is flushed.
+    pub fn finish(&mut self) -> Result<(), Failure> {
+        if self.content == Content::Packets
+            && self.links.is_empty()
+            && self.format != RecordFormat::Raw
+            && let Some(link_type) = self.link_type
+        {
+            self.scratch.clear();
+            self.describe_link(Link {
+                interface: 0,
+                link_type,
+                nanos: false,
+            });
+            let r = self.out.write_all(&self.scratch);
+            r.map_err(|e| self.fail(e))?;
+        }
+        self.flush()
     }
 }
 
@@ -264,7 +468,7 @@ mod tests {
     fn raw_recording_is_the_bytes() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("r.bin");
-        let mut rec = Recorder::create(&path, true).unwrap();
+        let mut rec = Recorder::create(&path, Content::Line { timed: true }).unwrap();
         rec.data(&[1, 2], Some(5)).unwrap();
         rec.link(false, 6).unwrap();
         rec.data(&[3], Some(7)).unwrap();
@@ -289,14 +493,20 @@ mod tests {
                 "{m}"
             );
         }
-        assert!(Recorder::create(&std::env::temp_dir().join("busnoop-x.txt"), true).is_err());
+        assert!(
+            Recorder::create(
+                &std::env::temp_dir().join("busnoop-x.txt"),
+                Content::Line { timed: true }
+            )
+            .is_err()
+        );
     }
 
     #[test]
     fn pcapng_names_the_interface_and_comments_the_gap() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("r.pcapng");
-        let mut rec = Recorder::create(&path, true).unwrap();
+        let mut rec = Recorder::create(&path, Content::Line { timed: true }).unwrap();
         rec.describe("/dev/ttyUSB0", "FrSky S.Port, 57600 baud 8N1");
         rec.start(None).unwrap();
         rec.data(&[0x7E, 0x1B], Some(5)).unwrap();
@@ -324,5 +534,125 @@ mod tests {
                 Some((rtac::EVENT_STATUS, rtac::LINK_UP.to_vec())),
             ]
         );
+    }
+
+    /// A packet of `link_type` on `interface`, stamped `micros` (and `nanos`).
+    fn packet(interface: u32, link_type: u32, micros: i64, nanos: Option<u16>) -> Packet<'static> {
+        Packet {
+            ts_micros: micros,
+            nanos,
+            time: 0,
+            link_type,
+            data: b"pkt",
+            orig_len: 60,
+            interface,
+        }
+    }
+
+    /// Every packet of a capture: interface, link type, time (µs), bytes, length on the wire.
+    fn read_back(bytes: &[u8]) -> Vec<(u32, u32, i64, Vec<u8>, u32)> {
+        let mut got = Vec::new();
+        let mut s = pcap::PcapStream::default();
+        s.push(bytes, &mut |p| {
+            got.push((
+                p.interface,
+                p.link_type,
+                p.ts_micros,
+                p.data.to_vec(),
+                p.orig_len,
+            ))
+        })
+        .unwrap();
+        s.finish().unwrap();
+        got
+    }
+
+    #[test]
+    fn packets_of_several_interfaces_and_link_types() {
+        let dir = tempfile::tempdir().unwrap();
+        let packets = [
+            packet(0, linktype::ETHERNET, 1_000_000, None),
+            packet(1, linktype::LINUX_SLL2, 1_000_001, Some(5)),
+            packet(0, linktype::ETHERNET, 1_000_002, None),
+            packet(2, linktype::ETHERNET, 1_000_003, None),
+        ];
+        let record = |name: &str| {
+            let path = dir.path().join(name);
+            let mut rec = Recorder::create(&path, Content::Packets).unwrap();
+            rec.start(None).unwrap();
+            let mut warnings = Vec::new();
+            for p in &packets {
+                rec.packet(p).unwrap();
+                rec.link(false, 5).unwrap();
+                warnings.extend(rec.take_warning());
+            }
+            rec.finish().unwrap();
+            (std::fs::read(&path).unwrap(), warnings)
+        };
+        // pcapng: an interface description for each of the input's interfaces.
+        let (ng, warnings) = record("r.pcapng");
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let want: Vec<_> = packets
+            .iter()
+            .map(|p| (p.interface, p.link_type, p.ts_micros, b"pkt".to_vec(), 60))
+            .collect();
+        assert_eq!(read_back(&ng), want);
+        // pcap: the first link type only, the user told once.
+        let (classic, warnings) = record("r.pcap");
+        let want: Vec<_> = want
+            .into_iter()
+            .filter(|p| p.1 == linktype::ETHERNET)
+            .map(|p| (0, p.1, p.2, p.3, p.4))
+            .collect();
+        assert_eq!(read_back(&classic), want);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].contains("link type 276 are left out"),
+            "{}",
+            warnings[0]
+        );
+    }
+
+    #[test]
+    fn packets_refuse_raw_and_go_to_standard_output_as_pcap() {
+        let packets = Content::Packets;
+        let line = Content::Line { timed: true };
+        assert_eq!(format_for(None, packets).unwrap(), RecordFormat::Pcap);
+        assert_eq!(format_for(None, line).unwrap(), RecordFormat::Raw);
+        for name in ["a.bin", "a.raw", "/dev/null"] {
+            let path = Path::new(name);
+            assert_eq!(format_for(Some(path), line).unwrap(), RecordFormat::Raw);
+            if name == "/dev/null" {
+                // A device or FIFO is a stream, like standard output.
+                assert_eq!(format_for(Some(path), packets).unwrap(), RecordFormat::Pcap);
+                continue;
+            }
+            let Err(Failure::Usage(m)) = format_for(Some(path), packets) else {
+                panic!("{name} accepted for packets")
+            };
+            assert!(m.contains("FILE.pcap or FILE.pcapng"), "{m}");
+        }
+        let pcapng = format_for(Some(Path::new("a.pcapng")), packets).unwrap();
+        assert_eq!(pcapng, RecordFormat::Pcapng);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.bin");
+        assert!(Recorder::create(&path, packets).is_err());
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn a_capture_without_packets_gets_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, known) in [("r.pcap", true), ("r.pcapng", true), ("n.pcap", false)] {
+            let path = dir.path().join(name);
+            let mut rec = Recorder::create(&path, Content::Packets).unwrap();
+            rec.capture_link_type(known.then_some(linktype::LINUX_SLL));
+            rec.capture_link_type(None);
+            rec.finish().unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            let lt = pcap::link_type(&bytes).or(pcap::pcapng_link_type(&bytes));
+            assert_eq!(lt, known.then_some(linktype::LINUX_SLL), "{name}");
+            assert_eq!(read_back(&bytes), []);
+        }
     }
 }

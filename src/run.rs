@@ -110,7 +110,7 @@ pub fn drive(
         let _ = decoder.finish(Select { table, selection }.out());
     }
     let recorded = match recorder {
-        Some(r) => r.flush(),
+        Some(r) => r.finish(),
         None => Ok(()),
     };
     let close = table.close();
@@ -298,24 +298,36 @@ impl Driver<'_> {
         Ok(fed)
     }
 
-    /// Decodes the packets of a capture (and records the input they came from), looking for a
-    /// signal between packets; false when a signal stopped it (the packets' input then does
-    /// not count as decoded).
+    /// Decodes (and records) the packets of a capture, looking for a signal between packets;
+    /// false when a signal stopped it (the packets' input then does not count as decoded).
+    /// A packet is recorded just before it is decoded, so that the recording holds the
+    /// packets the table shows, however the run ends.
     fn packets(&mut self, c: &Captured, stop: &Stop) -> Result<bool, Failure> {
         if let Some(r) = self.recorder.as_deref_mut() {
-            for piece in c.input.chunks(UNIT) {
-                r.data(piece, None)?;
-            }
+            r.capture_link_type(c.link_type);
         }
+        let mut whole = true;
         for p in c.packets.iter() {
             if stop.signal().is_some() {
-                return Ok(false);
+                whole = false;
+                break;
+            }
+            if let Some(r) = self.recorder.as_deref_mut() {
+                r.packet(&p)?;
             }
             self.decoder
                 .packet(&p, select!(self))
                 .map_err(Failure::from)?;
         }
-        Ok(true)
+        if let Some(w) = self
+            .recorder
+            .as_deref_mut()
+            .and_then(Recorder::take_warning)
+        {
+            self.table.flush()?;
+            eprintln!("busnoop: warning: {w}");
+        }
+        Ok(whole)
     }
 
     fn push(&mut self, bytes: &[u8], time: Option<u64>) -> Result<(), Failure> {

@@ -313,7 +313,7 @@ fn unusable_inputs_and_options_fail_clearly() {
 
 #[test]
 fn timed_recordings_use_the_real_times() {
-    use busnoop::Recorder;
+    use busnoop::{RecordContent, Recorder};
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("timed.pcap");
     let frame = |flags, cmd, data: &[u8]| {
@@ -321,7 +321,7 @@ fn timed_recordings_use_the_real_times() {
         sample::frame(&mut w, Framing::Hdlc, flags, 5, cmd, data);
         w
     };
-    let mut r = Recorder::create(&path, true).unwrap();
+    let mut r = Recorder::create(&path, RecordContent::Line { timed: true }).unwrap();
     r.start(None).unwrap();
     r.data(&frame(Flags::Request, 0x10, &[]), Some(1_000))
         .unwrap();

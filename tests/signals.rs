@@ -251,3 +251,55 @@ fn the_wiring_hint_is_for_live_sources_only() {
     assert!(err.contains("in 0 valid frames"), "{err}");
     assert!(err.contains("busnoop: no S.Port frame in "), "{err}");
 }
+
+/// Ctrl-C while a network capture streams in with `--record`: the recording ends with a whole
+/// packet, and it holds exactly the packets the table shows (replayed, the same rows).
+#[test]
+fn ctrl_c_leaves_a_recording_of_the_packets_the_table_shows() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("feed");
+    let out = dir.path().join("out.tsv");
+    let rec = dir.path().join("rec.pcap");
+    mkfifo(&fifo);
+    let capture =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sbus-digimat.pcap"))
+            .unwrap();
+    // The capture's packets over and over, until busnoop closes its end.
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut f = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+            let mut ok = f.write_all(&capture).is_ok();
+            while ok {
+                ok = f.write_all(&capture[24..]).is_ok();
+            }
+        })
+    };
+    let child = busnoop()
+        .args(["sbus", "-f", "tsv", "-o"])
+        .arg(&out)
+        .arg("--record")
+        .arg(&rec)
+        .arg(&fifo)
+        .spawn()
+        .unwrap();
+    let mut guard = Guard(child);
+    wait_for_rows(&out, 1000);
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGINT, STOP_WITHIN);
+    assert_eq!(status.code(), Some(130), "{err}");
+    writer.join().unwrap();
+    let recorded = std::fs::read(&rec).unwrap();
+    let mut stream = busnoop::pcap::PcapStream::new();
+    stream.push(&recorded, &mut |_| {}).unwrap();
+    stream
+        .finish()
+        .expect("the recording ends with a whole packet");
+    let replay = busnoop()
+        .args(["sbus", "-f", "tsv"])
+        .arg(&rec)
+        .stdout(Stdio::piped())
+        .output()
+        .unwrap();
+    assert_eq!(replay.status.code(), Some(0));
+    assert_eq!(replay.stdout, std::fs::read(&out).unwrap());
+}

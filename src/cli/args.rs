@@ -37,7 +37,10 @@ pub enum Command {
     Sport(SportArgs),
     /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
     /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
-    #[command(mut_arg("source", |a| a.help(SBUS_SOURCE)))]
+    #[command(
+        mut_arg("source", |a| a.help(SBUS_SOURCE)),
+        mut_arg("record", |a| a.help(SBUS_RECORD))
+    )]
     Sbus(SbusArgs),
     /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
     /// requests paired with responses.
@@ -100,6 +103,21 @@ const SBUS_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/ser
      a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng capture of \
      Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w -` pipe). File kinds \
      are recognised by content; `--baud` also sets the byte times of raw files.";
+/// `--record` in every protocol's help (a macro, so that sbus's can extend it with `concat!`).
+macro_rules! record_help {
+    () => {
+        "Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng with arrival times \
+         (busnoop replays both with the original Millis; Wireshark opens them; pcapng also names \
+         the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: the raw bytes; \
+         `-`: the raw bytes on standard output (with -o FILE only). Other names are refused"
+    };
+}
+/// `--record` in `busnoop sbus --help`: a network capture is recorded as its packets.
+const SBUS_RECORD: &str = concat!(
+    record_help!(),
+    ". A pcap/pcapng capture of Ether-S-Bus is recorded as its packets (its link type, times, \
+     bytes): FILE.pcap, FILE.pcapng, or `-` as pcap; raw names are refused for it"
+);
 /// `SOURCE` in `busnoop sab2 --help`.
 const SAB_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
      a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for standard \
@@ -280,11 +298,8 @@ pub struct LiveArgs {
     #[arg(long)]
     pub reconnect: bool,
 
-    /// Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng with arrival times
-    /// (busnoop replays both with the original Millis; Wireshark opens them; pcapng also names
-    /// the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: the raw bytes;
-    /// `-`: the raw bytes on standard output (with -o FILE only). Other names are refused.
-    #[arg(long, value_name = "FILE")]
+    // The help is `record_help!` (sbus extends it for network captures).
+    #[arg(long, value_name = "FILE", help = record_help!())]
     pub record: Option<PathBuf>,
 
     /// Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with its

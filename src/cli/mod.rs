@@ -10,7 +10,7 @@ use crate::exit::{Failure, code};
 use crate::filter::Selection;
 use crate::pace::{Paced, Pacer};
 use crate::protocol::{Decoder, Kind, Line, Protocol};
-use crate::record::Recorder;
+use crate::record::{Content, Recorder};
 use crate::run::{Context, drive};
 use crate::signal::Stop;
 use crate::sink::{Format, Output, Table};
@@ -313,11 +313,9 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    // A capture reader hands on its input bytes for --record (all of them), and for the
-    // wrong-protocol check after the run (which looks at the first ADVICE_BYTES only).
-    let keep_input = if args.live.record.is_some() {
-        u64::MAX
-    } else if matches!(input, Input::Device(_)) {
+    // A capture reader hands on its first input bytes for the wrong-protocol check after the
+    // run (which looks at the first ADVICE_BYTES only); a recording keeps its packets.
+    let keep_input = if matches!(input, Input::Device(_)) {
         0
     } else {
         crate::detect::ADVICE_BYTES as u64
@@ -335,6 +333,26 @@ pub fn run_capture(
             args.source.display()
         )));
     }
+    // Before anything else is written: a recording of packets refuses a raw name.
+    let content = match kind {
+        Kind::Pcap | Kind::Pcapng => Content::Packets,
+        Kind::Serial | Kind::EdgeTxLog | Kind::Recording => Content::Line { timed: true },
+        Kind::Raw => Content::Line { timed: false },
+    };
+    let mut recorder = match &args.live.record {
+        Some(_) if record_to_stdout => Some(Recorder::stdout(content)),
+        Some(p) => {
+            let mut r = Recorder::create(p, content)?;
+            if content != Content::Packets {
+                r.describe(
+                    &args.source.to_string_lossy(),
+                    &crate::record::line_description(protocol.name, &line),
+                );
+            }
+            Some(r)
+        }
+        None => None,
+    };
     for note in option_notes(&args.output, kind) {
         eprintln!("busnoop: note: {note}");
     }
@@ -346,20 +364,6 @@ pub fn run_capture(
         (Box::new(tee), Some(kept))
     };
     let mut decoder = decoder_for(kind, &line);
-
-    let timed = matches!(kind, Kind::Serial | Kind::EdgeTxLog | Kind::Recording);
-    let mut recorder = match &args.live.record {
-        Some(_) if record_to_stdout => Some(Recorder::stdout(timed)),
-        Some(p) => {
-            let mut r = Recorder::create(p, timed)?;
-            r.describe(
-                &args.source.to_string_lossy(),
-                &crate::record::line_description(protocol.name, &line),
-            );
-            Some(r)
-        }
-        None => None,
-    };
     let mut export = match &args.live.export {
         Some(p) => Some(crate::export::Exporter::create(
             p,

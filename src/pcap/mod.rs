@@ -53,6 +53,11 @@ pub mod linktype {
 pub struct Packet<'a> {
     /// Capture time in µs since the Unix epoch.
     pub ts_micros: i64,
+    /// Nanoseconds past `ts_micros` (0 to 999) when the capture stamps its packets finer than
+    /// microseconds (a nanosecond pcap, a pcapng interface with such an `if_tsresol`); `None`
+    /// otherwise. Only a recording uses them (`--record` keeps a nanosecond capture's times);
+    /// the decoders work in µs.
+    pub nanos: Option<u16>,
     /// Capture time in µs since the first packet of the stream (0 for a packet stamped before
     /// it): the `time` every decoder works with.
     pub time: u64,
@@ -198,6 +203,7 @@ pub fn anchor(ts_micros: i64) -> Option<Anchor> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Slot {
     ts_micros: i64,
+    nanos: Option<u16>,
     time: u64,
     link_type: u32,
     orig_len: u32,
@@ -230,6 +236,7 @@ impl Packets {
         self.data.extend_from_slice(p.data);
         self.slots.push(Slot {
             ts_micros: p.ts_micros,
+            nanos: p.nanos,
             time: p.time,
             link_type: p.link_type,
             orig_len: p.orig_len,
@@ -244,6 +251,7 @@ impl Packets {
         let start = i.checked_sub(1).map_or(0, |j| self.slots[j].end);
         Some(Packet {
             ts_micros: s.ts_micros,
+            nanos: s.nanos,
             time: s.time,
             link_type: s.link_type,
             data: &self.data[start..s.end],
@@ -312,6 +320,7 @@ mod tests {
     fn packets_keep_every_field_and_byte() {
         let p = |ts, data: &'static [u8]| Packet {
             ts_micros: ts,
+            nanos: Some(ts as u16 * 3),
             time: ts as u64 * 2,
             link_type: 1,
             data,

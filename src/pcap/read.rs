@@ -28,6 +28,22 @@ impl Resolution {
         };
         v.clamp(i64::MIN as i128, i64::MAX as i128) as i64
     }
+
+    /// The nanoseconds a stamp of `ts` units holds past its whole microseconds
+    /// ([`Packet::nanos`]); `None` when a unit is a microsecond or longer. Truncates as
+    /// [`Resolution::to_micros`] does, so that the two together are the time in ns.
+    fn sub_micros(self, ts: u64) -> Option<u16> {
+        let ts = ts as i128;
+        let ns = match self {
+            Resolution::Pow10(n) if n <= 6 => return None,
+            Resolution::Pow10(n) if n <= 9 => ts * 10i128.pow(9 - n as u32),
+            Resolution::Pow10(n) => ts / 10i128.pow((n as u32 - 9).min(38)),
+            // 2^20 units a second are the first that are shorter than a microsecond.
+            Resolution::Pow2(n) if n < 20 => return None,
+            Resolution::Pow2(n) => (ts * 1_000_000_000) >> n.min(127),
+        };
+        Some((ns % 1000) as u16)
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -64,6 +80,9 @@ pub struct PcapStream {
     last_ts: i64,
     /// Time of the first packet: [`Packet::time`] counts from it.
     first_ts: Option<i64>,
+    /// The link type of a classic pcap's header or of the first pcapng interface, kept after
+    /// an error (see [`PcapStream::link_type`]).
+    first_link_type: Option<u32>,
     packets: u64,
     /// Longest record or block accepted.
     max_record: usize,
@@ -109,6 +128,7 @@ impl PcapStream {
             offset: 0,
             last_ts: 0,
             first_ts: None,
+            first_link_type: None,
             packets: 0,
             max_record: MAX_RECORD,
         }
@@ -126,6 +146,12 @@ impl PcapStream {
     /// Time stamp of the first packet (the capture's start), once one was read.
     pub fn start(&self) -> Option<i64> {
         self.first_ts
+    }
+
+    /// The capture's link type as soon as its headers tell it: a classic pcap's, or that of the
+    /// first interface a pcapng described; for a recording of a capture without packets.
+    pub fn link_type(&self) -> Option<u32> {
+        self.first_link_type
     }
 
     /// Bytes of an unfinished record held until the rest arrives.
@@ -306,6 +332,7 @@ impl PcapStream {
             // The upper bits may carry FCS information; the link type is the low 16 bits.
             *link_type = rd32(&b[20..], *big) & 0xFFFF;
             *header_done = true;
+            self.first_link_type.get_or_insert(*link_type);
         }
         Ok(Step::Took(24))
     }
@@ -369,6 +396,7 @@ impl PcapStream {
             let time = self.time(ts);
             emit(Packet {
                 ts_micros: ts,
+                nanos: nanos.then_some((frac % 1000) as u16),
                 time,
                 link_type,
                 data,
@@ -486,6 +514,7 @@ impl PcapStream {
                     opts = opts.get(4 + padded..).unwrap_or(&[]);
                 }
                 *defined += 1;
+                self.first_link_type.get_or_insert(iface.link_type);
                 if ifaces.len() < MAX_INTERFACES {
                     ifaces.push(iface);
                 }
@@ -522,12 +551,14 @@ impl PcapStream {
                     .units
                     .to_micros(ts)
                     .saturating_add(iface.offset_secs.saturating_mul(1_000_000));
+                let nanos = iface.units.sub_micros(ts);
                 let link_type = iface.link_type;
                 self.last_ts = ts_micros;
                 self.packets += 1;
                 let time = self.time(ts_micros);
                 emit(Packet {
                     ts_micros,
+                    nanos,
                     time,
                     link_type,
                     data: &body[20..20 + cap],
@@ -559,6 +590,8 @@ impl PcapStream {
                 let time = self.time(self.last_ts);
                 emit(Packet {
                     ts_micros: self.last_ts,
+                    // No time of its own: the last one's, to the microsecond.
+                    nanos: None,
                     time,
                     link_type,
                     data: &body[4..4 + cap],

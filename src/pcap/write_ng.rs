@@ -1,9 +1,12 @@
-//! Writes pcapng (little endian, microsecond time stamps): the section header, interface
-//! descriptions naming the device, and enhanced packet blocks with optional comments. Used by
-//! the recorder (`--record FILE.pcapng`) and the frame export (`--export FILE.pcapng`).
+//! Writes pcapng (little endian; microsecond time stamps, or nanosecond ones for a recording
+//! of a nanosecond capture): the section header, interface descriptions naming the device, and
+//! enhanced packet blocks with optional comments. Used by the recorder (`--record
+//! FILE.pcapng`) and the frame export (`--export FILE.pcapng`).
 //!
 //! Every function appends one whole block to `out`; blocks are padded to 32 bits as the format
 //! requires, and options strings are written as UTF-8 without a terminating NUL.
+
+use super::Packet;
 
 const SHB: u32 = 0x0A0D_0D0A;
 const IDB: u32 = 0x0000_0001;
@@ -64,21 +67,34 @@ pub fn section_header(out: &mut Vec<u8>) {
     block(out, SHB, &body);
 }
 
-/// An interface description block: `link_type`, microsecond time stamps, and the interface's
-/// name (`if_name`, e.g. the device path) and description (`if_description`, e.g. the
-/// protocol and baud rate) when given.
+/// An interface description block: `link_type`, microsecond time stamps, snap length
+/// [`SNAPLEN`], and the interface's name (`if_name`, e.g. the device path) and description
+/// (`if_description`, e.g. the protocol and baud rate) when given.
 pub fn interface(out: &mut Vec<u8>, link_type: u16, name: Option<&str>, description: Option<&str>) {
+    interface_block(out, link_type, SNAPLEN, false, name, description);
+}
+
+/// Like [`interface`] with the given snap length, and nanosecond time stamps (`if_tsresol` 9)
+/// when `nanos`.
+pub fn interface_block(
+    out: &mut Vec<u8>,
+    link_type: u16,
+    snaplen: u32,
+    nanos: bool,
+    name: Option<&str>,
+    description: Option<&str>,
+) {
     let mut body = Vec::with_capacity(64);
     body.extend_from_slice(&link_type.to_le_bytes());
     body.extend_from_slice(&0u16.to_le_bytes());
-    body.extend_from_slice(&SNAPLEN.to_le_bytes());
+    body.extend_from_slice(&snaplen.to_le_bytes());
     if let Some(n) = name {
         option(&mut body, IF_NAME, n.as_bytes());
     }
     if let Some(d) = description {
         option(&mut body, IF_DESCRIPTION, d.as_bytes());
     }
-    option(&mut body, IF_TSRESOL, &[6]);
+    option(&mut body, IF_TSRESOL, &[if nanos { 9 } else { 6 }]);
     end_options(&mut body, true);
     block(out, IDB, &body);
 }
@@ -93,6 +109,34 @@ pub fn packet(
     comment: Option<&str>,
 ) {
     let ts = ts_micros.max(0) as u64;
+    packet_block(out, interface, ts, data, data.len() as u32, comment);
+}
+
+/// A captured packet as an enhanced packet block on `interface`, whose description says
+/// `nanos` ([`interface_block`]): its time (to the nanosecond when both the interface and the
+/// packet have them), its bytes and its length on the wire as the capture told it.
+pub fn captured(out: &mut Vec<u8>, interface: u32, p: &Packet<'_>, nanos: bool) {
+    let micros = p.ts_micros.max(0) as u64;
+    let ts = if nanos {
+        micros
+            .saturating_mul(1000)
+            .saturating_add(u64::from(p.nanos.unwrap_or(0)))
+    } else {
+        micros
+    };
+    packet_block(out, interface, ts, p.data, p.orig_len, None);
+}
+
+/// An enhanced packet block: `ts` in the interface's units, `data` captured of `original`
+/// bytes on the wire, an optional comment.
+fn packet_block(
+    out: &mut Vec<u8>,
+    interface: u32,
+    ts: u64,
+    data: &[u8],
+    original: u32,
+    comment: Option<&str>,
+) {
     let start = out.len();
     out.extend_from_slice(&EPB.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes()); // length, set below
@@ -100,7 +144,7 @@ pub fn packet(
     out.extend_from_slice(&((ts >> 32) as u32).to_le_bytes());
     out.extend_from_slice(&(ts as u32).to_le_bytes());
     out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-    out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+    out.extend_from_slice(&original.to_le_bytes());
     out.extend_from_slice(data);
     pad(out);
     if let Some(c) = comment {

@@ -12,13 +12,16 @@ use super::{Chunk, ChunkReader, Message, Opened, READ_SIZE};
 use crate::exit::Failure;
 use crate::pcap::{self, Packets, PcapError, PcapStream};
 
-/// Packets read from a capture, and the input bytes they came from when a recording keeps
+/// Packets read from a capture, and the input bytes they came from when the reader keeps
 /// them.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Captured {
     pub packets: Packets,
     /// The bytes read (empty unless the reader keeps its input).
     pub input: Vec<u8>,
+    /// The capture's link type once its headers told it ([`PcapStream::link_type`]): a
+    /// recording of a capture without packets still gets its header.
+    pub link_type: Option<u32>,
 }
 
 /// Reads a pcap or pcapng capture as packets.
@@ -28,8 +31,8 @@ pub struct CaptureReader {
     name: String,
     stream: PcapStream,
     buf: Vec<u8>,
-    /// How many more of the input's bytes to hand on with the packets (all of them for
-    /// `--record`, the first few KiB for the wrong-protocol check after the run).
+    /// How many more of the input's bytes to hand on with the packets (the first few KiB, for
+    /// the wrong-protocol check after the run).
     keep_input: u64,
     anchored: bool,
     /// A parse failure to send before anything else.
@@ -37,8 +40,8 @@ pub struct CaptureReader {
 }
 
 impl CaptureReader {
-    /// `keep_input`: the reads also hand on the bytes as read, up to this many in all (for a
-    /// recording of the input, `u64::MAX`; 0: none).
+    /// `keep_input`: the reads also hand on the bytes as read, up to this many in all (0:
+    /// none).
     pub fn new(opened: Opened, keep_input: u64) -> Self {
         CaptureReader {
             prefix: Some(opened.prefix),
@@ -96,7 +99,12 @@ impl ChunkReader for CaptureReader {
                 let keep = usize::try_from(self.keep_input).map_or(n, |k| k.min(n));
                 self.keep_input -= keep as u64;
                 let input = self.buf[..keep].to_vec();
-                return Ok(Some(Chunk::Packets(Captured { packets, input })));
+                let link_type = self.stream.link_type();
+                return Ok(Some(Chunk::Packets(Captured {
+                    packets,
+                    input,
+                    link_type,
+                })));
             }
         }
     }

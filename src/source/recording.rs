@@ -418,7 +418,7 @@ const SHORT_RECORD: u8 = 0xFF;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::Recorder;
+    use crate::record::{Content, Recorder};
     use crate::time::Anchor;
     use chrono::{DateTime, Utc};
 
@@ -443,7 +443,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("r.pcap");
         let anchor: DateTime<Utc> = "2026-01-02T03:04:05.678901Z".parse().unwrap();
-        let mut rec = Recorder::create(&path, true).unwrap();
+        let mut rec = Recorder::create(&path, Content::Line { timed: true }).unwrap();
         rec.start(Some(Anchor::Instant(anchor))).unwrap();
         rec.data(&[0x7E, 0x00], Some(1_000)).unwrap();
         rec.data(&[0x7E, 0xA1], Some(13_000)).unwrap();
@@ -482,7 +482,7 @@ mod tests {
     fn untimed_sources_replay_untimed() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("r.pcap");
-        let mut rec = Recorder::create(&path, false).unwrap();
+        let mut rec = Recorder::create(&path, Content::Line { timed: false }).unwrap();
         rec.data(&[0x7E, 0x00], None).unwrap();
         rec.flush().unwrap();
         let msgs = replay(std::fs::read(&path).unwrap());

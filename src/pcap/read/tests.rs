@@ -336,3 +336,66 @@ proptest::proptest! {
         }
     }
 }
+
+/// The nanoseconds past the microsecond ([`Packet::nanos`]): only for stamps finer than a
+/// microsecond, truncated as the microseconds are, so that the two make the time in ns.
+#[test]
+fn nanoseconds_past_the_microsecond() {
+    use Resolution::{Pow2, Pow10};
+    for r in [Pow10(0), Pow10(3), Pow10(6), Pow2(0), Pow2(10), Pow2(19)] {
+        assert_eq!(r.sub_micros(123_456_789), None, "{r:?}");
+    }
+    assert_eq!(Pow10(9).sub_micros(7_000_000_123), Some(123));
+    assert_eq!(Pow10(7).sub_micros(12_345), Some(500));
+    assert_eq!(Pow10(12).sub_micros(7_000_000_123_456), Some(123));
+    assert_eq!(Pow10(127).sub_micros(u64::MAX), Some(0));
+    assert_eq!(Pow2(127).sub_micros(u64::MAX), Some(0));
+    for (r, units) in [
+        (Pow10(9), 1e9),
+        (Pow2(20), 1_048_576.0),
+        (Pow2(30), 1_073_741_824.0),
+    ] {
+        for ts in [
+            0u64,
+            1,
+            999,
+            1_000_001,
+            1 << 29 | 1 << 10,
+            1_700_000_000_999_999_999,
+        ] {
+            let ns = (ts as u128 * 1_000_000_000 / units as u128) as i128;
+            let got = r.to_micros(ts) as i128 * 1000 + r.sub_micros(ts).unwrap() as i128;
+            assert_eq!(got, ns.min(i64::MAX as i128 * 1000 + 999), "{r:?} {ts}");
+        }
+    }
+}
+
+/// Packets carry their nanoseconds when the capture has them; the stream tells the capture's
+/// link type from its header, before any packet and after an error.
+#[test]
+fn packets_nanoseconds_and_the_link_type() {
+    let nanos_of = |f: &[u8]| {
+        let mut s = PcapStream::new();
+        let mut got = Vec::new();
+        let _ = s.push(f, &mut |p| got.push(p.nanos));
+        (got, s.link_type())
+    };
+    let mut f = Vec::new();
+    write::file_header(&mut f, 113, 65_535, true);
+    assert_eq!(nanos_of(&f[..23]), (vec![], None));
+    assert_eq!(nanos_of(&f), (vec![], Some(113)));
+    f.extend_from_slice(&[1, 0, 0, 0, 0xE7, 0x03, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+    assert_eq!(nanos_of(&f), (vec![Some(999)], Some(113)));
+    f.extend_from_slice(&[0xFF; 16]); // an impossible record length
+    assert_eq!(nanos_of(&f), (vec![Some(999)], Some(113)));
+    let mut us = Vec::new();
+    write::header(&mut us, 1);
+    write::record(&mut us, 5, b"x");
+    assert_eq!(nanos_of(&us), (vec![None], Some(1)));
+    let mut ng = shb_le();
+    ng.extend(idb_le(276, Some(9)));
+    ng.extend(idb_le(1, None));
+    ng.extend(epb_le(0, 7_000_000_123, b"a"));
+    ng.extend(epb_le(1, 7_000_000, b"b"));
+    assert_eq!(nanos_of(&ng), (vec![Some(123), None], Some(276)));
+}
