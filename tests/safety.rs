@@ -123,6 +123,32 @@ fn output_onto_the_input_is_refused() {
 }
 
 #[test]
+fn a_plot_onto_its_input_is_refused() {
+    // `busnoop plot` writes .svg or .png: a capture under such a name (or a link of that name
+    // to the capture) must not become the image.
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap.svg");
+    let out = busnoop()
+        .args(["plot", "--protocol", "sport"])
+        .arg(&cap)
+        .arg("-o")
+        .arg(&cap)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    let png = dir.path().join("link.png");
+    std::os::unix::fs::symlink(&cap, &png).unwrap();
+    let out = busnoop()
+        .args(["plot", "--protocol", "sport"])
+        .arg(&cap)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+}
+
+#[test]
 fn a_recording_replayed_onto_itself_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (cap, _) = capture(dir.path(), "cap");

@@ -270,19 +270,20 @@ pub fn run_capture(
     }
     check_top(args, record_to_stdout)?;
     // The clash with the input first: the capture-name hint below would point at it again.
+    // The table's file is the image for `busnoop plot`.
     let input = Input::parse(&args.source);
-    check_distinct(
-        &input,
-        args.output.output_file(),
-        args.live.record.as_deref(),
-    )?;
+    let table_file = match &args.output.plot {
+        Some(p) => Some(p.path.as_path()),
+        None => args.output.output_file(),
+    };
+    check_distinct(&input, table_file, args.live.record.as_deref())?;
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
     if let Some(p) = args.live.export.as_deref() {
         crate::export::check(p, protocol.command)?;
         // The export is neither the input nor the table (nor the recording).
-        check_distinct(&input, args.output.output_file(), Some(p))?;
+        check_distinct(&input, table_file, Some(p))?;
         if args.live.record.as_deref() == Some(p) {
             return Err(Failure::Usage(format!(
                 "--record and --export name the same file {}",
