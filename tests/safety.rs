@@ -617,3 +617,63 @@ fn time_going_back_in_an_edgetx_log_is_a_row_and_keeps_the_logged_time() {
     assert!(times[3].contains("22:41:01.000"), "{times:?}");
     assert!(times[4].contains("22:41:01.012"), "{times:?}");
 }
+
+/// `--export` is an output like `-o` and `--record`: compared with them as files, not as
+/// names (`--record x.pcapng --export ./x.pcapng` used to write both into one file, the
+/// recording's blocks and the export's interleaved), and the message names `--export`.
+#[test]
+fn export_onto_the_recording_or_the_table_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let x = dir.path().join("x.pcapng");
+    // X does not exist yet: two spellings of one name (`Path`'s `==` would see through a
+    // `.`, not through `sub/..`).
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("--export")
+        .arg(dir.path().join("sub/../x.pcapng"))
+        .args(["-o", "/dev/null"])
+        .output()
+        .unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--export") && err.contains("same file"),
+        "{err}"
+    );
+    assert!(!x.exists(), "nothing is created");
+    // X exists, named through a symbolic link.
+    std::fs::write(&x, b"keep").unwrap();
+    let link = dir.path().join("link.pcapng");
+    std::os::unix::fs::symlink(&x, &link).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("--export")
+        .arg(&link)
+        .args(["-o", "/dev/null"])
+        .output()
+        .unwrap();
+    refused(&out, &x, b"keep");
+    assert!(text(&out.stderr).contains("--export"));
+    // Standard output appended to the export: the message names --export, not --record.
+    let stdout = std::fs::OpenOptions::new().append(true).open(&x).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--export")
+        .arg(&x)
+        .stdout(stdout)
+        .output()
+        .unwrap();
+    refused(&out, &x, b"keep");
+    let err = text(&out.stderr);
+    assert!(err.contains("standard output and --export"), "{err}");
+}

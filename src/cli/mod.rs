@@ -276,20 +276,17 @@ pub fn run_capture(
         Some(p) => Some(p.path.as_path()),
         None => args.output.output_file(),
     };
-    check_distinct(&input, table_file, args.live.record.as_deref())?;
+    check_distinct(
+        &input,
+        table_file,
+        args.live.record.as_deref(),
+        args.live.export.as_deref(),
+    )?;
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
     if let Some(p) = args.live.export.as_deref() {
         crate::export::check(p, protocol.command)?;
-        // The export is neither the input nor the table (nor the recording).
-        check_distinct(&input, table_file, Some(p))?;
-        if args.live.record.as_deref() == Some(p) {
-            return Err(Failure::Usage(format!(
-                "--record and --export name the same file {}",
-                p.display()
-            )));
-        }
     }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
