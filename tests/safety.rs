@@ -677,3 +677,42 @@ fn export_onto_the_recording_or_the_table_is_refused() {
     let err = text(&out.stderr);
     assert!(err.contains("standard output and --export"), "{err}");
 }
+
+/// An output named through a symbolic link whose target does not exist yet is created at the
+/// target: `-o out.csv --record r.pcap` with `out.csv -> r.pcap` used to pass the check (a
+/// dangling link had no name to compare) and wrote the table into the recording.
+#[test]
+fn outputs_meeting_through_a_dangling_link_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap");
+    let rec = dir.path().join("r.pcap");
+    let link = dir.path().join("out.csv");
+    std::os::unix::fs::symlink("r.pcap", &link).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&link)
+        .arg("--record")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    assert!(!rec.exists(), "nothing is created");
+    // A chain of links, the last one dangling, to the export.
+    let hop = dir.path().join("hop.pcapng");
+    std::os::unix::fs::symlink("e.pcapng", &hop).unwrap();
+    let first = dir.path().join("first.csv");
+    std::os::unix::fs::symlink(&hop, &first).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&first)
+        .arg("--export")
+        .arg(dir.path().join("e.pcapng"))
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    assert!(!dir.path().join("e.pcapng").exists(), "nothing is created");
+}

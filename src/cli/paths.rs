@@ -45,9 +45,12 @@ impl FileId {
         match std::fs::metadata(p) {
             Ok(m) => FileId::of_metadata(&m, devices),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                // A dangling symlink would be created at its target: no name to compare.
-                if std::fs::symlink_metadata(p).is_ok() {
-                    return None;
+                // A dangling symlink is created at its target (relative to the link's
+                // directory): `-o out.csv` with `out.csv -> r.pcap` writes r.pcap. A loop of
+                // links is ELOOP, not NotFound, so this ends.
+                if let Ok(target) = std::fs::read_link(p) {
+                    let base = p.parent().unwrap_or(Path::new(""));
+                    return FileId::of_path(&base.join(target), devices);
                 }
                 let name = p.file_name()?;
                 let dir = match p.parent() {
