@@ -6,7 +6,7 @@
 //! number; its moment is a red vertical line in every panel.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
@@ -23,6 +23,58 @@ pub struct PlotSpec {
     pub sensors: Vec<String>,
     pub path: PathBuf,
     pub title: String,
+}
+
+/// The image formats `busnoop plot` writes, by the file's extension (any case).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ImageFormat {
+    Svg,
+    Png,
+}
+
+impl ImageFormat {
+    fn of(path: &Path) -> Option<ImageFormat> {
+        let ext = path.extension()?.to_str()?;
+        if ext.eq_ignore_ascii_case("svg") {
+            Some(ImageFormat::Svg)
+        } else if ext.eq_ignore_ascii_case("png") {
+            Some(ImageFormat::Png)
+        } else {
+            None
+        }
+    }
+}
+
+const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png";
+
+/// Checks the image's name and folder before the capture is read: the image is drawn only at
+/// the end, and finding then that it cannot be would waste the whole input (a pipe cannot be
+/// read twice). A name without `.svg`/`.png` is a usage error (exit 2), a missing folder an
+/// output error (exit 8) like `-o` into one.
+pub fn check(path: &Path) -> Result<(), crate::exit::Failure> {
+    use crate::exit::Failure;
+    if ImageFormat::of(path).is_none() {
+        return Err(Failure::Usage(format!(
+            "-o {}: {IMAGE_NAMES}",
+            path.display()
+        )));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(Failure::Output(format!(
+            "cannot create {}: {} is not a directory",
+            path.display(),
+            dir.display()
+        ))),
+        Err(e) => Err(Failure::Output(format!(
+            "cannot create {}: {e}",
+            path.display()
+        ))),
+    }
 }
 
 /// One series: its label, unit and points (seconds, value).
@@ -121,29 +173,19 @@ impl Plot {
                 )
             });
         }
-        let ext = self
-            .spec
-            .path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        let format = ImageFormat::of(&self.spec.path).ok_or_else(|| IMAGE_NAMES.to_string())?;
         // Both backends measure text with this font (the SVG names it, a viewer draws it).
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
             .map_err(|_| "cannot load the embedded font".to_string())?;
         let size = (1000, 300 * panels(&chosen).len() as u32 + 60);
-        let r = match ext.as_deref() {
-            Some("svg") => {
+        let r = match format {
+            ImageFormat::Svg => {
                 let root = SVGBackend::new(&self.spec.path, size).into_drawing_area();
                 self.render(root, &chosen)
             }
-            Some("png") => {
+            ImageFormat::Png => {
                 let root = BitMapBackend::new(&self.spec.path, size).into_drawing_area();
                 self.render(root, &chosen)
-            }
-            _ => {
-                return Err(
-                    "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png".into(),
-                );
             }
         };
         r.map_err(|e| format!("cannot draw {}: {e}", self.spec.path.display()))

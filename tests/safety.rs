@@ -716,3 +716,41 @@ fn outputs_meeting_through_a_dangling_link_are_refused() {
     refused(&out, &cap, &bytes);
     assert!(!dir.path().join("e.pcapng").exists(), "nothing is created");
 }
+
+/// `busnoop plot`'s image name and folder are checked before the capture is read: they used
+/// to be checked only when the image was drawn, after the whole input (a pipe, a FIFO, a long
+/// capture) had been decoded, and a wrong extension was exit code 8. Here the input is a FIFO
+/// no one writes to: reading it would wait for ever.
+#[test]
+fn a_plot_checks_its_image_name_before_reading_the_capture() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let plot = |image: PathBuf| {
+        output_within_10s(
+            busnoop()
+                .arg("plot")
+                .arg(&fifo)
+                .args(["--protocol", "sport", "-o"])
+                .arg(image),
+            None,
+            Stdio::piped(),
+        )
+    };
+    let out = plot(dir.path().join("flight.txt"));
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(".svg or .png"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let out = plot(dir.path().join("no-such-folder").join("flight.svg"));
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(8), "{err}");
+    assert!(
+        err.contains("no-such-folder") && err.contains("No such file or directory"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}

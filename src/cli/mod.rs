@@ -87,6 +87,7 @@ fn init_tracing(verbose: u8) {
 
 /// `busnoop plot`: the protocol's command with its rows going to a plot.
 fn plot(a: &PlotArgs) -> Result<(), Failure> {
+    crate::plot::check(&a.output)?;
     let (command, extra): (&str, &[&str]) = match &a.protocol {
         Some(p) => (p.as_str(), &[]),
         None => {
