@@ -424,12 +424,18 @@ impl OutputArgs {
 
     /// The table options for an output that is (or is not) a terminal, given whether the
     /// `NO_COLOR` environment variable is set to a non-empty value.
-    pub(super) fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
-        let format = self.format.unwrap_or_else(|| match self.output_file() {
+    /// The table's format: `--format`, else `-o`'s extension, else pretty on a terminal and
+    /// TSV elsewhere.
+    pub(super) fn table_format(&self, to_terminal: bool) -> Format {
+        self.format.unwrap_or_else(|| match self.output_file() {
             Some(p) => Format::from_path(p).unwrap_or(Format::Tsv),
             None if to_terminal => Format::Pretty,
             None => Format::Tsv,
-        });
+        })
+    }
+
+    pub(super) fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
+        let format = self.table_format(to_terminal);
         let color = format == Format::Pretty
             && match self.color {
                 ColorChoice::Always => true,

@@ -270,6 +270,7 @@ pub fn run_capture(
         ));
     }
     check_top(args, record_to_stdout)?;
+    check_wide(&args.output)?;
     // The clash with the input first: the capture-name hint below would point at it again.
     // The table's file is the image for `busnoop plot`.
     let input = Input::parse(&args.source);
@@ -394,12 +395,7 @@ pub fn run_capture(
                 table.set_plot(p.clone());
             }
             if out.wide {
-                let format = out.table_options(to_terminal, no_color_env).format;
-                if !matches!(format, Format::Csv | Format::Tsv) {
-                    return Err(Failure::Usage(
-                        "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
-                    ));
-                }
+                // CSV or TSV: check_wide refused the others before anything was opened.
                 let step = match out.every {
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
                     None => crate::sink::wide::Step::PollCycle,
@@ -585,6 +581,24 @@ fn check_top(args: &CaptureArgs, record_to_stdout: bool) -> Result<(), Failure> 
         ));
     }
     Ok(())
+}
+
+/// `--wide` writes CSV or TSV. Checked with the other usage errors, before the input is opened
+/// and before anything is opened for writing: found later, the table file, the recording and
+/// the export had already been emptied. With `--top` and no `-o` there is no table to widen.
+fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
+    let file = out.output_file();
+    if !out.wide || (out.top && file.is_none()) {
+        return Ok(());
+    }
+    let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+    if matches!(out.table_format(to_terminal), Format::Csv | Format::Tsv) {
+        Ok(())
+    } else {
+        Err(Failure::Usage(
+            "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
+        ))
+    }
 }
 
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
