@@ -629,3 +629,66 @@ fn output_to_a_capture_name_points_to_record() {
     );
     assert!(!target.exists(), "nothing is created");
 }
+
+/// Standard error on a full disk (`2>/dev/full`) or closed (`2>&-`): the messages are lost, but
+/// the run ends with its own exit code. Every message used to panic there (exit 101), a
+/// warning in the middle of a run ending it.
+#[test]
+fn a_full_or_closed_stderr_keeps_the_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let random = dir.path().join("random.bin");
+    std::fs::write(&random, noise(5000, 7)).unwrap();
+    let sample = fixture("sport-sample.bin");
+    let table = dir.path().join("table.tsv");
+    let runs: [(Vec<&std::ffi::OsStr>, i32); 5] = [
+        // Warnings and the problems line, then "no S.Port frame".
+        (vec!["sport".as_ref(), random.as_os_str()], 10),
+        (vec!["sport".as_ref(), "/no/such/capture".as_ref()], 3),
+        (
+            vec![
+                "sport".as_ref(),
+                sample.as_os_str(),
+                "--stats".as_ref(),
+                "-o".as_ref(),
+                table.as_os_str(),
+            ],
+            0,
+        ),
+        (vec!["detect".as_ref(), random.as_os_str()], 11),
+        (
+            vec![
+                "sport".as_ref(),
+                "-".as_ref(),
+                "--wide".as_ref(),
+                "-f".as_ref(),
+                "jsonl".as_ref(),
+            ],
+            2,
+        ),
+    ];
+    for (args, code) in runs {
+        for closed in [false, true] {
+            let mut cmd = busnoop();
+            cmd.args(&args).stdout(Stdio::null()).stdin(Stdio::null());
+            if closed {
+                // SAFETY: only closes a descriptor in the child before exec.
+                unsafe {
+                    cmd.pre_exec(|| {
+                        libc::close(2);
+                        Ok(())
+                    });
+                }
+            } else {
+                cmd.stderr(std::fs::File::create("/dev/full").unwrap());
+            }
+            let out = cmd.output().unwrap();
+            assert_eq!(
+                out.status.code(),
+                Some(code),
+                "{args:?}, stderr closed: {closed}"
+            );
+        }
+    }
+    // The table is whole: the --stats run wrote every row.
+    assert_eq!(text(&std::fs::read(&table).unwrap()).lines().count(), 31);
+}
