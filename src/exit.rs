@@ -131,6 +131,18 @@ impl Failure {
         matches!(self, Failure::BrokenPipe | Failure::Signal(_))
     }
 
+    /// Maps an error from creating an output (`what`: "cannot create recording FILE"): the
+    /// signal that ended the wait for a FIFO's reader ([`crate::sink::create_file`]), or an
+    /// output error.
+    pub fn from_create(what: &str, e: &std::io::Error) -> Failure {
+        match crate::signal::Stop::received() {
+            Some(sig) if e.kind() == std::io::ErrorKind::Interrupted => {
+                Failure::Signal(Interrupt::new(sig))
+            }
+            _ => Failure::Output(format!("{what}: {e}")),
+        }
+    }
+
     /// Maps an error from opening or reading an input file.
     pub fn from_input_io(path: &Path, e: &std::io::Error) -> Failure {
         use std::io::ErrorKind::*;

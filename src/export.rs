@@ -170,8 +170,8 @@ impl Exporter {
         description: &str,
     ) -> Result<Exporter, Failure> {
         let (link_type, _) = check(path, command)?;
-        let file = File::create(path).map_err(|e| {
-            Failure::Output(format!("cannot create export {}: {e}", path.display()))
+        let file = crate::sink::create_file(path).map_err(|e| {
+            Failure::from_create(&format!("cannot create export {}", path.display()), &e)
         })?;
         Ok(Exporter {
             path: path.to_owned(),

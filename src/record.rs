@@ -28,7 +28,6 @@
 //! `--record -` (or a device or FIFO named without an extension) writes the packets as classic
 //! pcap, as `tcpdump -w -` does.
 
-use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -188,8 +187,8 @@ impl Recorder {
     /// Creates the recording of `content` (its format checked first, [`format_for`]).
     pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
         let format = format_for(Some(path), content)?;
-        let file = File::create(path).map_err(|e| {
-            Failure::Output(format!("cannot create recording {}: {e}", path.display()))
+        let file = crate::sink::create_file(path).map_err(|e| {
+            Failure::from_create(&format!("cannot create recording {}", path.display()), &e)
         })?;
         Ok(Self::new(Some(path), Box::new(file), format, content))
     }

@@ -171,6 +171,38 @@ fn a_fifo_without_a_writer_ends_on_a_signal() {
     }
 }
 
+/// An output FIFO no one reads (`-o FIFO`, `--record FIFO`, `--export FIFO`): busnoop waits for
+/// a reader, and SIGINT/SIGTERM end the wait at once. A plain open() waits inside the kernel,
+/// where the handlers cannot end it: only a second signal (or SIGKILL) did.
+#[test]
+fn an_output_fifo_without_a_reader_ends_on_a_signal() {
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sport-sample.bin");
+    for (option, name) in [
+        ("-o", "table"),
+        ("--record", "rec.pcap"),
+        ("--export", "frames.pcapng"),
+    ] {
+        for (sig, code) in [(libc::SIGTERM, 143), (libc::SIGINT, 130)] {
+            let dir = tempfile::tempdir().unwrap();
+            let fifo = dir.path().join(name);
+            mkfifo(&fifo);
+            let mut cmd = busnoop();
+            cmd.arg("sport").arg(&sample).arg(option).arg(&fifo);
+            if option != "-o" {
+                cmd.args(["-o", "/dev/null"]);
+            }
+            let child = cmd.spawn().unwrap();
+            let mut guard = Guard(child);
+            wait_for_handlers(&guard.0);
+            std::thread::sleep(Duration::from_millis(200));
+            assert!(guard.0.try_wait().unwrap().is_none(), "{option}: no wait");
+            let (status, err) = signal_and_wait(&mut guard, sig, STOP_WITHIN);
+            assert_eq!(status.code(), Some(code), "{option}, signal {sig}: {err}");
+            assert!(!err.contains("panick"), "{err}");
+        }
+    }
+}
+
 #[test]
 fn a_fifo_waits_for_its_writer_and_ends_when_the_writer_closes() {
     let dir = tempfile::tempdir().unwrap();

@@ -379,8 +379,9 @@ pub fn run_capture(
         (true, None) => None,
         (_, file) => {
             let output = match file {
-                Some(p) => Output::create(p)
-                    .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
+                Some(p) => Output::create(p).map_err(|e| {
+                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
+                })?,
                 None => Output::stdout(),
             };
             let to_terminal = file.is_none() && std::io::stdout().is_terminal();

@@ -2,6 +2,7 @@
 
 mod line;
 pub mod output;
+pub(crate) use output::create_file;
 mod spans;
 mod tap;
 pub mod wide;

@@ -26,6 +26,44 @@ enum Dest {
     Memory(Vec<u8>),
 }
 
+/// How often the wait for a FIFO's reader looks for a signal.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Creates (truncates) `path` for writing: the table, a recording, an export. A FIFO is opened
+/// non-blocking, retried until a reader comes: a plain open waits for the reader inside the
+/// kernel, where no signal can end it (`-o FIFO` with no reader ignored Ctrl-C). SIGINT/SIGTERM
+/// end the wait with an `Interrupted` error ([`crate::exit::Failure::from_create`]); once open,
+/// the FIFO is written blocking like any file.
+pub(crate) fn create_file(path: &Path) -> io::Result<File> {
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    if !std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
+        return File::create(path);
+    }
+    loop {
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(path)
+        {
+            Ok(f) => {
+                crate::source::set_blocking(&f)?;
+                return Ok(f);
+            }
+            // No reader yet.
+            Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                if crate::signal::Stop::received().is_some() {
+                    return Err(io::Error::new(
+                        io::ErrorKind::Interrupted,
+                        "stopped by a signal",
+                    ));
+                }
+                std::thread::sleep(SIGNAL_POLL);
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
 /// A buffered destination that only ever writes complete rows.
 pub struct Output {
     dest: Dest,
@@ -47,7 +85,7 @@ impl Output {
     /// Creates (truncates) `path`. It may also be a special file (`/dev/null`, `/dev/stdout`,
     /// a FIFO): those are written to but never synced.
     pub fn create(path: &Path) -> io::Result<Self> {
-        let file = File::create(path)?;
+        let file = create_file(path)?;
         let regular = file.metadata()?.is_file();
         Ok(Self::new(Dest::File {
             file,
