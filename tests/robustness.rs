@@ -330,6 +330,100 @@ fn output_file_that_fills_up_ends_with_a_whole_row() {
     assert!(n > 500, "rows decoded so far are kept: {n}");
 }
 
+/// The lengths of the records of a classic pcap (`pcapng`: of the blocks), or the byte where
+/// the file ends inside one.
+fn whole_records(bytes: &[u8], pcapng: bool) -> Result<usize, usize> {
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    let (mut at, mut n) = (if pcapng { 0 } else { 24 }, 0);
+    while at < bytes.len() {
+        let len = match (pcapng, bytes.len() - at) {
+            (true, left) if left >= 12 => u32_at(at + 4),
+            (false, left) if left >= 16 => 16 + u32_at(at + 8),
+            _ => return Err(at),
+        };
+        if len < 12 || at + len > bytes.len() {
+            return Err(at);
+        }
+        at += len;
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// A recording or an export on a disk that fills up during the run ends with its last whole
+/// record, like the table ends with its last whole row; it replays without a warning. Both
+/// used to end inside a record (Wireshark: "cut short in the middle of a packet").
+#[test]
+fn recording_and_export_that_fill_up_end_with_a_whole_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..20_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0300,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    for (option, name) in [
+        ("--record", "r.pcap"),
+        ("--record", "r.pcapng"),
+        ("--export", "e.pcapng"),
+    ] {
+        let file = dir.path().join(name);
+        let mut cmd = busnoop();
+        cmd.arg("sport")
+            .arg(&big)
+            .arg(option)
+            .arg(&file)
+            .args(["-o", "/dev/null"]);
+        // SAFETY: only signal() and setrlimit() in the child before exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                let lim = libc::rlimit {
+                    rlim_cur: 100_000,
+                    rlim_max: 100_000,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let out = cmd.output().unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{name}: {err}");
+        assert!(err.contains(&file.display().to_string()), "{err}");
+        let written = std::fs::read(&file).unwrap();
+        assert!(written.len() <= 100_000, "{name}: {}", written.len());
+        let records = whole_records(&written, name.ends_with("pcapng"));
+        assert!(
+            records.is_ok_and(|n| n > 10),
+            "{name}: {records:?} of {} bytes",
+            written.len()
+        );
+        if option == "--record" {
+            let out = busnoop()
+                .arg("sport")
+                .arg(&file)
+                .args(["-o", "/dev/null"])
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(0), "{name}");
+            assert!(
+                !text(&out.stderr).contains("cut short"),
+                "{}",
+                text(&out.stderr)
+            );
+        }
+    }
+}
+
 #[test]
 fn recording_to_a_full_disk() {
     let out = busnoop()
