@@ -234,10 +234,13 @@ impl Recorder {
         self.format
     }
 
+    /// A write error as the user sees it. A pipe whose reader went away (standard output, a
+    /// FIFO, `--record >(tshark -r -)` and tshark quit) ends busnoop quietly, as the table's
+    /// and the export's do.
     fn fail(&self, e: io::Error) -> Failure {
         match &self.path {
+            _ if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
             Some(p) => Failure::Output(format!("cannot write recording {}: {e}", p.display())),
-            None if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
             None => Failure::Output(format!(
                 "cannot write the recording to standard output: {e}"
             )),

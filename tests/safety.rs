@@ -423,6 +423,56 @@ fn output_to_dev_stdout_closed_by_the_reader_exits_quietly() {
     assert_eq!(text(&out.stderr), "");
 }
 
+/// A recording into a pipe whose reader goes away (`--record FIFO`, `--record >(tshark -r -)`
+/// and tshark quits) ends like the table's and the export's pipe: quietly, 141. It used to be
+/// `cannot write recording …: Broken pipe`, exit 8.
+#[test]
+fn a_recording_pipe_closed_by_the_reader_exits_quietly() {
+    use std::io::Read;
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..100_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0100,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    let fifo = dir.path().join("r.pcap");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut head = [0u8; 100];
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_exact(&mut head)
+                .unwrap();
+            head
+        })
+    };
+    let out = output_within_10s(
+        busnoop()
+            .arg("sport")
+            .arg(&big)
+            .arg("--record")
+            .arg(&fifo)
+            .args(["-o", "/dev/null"]),
+        None,
+        Stdio::null(),
+    );
+    let head = reader.join().unwrap();
+    assert_eq!(&head[2..4], &[0xb2, 0xa1], "a pcap header");
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(141), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stderr), "");
+}
+
 #[test]
 fn the_capture_extension_guard_ignores_case() {
     let dir = tempfile::tempdir().unwrap();
