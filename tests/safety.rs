@@ -590,6 +590,11 @@ fn numeric_options_out_of_range_are_refused() {
     out_of_range(&["sbus", "--udp-port", "0"], "1..=65535");
     out_of_range(&["sbus", "--port", "0"], "1..=65535");
     out_of_range(&["sab2", "--max-payload", "0"], "1..=255");
+    // --speed: 0, or 0.001 to 1000. A tiny speed (1e-300) panicked turning the first delay
+    // into a Duration; 1e-10 would wait centuries per second of capture.
+    for s in ["1e-300", "1e-10", "0.0009", "-1", "1001", "NaN"] {
+        out_of_range(&["sport", &format!("--speed={s}")], "0.001 to 1000");
+    }
     for cmd in ["sport", "sbus", "sab2"] {
         for b in ["0", "49", "12000001", "99999999999"] {
             out_of_range(&[cmd, "--baud", b], "50..=12000000");

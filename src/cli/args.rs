@@ -408,11 +408,16 @@ pub struct OutputArgs {
     pub plot: Option<crate::plot::PlotSpec>,
 }
 
-/// `--speed`: a number from 0 to 1000.
+/// `--speed`: 0, or a number from 0.001 to 1000. Below a thousandth of real time the pacer's
+/// delays grow past what a `Duration` holds (`--speed 1e-300` panicked) or past any replay
+/// (`1e-10`: three centuries per second of capture).
 fn parse_speed(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if (0.0..=1000.0).contains(&v) => Ok(v),
-        _ => Err("expected a number from 0 (as fast as possible) to 1000 (1 = real time)".into()),
+        Ok(v) if v == 0.0 || (0.001..=1000.0).contains(&v) => Ok(v),
+        _ => Err(
+            "expected 0 (as fast as possible) or a number from 0.001 to 1000 (1 = real time)"
+                .into(),
+        ),
     }
 }
 
@@ -422,8 +427,6 @@ impl OutputArgs {
         self.output.as_deref().filter(|p| !is_dash(p))
     }
 
-    /// The table options for an output that is (or is not) a terminal, given whether the
-    /// `NO_COLOR` environment variable is set to a non-empty value.
     /// The table's format: `--format`, else `-o`'s extension, else pretty on a terminal and
     /// TSV elsewhere.
     pub(super) fn table_format(&self, to_terminal: bool) -> Format {
@@ -434,6 +437,8 @@ impl OutputArgs {
         })
     }
 
+    /// The table options for an output that is (or is not) a terminal, given whether the
+    /// `NO_COLOR` environment variable is set to a non-empty value.
     pub(super) fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
         let format = self.table_format(to_terminal);
         let color = format == Format::Pretty
