@@ -786,3 +786,37 @@ fn a_full_or_closed_stderr_keeps_the_exit_code() {
     // The table is whole: the --stats run wrote every row.
     assert_eq!(text(&std::fs::read(&table).unwrap()).lines().count(), 31);
 }
+
+/// A character device that is not a terminal is read as a file, /dev/urandom as well as
+/// /dev/zero: its terminal ioctl fails with EINVAL rather than ENOTTY, and busnoop took it for a
+/// serial port it could not open (`cannot open the serial port: tcgetattr: Invalid argument`,
+/// exit 6).
+#[test]
+fn dev_urandom_is_read_as_a_file() {
+    if !std::path::Path::new("/dev/urandom").exists() {
+        return;
+    }
+    let out = busnoop().args(["detect", "/dev/urandom"]).output().unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(11), "{err}");
+    assert!(
+        text(&out.stdout).contains("2097"),
+        "2 MiB examined: {}",
+        text(&out.stdout)
+    );
+    // The decoders read it until Ctrl-C.
+    let child = busnoop()
+        .args(["sport", "/dev/urandom", "-f", "tsv"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    // SAFETY: kill() sends a signal to our own child; no memory is involved.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let out = child.wait_with_output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).lines().count() > 100);
+}
