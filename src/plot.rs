@@ -77,20 +77,71 @@ pub fn check(path: &Path) -> Result<(), crate::exit::Failure> {
     }
 }
 
+/// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels
+/// wide, so a plot of more says nothing more.
+const MAX_POINTS: usize = 16_384;
+
+/// At most [`MAX_POINTS`] of a growing sequence, evenly spread over it: when full, every other
+/// one is dropped, and from then on only every second (fourth, …) newcomer is kept. Without a
+/// bound, memory grew with the capture, and a noisy one drew an SVG of gigabytes (a red line per
+/// broken frame).
+#[derive(Debug)]
+struct Thinned<T> {
+    kept: Vec<T>,
+    /// Every `stride`-th value is kept.
+    stride: u64,
+    seen: u64,
+}
+
+impl<T> Default for Thinned<T> {
+    fn default() -> Self {
+        Thinned {
+            kept: Vec::new(),
+            stride: 1,
+            seen: 0,
+        }
+    }
+}
+
+impl<T> Thinned<T> {
+    fn push(&mut self, v: T) {
+        if self.seen.is_multiple_of(self.stride) {
+            self.kept.push(v);
+            if self.kept.len() >= MAX_POINTS {
+                let mut odd = false;
+                self.kept.retain(|_| {
+                    odd = !odd;
+                    odd
+                });
+                self.stride *= 2;
+            }
+        }
+        self.seen += 1;
+    }
+
+    fn is_empty(&self) -> bool {
+        self.kept.is_empty()
+    }
+
+    fn iter(&self) -> std::slice::Iter<'_, T> {
+        self.kept.iter()
+    }
+}
+
 /// One series: its label, unit and points (seconds, value).
 #[derive(Debug, Default)]
 struct Series {
     id: Option<u32>,
     name: String,
     unit: String,
-    points: Vec<(f64, f64)>,
+    points: Thinned<(f64, f64)>,
 }
 
 /// Collects the rows of a capture, then draws them.
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
-    errors: Vec<f64>,
+    errors: Thinned<f64>,
 }
 
 impl Plot {
@@ -98,7 +149,7 @@ impl Plot {
         Plot {
             spec,
             series: Vec::new(),
-            errors: Vec::new(),
+            errors: Thinned::default(),
         }
     }
 
@@ -128,7 +179,7 @@ impl Plot {
                         id: row.id,
                         name: p.name.to_owned(),
                         unit: p.unit.to_owned(),
-                        points: Vec::new(),
+                        points: Thinned::default(),
                     });
                     self.series.len() - 1
                 }
@@ -326,6 +377,40 @@ mod tests {
         text: "20",
         value: 20.0,
     }];
+
+    /// A long or noisy capture: the points of a series and the broken frames' marks are thinned
+    /// evenly to at most [`MAX_POINTS`] each (the image is 1000 pixels wide). They used to be
+    /// kept all: memory grew with the capture, and `busnoop plot /dev/urandom` drew an SVG of
+    /// gigabytes, a red line per broken frame.
+    #[test]
+    fn long_captures_are_thinned_to_a_bounded_plot() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.svg");
+        let mut p = Plot::new(PlotSpec {
+            sensors: vec![],
+            path: path.clone(),
+            title: "t".into(),
+        });
+        let n = 300_000u64;
+        for i in 0..n {
+            p.row(&row(i * 10_000, Class::Plain, ALT1));
+            p.row(&row(i * 10_000 + 5_000, Class::Error, &[]));
+        }
+        let points: Vec<f64> = p.series[0].points.kept.iter().map(|p| p.0).collect();
+        assert!(points.len() <= MAX_POINTS && points.len() > MAX_POINTS / 4);
+        assert!(p.errors.kept.len() <= MAX_POINTS && p.errors.kept.len() > MAX_POINTS / 4);
+        // Evenly spread from the start: equal steps.
+        assert_eq!(points[0], 0.0);
+        let step = points[1] - points[0];
+        assert!(
+            points
+                .windows(2)
+                .all(|w| ((w[1] - w[0]) - step).abs() < 1e-9)
+        );
+        p.draw().unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        assert!(size < 8_000_000, "{size} bytes");
+    }
 
     /// A broken frame's moment is a red vertical line across the panel.
     #[test]
