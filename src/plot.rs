@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
+use crate::exit::Failure;
 use crate::row::{Class, Row};
 
 /// The DejaVu Sans font (Bitstream Vera licence, assets/DejaVuSans-LICENSE.txt) for the PNG's
@@ -51,8 +52,7 @@ const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or
 /// the end, and finding then that it cannot be would waste the whole input (a pipe cannot be
 /// read twice). A name without `.svg`/`.png` is a usage error (exit 2), a missing folder an
 /// output error (exit 8) like `-o` into one.
-pub fn check(path: &Path) -> Result<(), crate::exit::Failure> {
-    use crate::exit::Failure;
+pub fn check(path: &Path) -> Result<(), Failure> {
     if ImageFormat::of(path).is_none() {
         return Err(Failure::Usage(format!(
             "-o {}: {IMAGE_NAMES}",
@@ -153,11 +153,6 @@ impl Plot {
         }
     }
 
-    /// The file the plot goes to.
-    pub fn path(&self) -> &std::path::Path {
-        &self.spec.path
-    }
-
     pub fn row(&mut self, row: &Row<'_>) {
         let Some(us) = row.micros else { return };
         let t = us as f64 / 1e6;
@@ -200,8 +195,11 @@ impl Plot {
         }
     }
 
-    /// Draws the plot into the spec's file (`.svg` or `.png`). Errors are one-line messages.
-    pub fn draw(&self) -> Result<(), String> {
+    /// Draws the plot into the spec's file (`.svg` or `.png`). Nothing to draw is no failed
+    /// write: a capture without numbers is [`Failure::NothingDecoded`] (exit 10), sensor names it
+    /// does not have a usage error (exit 2, with the names it has); a drawing that cannot be
+    /// written is [`Failure::Output`] (exit 8).
+    pub fn draw(&self) -> Result<(), Failure> {
         let chosen: Vec<(String, &Series)> = self
             .series
             .iter()
@@ -215,19 +213,21 @@ impl Plot {
             let mut seen: Vec<String> = self.series.iter().map(|s| self.label(s)).collect();
             seen.dedup();
             return Err(if seen.is_empty() {
-                "no row of this capture carries a number to plot".into()
+                Failure::NothingDecoded("no row of this capture carries a number to plot".into())
             } else {
-                format!(
+                Failure::Usage(format!(
                     "no number named {} in this capture; it has: {}",
                     self.spec.sensors.join(","),
                     seen.join(",")
-                )
+                ))
             });
         }
-        let format = ImageFormat::of(&self.spec.path).ok_or_else(|| IMAGE_NAMES.to_string())?;
+        let format = ImageFormat::of(&self.spec.path).ok_or_else(|| {
+            Failure::Usage(format!("-o {}: {IMAGE_NAMES}", self.spec.path.display()))
+        })?;
         // Both backends measure text with this font (the SVG names it, a viewer draws it).
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-            .map_err(|_| "cannot load the embedded font".to_string())?;
+            .map_err(|_| Failure::Internal("cannot load the embedded font".into()))?;
         let size = (1000, 300 * panels(&chosen).len() as u32 + 60);
         let r = match format {
             ImageFormat::Svg => {
@@ -239,7 +239,7 @@ impl Plot {
                 self.render(root, &chosen)
             }
         };
-        r.map_err(|e| format!("cannot draw {}: {e}", self.spec.path.display()))
+        r.map_err(|e| Failure::Output(format!("cannot draw {}: {e}", self.spec.path.display())))
     }
 
     fn render<DB: DrawingBackend>(

@@ -148,3 +148,47 @@ fn png_is_written_and_unknown_names_are_listed() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains(".svg or .png"));
 }
+
+/// Nothing to plot is not a failed write: a sensor name the capture does not have is a usage
+/// error (exit 2), a capture without any number has nothing to draw (exit 10), each in one line
+/// without "cannot write to". Both used to be `cannot write to IMAGE: …`, exit 8, the code of a
+/// full disk.
+#[test]
+fn nothing_to_plot_is_not_a_write_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let polls = dir.path().join("polls.bin");
+    std::fs::write(&polls, [0x7E, 0xA1].repeat(100)).unwrap();
+    let log = fixture("edgetx-MODELE24-2014-07-11-sport.log");
+    for (source, extra, code, want) in [
+        (
+            log.as_path(),
+            &["--sensor", "Alt"][..],
+            2,
+            "no number named Alt",
+        ),
+        (
+            polls.as_path(),
+            &["--protocol", "sport"][..],
+            10,
+            "carries a number",
+        ),
+    ] {
+        let out = Command::cargo_bin("busnoop")
+            .unwrap()
+            .arg("plot")
+            .arg(source)
+            .args(extra)
+            .arg("-o")
+            .arg(dir.path().join("x.svg"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{err}");
+        let last = err.lines().last().unwrap();
+        assert!(
+            last.contains(want) && !last.contains("cannot write"),
+            "{err}"
+        );
+        assert!(!dir.path().join("x.svg").exists());
+    }
+}

@@ -522,6 +522,16 @@ pub fn run_capture(
             Advice::NothingDecoded(m) => return Err(Failure::NothingDecoded(m)),
         }
     }
+    // `busnoop plot`: drawn once the input is read, also after Ctrl-C (what was read so far),
+    // whose exit code then stays.
+    if let Some(plot) = table.as_mut().and_then(Table::take_plot)
+        && let Err(f) = plot.draw()
+    {
+        if result.is_ok() {
+            return Err(f);
+        }
+        eprintln!("busnoop: {f}");
+    }
     result
 }
 
