@@ -59,22 +59,7 @@ pub fn check(path: &Path) -> Result<(), Failure> {
             path.display()
         )));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    match std::fs::metadata(dir) {
-        Ok(m) if m.is_dir() => Ok(()),
-        Ok(_) => Err(Failure::Output(format!(
-            "cannot create {}: {} is not a directory",
-            path.display(),
-            dir.display()
-        ))),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot create {}: {e}",
-            path.display()
-        ))),
-    }
+    crate::sink::check_folder(path)
 }
 
 /// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels

@@ -809,3 +809,75 @@ fn a_plot_checks_its_image_name_before_reading_the_capture() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+/// An output into a folder that does not exist is refused before any output is created: a
+/// typo in `-o` used to fail only after the recording and the export had been created (and an
+/// existing recording of that name emptied), a typo in `--record` after the table had.
+#[test]
+fn an_output_into_a_missing_folder_creates_no_other_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let missing = dir.path().join("no-such-folder");
+    let rec = dir.path().join("r.pcap");
+    std::fs::write(&rec, b"keep").unwrap();
+    let export = dir.path().join("e.pcapng");
+    let table = dir.path().join("t.csv");
+    let runs: [(&str, PathBuf, &str, PathBuf, &str, PathBuf); 3] = [
+        (
+            "-o",
+            missing.join("t.csv"),
+            "--record",
+            rec.clone(),
+            "--export",
+            export.clone(),
+        ),
+        (
+            "-o",
+            table.clone(),
+            "--record",
+            missing.join("r.pcap"),
+            "--export",
+            export.clone(),
+        ),
+        (
+            "-o",
+            table.clone(),
+            "--record",
+            rec.clone(),
+            "--export",
+            missing.join("e.pcapng"),
+        ),
+    ];
+    for (o, a, r, b, e, c) in runs {
+        let out = busnoop()
+            .arg("sport")
+            .arg(&cap)
+            .args([
+                o.as_ref(),
+                a.as_os_str(),
+                r.as_ref(),
+                b.as_os_str(),
+                e.as_ref(),
+                c.as_os_str(),
+            ])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{err}");
+        assert!(
+            err.contains("no-such-folder") && err.contains("No such file"),
+            "{err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(
+            std::fs::read(&rec).unwrap(),
+            b"keep",
+            "the recording was emptied"
+        );
+        assert!(
+            !export.exists() && !table.exists(),
+            "an output was created: {err}"
+        );
+    }
+}

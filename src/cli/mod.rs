@@ -290,6 +290,18 @@ pub fn run_capture(
     if let Some(p) = args.live.export.as_deref() {
         crate::export::check(p, protocol.command)?;
     }
+    // A missing folder in any output name, before the input is opened or any output created.
+    for p in [
+        table_file,
+        args.live.record.as_deref(),
+        args.live.export.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .filter(|p| !is_dash(p))
+    {
+        crate::sink::check_folder(p)?;
+    }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
             ["pcap", "pcapng", "bin"]

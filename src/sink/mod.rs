@@ -2,7 +2,7 @@
 
 mod line;
 pub mod output;
-pub(crate) use output::{Records, create_file};
+pub(crate) use output::{Records, check_folder, create_file};
 mod spans;
 mod tap;
 pub mod wide;

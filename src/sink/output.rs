@@ -64,6 +64,25 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
     }
 }
 
+/// Refuses an output whose folder does not exist (or is no folder) before any output is
+/// created, with the message creating it would give: found only then, the outputs created
+/// before it (the recording, the export, the table) were left behind, an existing one emptied.
+pub(crate) fn check_folder(path: &Path) -> Result<(), crate::exit::Failure> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let problem = match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => return Ok(()),
+        Ok(_) => format!("{} is not a directory", dir.display()),
+        Err(e) => e.to_string(),
+    };
+    Err(crate::exit::Failure::Output(format!(
+        "cannot create {}: {problem}",
+        path.display()
+    )))
+}
+
 /// A buffered destination that only ever writes complete rows.
 pub struct Output {
     dest: Dest,
