@@ -881,3 +881,47 @@ fn an_output_into_a_missing_folder_creates_no_other_output() {
         );
     }
 }
+
+/// The project file is an input too: `-o busnoop.toml` (the one in the current folder, read
+/// without being named), `--config my.toml -o my.toml`, or a link to it, used to overwrite it
+/// with the table (a note said only that .toml is no table format).
+#[test]
+fn output_onto_the_project_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let project = b"[sport]\nnames = { Rx = 24 }\n";
+    let toml = dir.path().join("busnoop.toml");
+    std::fs::write(&toml, project).unwrap();
+    let link = dir.path().join("notes.txt");
+    std::os::unix::fs::symlink("busnoop.toml", &link).unwrap();
+    let mine = dir.path().join("my.toml");
+    std::fs::write(&mine, project).unwrap();
+    let runs: [(Vec<&OsStr>, &Path); 3] = [
+        (vec!["-o".as_ref(), "busnoop.toml".as_ref()], &toml),
+        (vec!["-o".as_ref(), link.as_os_str()], &toml),
+        (
+            vec![
+                "--config".as_ref(),
+                mine.as_os_str(),
+                "-o".as_ref(),
+                "./my.toml".as_ref(),
+            ],
+            &mine,
+        ),
+    ];
+    for (args, file) in runs {
+        let out = busnoop()
+            .current_dir(dir.path())
+            .arg("sport")
+            .arg(&cap)
+            .args(&args)
+            .output()
+            .unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("project file"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read(file).unwrap(), project, "{args:?}");
+    }
+}

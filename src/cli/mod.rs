@@ -283,6 +283,7 @@ pub fn run_capture(
         table_file,
         args.live.record.as_deref(),
         args.live.export.as_deref(),
+        project::File::path(&args.select).as_deref(),
     )?;
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;

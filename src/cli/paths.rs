@@ -91,12 +91,14 @@ fn is_dev_null(m: &std::fs::Metadata) -> bool {
 /// busnoop sport - -o /dev/stdin` would feed busnoop its own rows and never end), or the serial
 /// port it listens to (writing there would send on the bus). Also two of the outputs that are
 /// one file, however they are named (`--record x.pcapng --export ./x.pcapng` would interleave
-/// the two).
+/// the two), and an output that is the project file the run reads (`project`: `-o
+/// busnoop.toml`).
 pub(super) fn check_distinct(
     input: &Input,
     output: Option<&Path>,
     record: Option<&Path>,
     export: Option<&Path>,
+    project: Option<&Path>,
 ) -> Result<(), Failure> {
     use std::os::fd::AsFd;
     // A serial port is compared with the outputs by its device number: writing there would
@@ -144,6 +146,16 @@ pub(super) fn check_distinct(
                 "{name} is the same file as {source_name}: writing it would {}; write \
                  somewhere else",
                 s.consequence()
+            )));
+        }
+    }
+    if let Some(p) = project {
+        let id = FileId::of_path(p, false);
+        if let Some((_, name)) = outputs.iter().find(|(o, _)| same(&id, o)) {
+            return Err(Failure::Usage(format!(
+                "{name} is the project file {}: writing it would destroy the project file; \
+                 write somewhere else",
+                p.display()
             )));
         }
     }

@@ -316,21 +316,22 @@ impl File {
         Ok(())
     }
 
-    /// Reads `--config FILE`, or ./busnoop.toml when it exists (and `--no-config` is not set).
-    /// Returns the file and its name (for messages).
-    pub fn load(args: &SelectArgs) -> Result<Option<(File, PathBuf)>, Failure> {
+    /// The project file a run reads: `--config FILE`, or ./busnoop.toml when it exists; none
+    /// with `--no-config`.
+    pub fn path(args: &SelectArgs) -> Option<PathBuf> {
         if args.no_config {
-            return Ok(None);
+            return None;
         }
-        let path = match &args.config {
-            Some(p) => p.clone(),
-            None => {
-                let p = PathBuf::from(FILE_NAME);
-                if !p.is_file() {
-                    return Ok(None);
-                }
-                p
-            }
+        match &args.config {
+            Some(p) => Some(p.clone()),
+            None => Some(PathBuf::from(FILE_NAME)).filter(|p| p.is_file()),
+        }
+    }
+
+    /// Reads the project file ([`File::path`]). Returns the file and its name (for messages).
+    pub fn load(args: &SelectArgs) -> Result<Option<(File, PathBuf)>, Failure> {
+        let Some(path) = File::path(args) else {
+            return Ok(None);
         };
         let text = match read_limited(&path) {
             Ok(b) if b.len() as u64 > MAX_SIZE => {
