@@ -80,7 +80,8 @@ pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "extcap", "comp
 /// `busnoop plot`.
 #[derive(Args, Debug, Clone)]
 pub struct PlotArgs {
-    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-`.
+    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-` (a
+    /// pipe, like a FIFO, needs --protocol: it can be read only once).
     pub source: PathBuf,
     /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
     /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
@@ -89,7 +90,7 @@ pub struct PlotArgs {
     /// The image to write: FILE.svg or FILE.png.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
-    /// The protocol [default: detected as by `busnoop detect`].
+    /// The protocol [default: detected as by `busnoop detect`; required for `-` and FIFOs].
     #[arg(long, value_name = "NAME", value_parser = ["sport", "sbus", "sab2"])]
     pub protocol: Option<String>,
 }

@@ -91,6 +91,18 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
     let (command, extra): (&str, &[&str]) = match &a.protocol {
         Some(p) => (p.as_str(), &[]),
         None => {
+            // Detection reads the input's start, then the plot reads the input again: a pipe
+            // (standard input, a FIFO) would have given its bytes to the detection only.
+            use std::os::unix::fs::FileTypeExt;
+            let pipe = is_dash(&a.source)
+                || std::fs::metadata(&a.source).is_ok_and(|m| m.file_type().is_fifo());
+            if pipe {
+                return Err(Failure::Usage(format!(
+                    "busnoop plot {}: a pipe can be read only once, so its protocol cannot be \
+                     detected before it is plotted; name it with --protocol sport|sbus|sab2",
+                    a.source.display()
+                )));
+            }
             let (p, args) = crate::detect::protocol_of(&a.source)?;
             (p.command, args)
         }
