@@ -820,3 +820,19 @@ fn dev_urandom_is_read_as_a_file() {
     assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
     assert!(text(&out.stdout).lines().count() > 100);
 }
+
+/// `busnoop detect /dev/zero` reads it as a file: stderr does not claim that busnoop listens to
+/// it at nine baud rates (it used to, before finding out it is no terminal).
+#[test]
+fn detect_on_a_device_that_is_no_terminal_does_not_claim_to_listen() {
+    let out = busnoop().args(["detect", "/dev/zero"]).output().unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(11), "{err}");
+    assert!(!err.contains("listening"), "{err}");
+    assert!(
+        text(&out.stdout).contains("/dev/zero: raw bytes"),
+        "{}",
+        text(&out.stdout)
+    );
+}
