@@ -217,6 +217,21 @@ impl From<crate::row::OutputError> for Failure {
     }
 }
 
+/// Writes `bytes` to standard output for the commands that print (`detect`, `ports`, `man`,
+/// `completions`, `extcap`): a reader that went away (`… | head`) ends busnoop quietly
+/// ([`Failure::BrokenPipe`], 141) as it does for the tables; another error is exit 8.
+pub fn write_stdout(bytes: &[u8]) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(bytes).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
+        Err(e) => Err(Failure::Output(format!(
+            "cannot write to standard output: {e}"
+        ))),
+    }
+}
+
 /// `1 frame`, `2 frames`.
 pub fn count(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })

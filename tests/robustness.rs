@@ -836,3 +836,37 @@ fn detect_on_a_device_that_is_no_terminal_does_not_claim_to_listen() {
         text(&out.stdout)
     );
 }
+
+/// Every command that prints on standard output ends quietly with 141 when the reader went
+/// away: `busnoop extcap --extcap-interfaces` into a closed pipe used to say `cannot write to
+/// standard output: Broken pipe` with exit 8, unlike `detect`, `ports`, `man` and the tables.
+#[test]
+fn every_command_on_a_closed_pipe_is_quiet() {
+    for args in [
+        &["extcap", "--extcap-interfaces"][..],
+        &[
+            "extcap",
+            "--extcap-interface",
+            "busnoop-sport",
+            "--extcap-dlts",
+        ][..],
+        &["man"][..],
+        &["completions", "bash"][..],
+    ] {
+        let mut fds = [0; 2];
+        // SAFETY: pipe() fills the two descriptors; the read end is closed at once, the write
+        // end handed to the child as its standard output (and closed here by the File).
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        unsafe { libc::close(fds[0]) };
+        let write_end = unsafe { <std::fs::File as std::os::fd::FromRawFd>::from_raw_fd(fds[1]) };
+        let out = busnoop().args(args).stdout(write_end).output().unwrap();
+        no_panic(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(141),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        assert_eq!(text(&out.stderr), "", "{args:?}");
+    }
+}

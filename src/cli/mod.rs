@@ -696,18 +696,7 @@ fn list_ports() -> Result<(), Failure> {
             p.by_id.map(|b| b.display().to_string()).unwrap_or_default()
         ));
     }
-    use std::io::Write;
-    let mut stdout = std::io::stdout().lock();
-    match stdout
-        .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush())
-    {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot write to standard output: {e}"
-        ))),
-    }
+    crate::exit::write_stdout(text.as_bytes())
 }
 
 /// Set for a capture Wireshark runs (`busnoop extcap --capture`): Wireshark shows whatever an

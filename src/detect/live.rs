@@ -75,7 +75,7 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             )))
         }
     };
-    write_stdout(&text).map_err(LiveError::Failed)?;
+    crate::exit::write_stdout(text.as_bytes()).map_err(LiveError::Failed)?;
     result.map_err(LiveError::Failed)
 }
 

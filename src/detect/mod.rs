@@ -10,7 +10,6 @@
 //!
 //! The same scoring tells a user who picked the wrong protocol ([`advise`], after a run).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -556,7 +555,7 @@ pub fn run(args: &Options) -> Result<(), Failure> {
             Ok(())
         }
     };
-    write_stdout(&text)?;
+    crate::exit::write_stdout(text.as_bytes())?;
     if let Some(sig) = signal {
         eprintln!("busnoop: interrupted after {examined} bytes; the verdict is on them");
         return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
@@ -613,17 +612,6 @@ pub fn shell_quote(p: &Path) -> String {
         s.into_owned()
     } else {
         format!("'{}'", s.replace('\'', "'\\''"))
-    }
-}
-
-fn write_stdout(text: &str) -> Result<(), Failure> {
-    let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot write to standard output: {e}"
-        ))),
     }
 }
 
