@@ -131,6 +131,18 @@ impl Failure {
         matches!(self, Failure::BrokenPipe | Failure::Signal(_))
     }
 
+    /// Maps an error from creating an output (`what`: "cannot create recording FILE"): the
+    /// signal that ended the wait for a FIFO's reader ([`crate::sink::create_file`]), or an
+    /// output error.
+    pub fn from_create(what: &str, e: &std::io::Error) -> Failure {
+        match crate::signal::Stop::received() {
+            Some(sig) if e.kind() == std::io::ErrorKind::Interrupted => {
+                Failure::Signal(Interrupt::new(sig))
+            }
+            _ => Failure::Output(format!("{what}: {e}")),
+        }
+    }
+
     /// Maps an error from opening or reading an input file.
     pub fn from_input_io(path: &Path, e: &std::io::Error) -> Failure {
         use std::io::ErrorKind::*;
@@ -202,6 +214,21 @@ impl From<crate::row::OutputError> for Failure {
         } else {
             Failure::Output(e.to_string())
         }
+    }
+}
+
+/// Writes `bytes` to standard output for the commands that print (`detect`, `ports`, `man`,
+/// `completions`, `extcap`): a reader that went away (`… | head`) ends busnoop quietly
+/// ([`Failure::BrokenPipe`], 141) as it does for the tables; another error is exit 8.
+pub fn write_stdout(bytes: &[u8]) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(bytes).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
+        Err(e) => Err(Failure::Output(format!(
+            "cannot write to standard output: {e}"
+        ))),
     }
 }
 

@@ -18,8 +18,7 @@
 //!
 //! [`Exporting`] wraps the driver's [`Sink`]: every row goes on to the table unchanged.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io;
 use std::path::{Path, PathBuf};
 
 use chrono::{DateTime, Utc};
@@ -28,7 +27,7 @@ use crate::exit::Failure;
 use crate::pcap::{linktype, write, write_ng};
 use crate::row::{Class, OutputError, Row, RowResult, Unframed};
 use crate::sbus::telegram::{self, AT_REQUEST};
-use crate::sink::{Sink, Tap, Tapped};
+use crate::sink::{Records, Sink, Tap, Tapped};
 use crate::time::Anchor;
 
 /// LINKTYPE_USER1: SAB frames.
@@ -145,7 +144,8 @@ impl SbusWrap {
 /// Writes the export.
 pub struct Exporter {
     path: PathBuf,
-    out: BufWriter<File>,
+    /// Whole blocks only: a full disk leaves the file ending with its last whole block.
+    out: Records,
     link_type: u32,
     interface: (String, String),
     /// Serial S-Bus: re-wrapped as Ether-S-Bus (otherwise the rows' bytes as they are).
@@ -170,12 +170,12 @@ impl Exporter {
         description: &str,
     ) -> Result<Exporter, Failure> {
         let (link_type, _) = check(path, command)?;
-        let file = File::create(path).map_err(|e| {
-            Failure::Output(format!("cannot create export {}: {e}", path.display()))
+        let file = crate::sink::create_file(path).map_err(|e| {
+            Failure::from_create(&format!("cannot create export {}", path.display()), &e)
         })?;
         Ok(Exporter {
             path: path.to_owned(),
-            out: BufWriter::with_capacity(64 * 1024, file),
+            out: Records::file(file),
             link_type,
             interface: (name.to_string(), description.to_string()),
             sbus: (command == "sbus").then(SbusWrap::default),
@@ -214,7 +214,7 @@ impl Exporter {
             Some(&self.interface.0),
             Some(&self.interface.1),
         );
-        self.out.write_all(&head)
+        self.out.record(&head)
     }
 
     /// The packet for `row`, when it carries bytes of a new frame; `unframed`: its content
@@ -252,7 +252,7 @@ impl Exporter {
         };
         self.scratch.clear();
         write_ng::packet(&mut self.scratch, 0, ts, data, comment.as_deref());
-        self.out.write_all(&self.scratch)?;
+        self.out.record(&self.scratch)?;
         self.packets += 1;
         let last = self.last.get_or_insert_with(|| (None, Vec::new()));
         last.0 = row.micros;

@@ -31,6 +31,18 @@
 
 #![deny(clippy::undocumented_unsafe_blocks)]
 
+/// `eprintln!` that never panics. The standard one panics when standard error cannot be
+/// written (`2>/dev/full`, a closed descriptor): a warning in the middle of a run ended it
+/// there, and the final message turned every exit code into 101. busnoop's messages are
+/// advice; a message that cannot be written is lost, and the run goes on with its own exit
+/// code. Defined before the modules, so it shadows the standard macro in all of them.
+macro_rules! eprintln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod cli;
 mod detect;
 mod digits;

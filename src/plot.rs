@@ -6,10 +6,11 @@
 //! number; its moment is a red vertical line in every panel.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
+use crate::exit::Failure;
 use crate::row::{Class, Row};
 
 /// The DejaVu Sans font (Bitstream Vera licence, assets/DejaVuSans-LICENSE.txt) for the PNG's
@@ -25,20 +26,107 @@ pub struct PlotSpec {
     pub title: String,
 }
 
+/// The image formats `busnoop plot` writes, by the file's extension (any case).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ImageFormat {
+    Svg,
+    Png,
+}
+
+impl ImageFormat {
+    fn of(path: &Path) -> Option<ImageFormat> {
+        let ext = path.extension()?.to_str()?;
+        if ext.eq_ignore_ascii_case("svg") {
+            Some(ImageFormat::Svg)
+        } else if ext.eq_ignore_ascii_case("png") {
+            Some(ImageFormat::Png)
+        } else {
+            None
+        }
+    }
+}
+
+const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png";
+
+/// Checks the image's name and folder before the capture is read: the image is drawn only at
+/// the end, and finding then that it cannot be would waste the whole input (a pipe cannot be
+/// read twice). A name without `.svg`/`.png` is a usage error (exit 2), a missing folder an
+/// output error (exit 8) like `-o` into one.
+pub fn check(path: &Path) -> Result<(), Failure> {
+    if ImageFormat::of(path).is_none() {
+        return Err(Failure::Usage(format!(
+            "-o {}: {IMAGE_NAMES}",
+            path.display()
+        )));
+    }
+    crate::sink::check_folder(path)
+}
+
+/// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels
+/// wide, so a plot of more says nothing more.
+const MAX_POINTS: usize = 16_384;
+
+/// At most [`MAX_POINTS`] of a growing sequence, evenly spread over it: when full, every other
+/// one is dropped, and from then on only every second (fourth, …) newcomer is kept. Without a
+/// bound, memory grew with the capture, and a noisy one drew an SVG of gigabytes (a red line per
+/// broken frame).
+#[derive(Debug)]
+struct Thinned<T> {
+    kept: Vec<T>,
+    /// Every `stride`-th value is kept.
+    stride: u64,
+    seen: u64,
+}
+
+impl<T> Default for Thinned<T> {
+    fn default() -> Self {
+        Thinned {
+            kept: Vec::new(),
+            stride: 1,
+            seen: 0,
+        }
+    }
+}
+
+impl<T> Thinned<T> {
+    fn push(&mut self, v: T) {
+        if self.seen.is_multiple_of(self.stride) {
+            self.kept.push(v);
+            if self.kept.len() >= MAX_POINTS {
+                let mut odd = false;
+                self.kept.retain(|_| {
+                    odd = !odd;
+                    odd
+                });
+                self.stride *= 2;
+            }
+        }
+        self.seen += 1;
+    }
+
+    fn is_empty(&self) -> bool {
+        self.kept.is_empty()
+    }
+
+    fn iter(&self) -> std::slice::Iter<'_, T> {
+        self.kept.iter()
+    }
+}
+
 /// One series: its label, unit and points (seconds, value).
 #[derive(Debug, Default)]
 struct Series {
     id: Option<u32>,
     name: String,
     unit: String,
-    points: Vec<(f64, f64)>,
+    points: Thinned<(f64, f64)>,
 }
 
 /// Collects the rows of a capture, then draws them.
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
-    errors: Vec<f64>,
+    errors: Thinned<f64>,
 }
 
 impl Plot {
@@ -46,13 +134,8 @@ impl Plot {
         Plot {
             spec,
             series: Vec::new(),
-            errors: Vec::new(),
+            errors: Thinned::default(),
         }
-    }
-
-    /// The file the plot goes to.
-    pub fn path(&self) -> &std::path::Path {
-        &self.spec.path
     }
 
     pub fn row(&mut self, row: &Row<'_>) {
@@ -76,7 +159,7 @@ impl Plot {
                         id: row.id,
                         name: p.name.to_owned(),
                         unit: p.unit.to_owned(),
-                        points: Vec::new(),
+                        points: Thinned::default(),
                     });
                     self.series.len() - 1
                 }
@@ -97,8 +180,11 @@ impl Plot {
         }
     }
 
-    /// Draws the plot into the spec's file (`.svg` or `.png`). Errors are one-line messages.
-    pub fn draw(&self) -> Result<(), String> {
+    /// Draws the plot into the spec's file (`.svg` or `.png`). Nothing to draw is no failed
+    /// write: a capture without numbers is [`Failure::NothingDecoded`] (exit 10), sensor names it
+    /// does not have a usage error (exit 2, with the names it has); a drawing that cannot be
+    /// written is [`Failure::Output`] (exit 8).
+    pub fn draw(&self) -> Result<(), Failure> {
         let chosen: Vec<(String, &Series)> = self
             .series
             .iter()
@@ -112,41 +198,33 @@ impl Plot {
             let mut seen: Vec<String> = self.series.iter().map(|s| self.label(s)).collect();
             seen.dedup();
             return Err(if seen.is_empty() {
-                "no row of this capture carries a number to plot".into()
+                Failure::NothingDecoded("no row of this capture carries a number to plot".into())
             } else {
-                format!(
+                Failure::Usage(format!(
                     "no number named {} in this capture; it has: {}",
                     self.spec.sensors.join(","),
                     seen.join(",")
-                )
+                ))
             });
         }
-        let ext = self
-            .spec
-            .path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        let format = ImageFormat::of(&self.spec.path).ok_or_else(|| {
+            Failure::Usage(format!("-o {}: {IMAGE_NAMES}", self.spec.path.display()))
+        })?;
         // Both backends measure text with this font (the SVG names it, a viewer draws it).
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-            .map_err(|_| "cannot load the embedded font".to_string())?;
+            .map_err(|_| Failure::Internal("cannot load the embedded font".into()))?;
         let size = (1000, 300 * panels(&chosen).len() as u32 + 60);
-        let r = match ext.as_deref() {
-            Some("svg") => {
+        let r = match format {
+            ImageFormat::Svg => {
                 let root = SVGBackend::new(&self.spec.path, size).into_drawing_area();
                 self.render(root, &chosen)
             }
-            Some("png") => {
+            ImageFormat::Png => {
                 let root = BitMapBackend::new(&self.spec.path, size).into_drawing_area();
                 self.render(root, &chosen)
             }
-            _ => {
-                return Err(
-                    "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png".into(),
-                );
-            }
         };
-        r.map_err(|e| format!("cannot draw {}: {e}", self.spec.path.display()))
+        r.map_err(|e| Failure::Output(format!("cannot draw {}: {e}", self.spec.path.display())))
     }
 
     fn render<DB: DrawingBackend>(
@@ -284,6 +362,40 @@ mod tests {
         text: "20",
         value: 20.0,
     }];
+
+    /// A long or noisy capture: the points of a series and the broken frames' marks are thinned
+    /// evenly to at most [`MAX_POINTS`] each (the image is 1000 pixels wide). They used to be
+    /// kept all: memory grew with the capture, and `busnoop plot /dev/urandom` drew an SVG of
+    /// gigabytes, a red line per broken frame.
+    #[test]
+    fn long_captures_are_thinned_to_a_bounded_plot() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.svg");
+        let mut p = Plot::new(PlotSpec {
+            sensors: vec![],
+            path: path.clone(),
+            title: "t".into(),
+        });
+        let n = 300_000u64;
+        for i in 0..n {
+            p.row(&row(i * 10_000, Class::Plain, ALT1));
+            p.row(&row(i * 10_000 + 5_000, Class::Error, &[]));
+        }
+        let points: Vec<f64> = p.series[0].points.kept.iter().map(|p| p.0).collect();
+        assert!(points.len() <= MAX_POINTS && points.len() > MAX_POINTS / 4);
+        assert!(p.errors.kept.len() <= MAX_POINTS && p.errors.kept.len() > MAX_POINTS / 4);
+        // Evenly spread from the start: equal steps.
+        assert_eq!(points[0], 0.0);
+        let step = points[1] - points[0];
+        assert!(
+            points
+                .windows(2)
+                .all(|w| ((w[1] - w[0]) - step).abs() < 1e-9)
+        );
+        p.draw().unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        assert!(size < 8_000_000, "{size} bytes");
+    }
 
     /// A broken frame's moment is a red vertical line across the panel.
     #[test]

@@ -28,14 +28,14 @@
 //! `--record -` (or a device or FIFO named without an extension) writes the packets as classic
 //! pcap, as `tcpdump -w -` does.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io;
 use std::path::{Path, PathBuf};
 
 use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
 use crate::pcap::{self, Packet, linktype, rtac};
+use crate::sink::Records;
 use crate::time::Anchor;
 
 /// The pcapng `if_description` of a line: `FrSky S.Port, 57600 baud 8N1`.
@@ -56,7 +56,8 @@ pub fn line_description(protocol: &str, line: &crate::protocol::Line) -> String 
 pub struct Recorder {
     /// `None` for standard output.
     path: Option<PathBuf>,
-    out: BufWriter<Box<dyn Write>>,
+    /// Whole records only: a full disk leaves the file ending with its last whole record.
+    out: Records,
     format: RecordFormat,
     content: Content,
     anchor: Option<DateTime<Utc>>,
@@ -188,27 +189,27 @@ impl Recorder {
     /// Creates the recording of `content` (its format checked first, [`format_for`]).
     pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
         let format = format_for(Some(path), content)?;
-        let file = File::create(path).map_err(|e| {
-            Failure::Output(format!("cannot create recording {}: {e}", path.display()))
+        let file = crate::sink::create_file(path).map_err(|e| {
+            Failure::from_create(&format!("cannot create recording {}", path.display()), &e)
         })?;
-        Ok(Self::new(Some(path), Box::new(file), format, content))
+        Ok(Self::new(Some(path), Records::file(file), format, content))
     }
 
     /// Records on standard output (`--record -`): a line's raw bytes, a capture's packets as
     /// classic pcap ([`format_for`]).
     pub fn stdout(content: Content) -> Recorder {
-        Self::new(None, Box::new(io::stdout()), content.on_stdout(), content)
+        Self::new(
+            None,
+            Records::stream(Box::new(io::stdout())),
+            content.on_stdout(),
+            content,
+        )
     }
 
-    fn new(
-        path: Option<&Path>,
-        out: Box<dyn Write>,
-        format: RecordFormat,
-        content: Content,
-    ) -> Recorder {
+    fn new(path: Option<&Path>, out: Records, format: RecordFormat, content: Content) -> Recorder {
         Recorder {
             path: path.map(Path::to_owned),
-            out: BufWriter::with_capacity(64 * 1024, out),
+            out,
             format,
             content,
             anchor: None,
@@ -233,10 +234,13 @@ impl Recorder {
         self.format
     }
 
+    /// A write error as the user sees it. A pipe whose reader went away (standard output, a
+    /// FIFO, `--record >(tshark -r -)` and tshark quit) ends busnoop quietly, as the table's
+    /// and the export's do.
     fn fail(&self, e: io::Error) -> Failure {
         match &self.path {
+            _ if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
             Some(p) => Failure::Output(format!("cannot write recording {}: {e}", p.display())),
-            None if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
             None => Failure::Output(format!(
                 "cannot write the recording to standard output: {e}"
             )),
@@ -276,7 +280,7 @@ impl Recorder {
                 );
             }
         }
-        self.out.write_all(&header).map_err(|e| self.fail(e))?;
+        self.out.record(&header).map_err(|e| self.fail(e))?;
         self.write_record(t, 0, rtac::EVENT_STATUS, start, None)?;
         Ok(())
     }
@@ -289,7 +293,7 @@ impl Recorder {
         }
         self.start(None)?;
         let r = match self.format {
-            RecordFormat::Raw => self.out.write_all(bytes),
+            RecordFormat::Raw => self.out.record(bytes),
             RecordFormat::Pcap | RecordFormat::Pcapng => {
                 let anchor = self.anchor.unwrap_or_else(Utc::now);
                 let micros = micros.unwrap_or(0);
@@ -344,7 +348,7 @@ impl Recorder {
         } else {
             rtac::record(&mut self.scratch, ts, event, data);
         }
-        let r = self.out.write_all(&self.scratch);
+        let r = self.out.record(&self.scratch);
         r.map_err(|e| self.fail(e))
     }
 
@@ -384,7 +388,7 @@ impl Recorder {
             }
             _ => pcap::write::packet(&mut self.scratch, p, nanos),
         }
-        let r = self.out.write_all(&self.scratch);
+        let r = self.out.record(&self.scratch);
         r.map_err(|e| self.fail(e))
     }
 
@@ -453,7 +457,7 @@ impl Recorder {
                 link_type,
                 nanos: false,
             });
-            let r = self.out.write_all(&self.scratch);
+            let r = self.out.record(&self.scratch);
             r.map_err(|e| self.fail(e))?;
         }
         self.flush()

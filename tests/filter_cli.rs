@@ -524,3 +524,34 @@ fn stats_as_json_count_hidden_rows() {
         r.stderr
     );
 }
+
+/// A project file is a few lines of TOML: `--config /dev/zero` (or a huge file, or
+/// `./busnoop.toml` a link to one) is refused after its first MiB, exit 12. It used to be read
+/// whole into memory: /dev/zero grew by 600 MB a second until the machine ran out. The run is
+/// limited to 1 GiB of address space here, so that the old behaviour fails instead of
+/// swapping.
+#[test]
+fn an_endless_project_file_is_refused_without_reading_it_all() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().unwrap();
+    let sport = fixture(SPORT_BIN);
+    let mut cmd = busnoop(dir.path());
+    cmd.arg("sport").arg(&sport).args(["--config", "/dev/zero"]);
+    // SAFETY: only setrlimit in the child before exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let lim = libc::rlimit {
+                rlim_cur: 1 << 30,
+                rlim_max: 1 << 30,
+            };
+            libc::setrlimit(libc::RLIMIT_AS, &lim);
+            Ok(())
+        });
+    }
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(12), "{err}");
+    assert!(err.contains("/dev/zero") && err.contains("1 MiB"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(out.stdout.is_empty());
+}

@@ -148,3 +148,103 @@ fn png_is_written_and_unknown_names_are_listed() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains(".svg or .png"));
 }
+
+/// Nothing to plot is not a failed write: a sensor name the capture does not have is a usage
+/// error (exit 2), a capture without any number has nothing to draw (exit 10), each in one line
+/// without "cannot write to". Both used to be `cannot write to IMAGE: …`, exit 8, the code of a
+/// full disk.
+#[test]
+fn nothing_to_plot_is_not_a_write_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let polls = dir.path().join("polls.bin");
+    std::fs::write(&polls, [0x7E, 0xA1].repeat(100)).unwrap();
+    let log = fixture("edgetx-MODELE24-2014-07-11-sport.log");
+    for (source, extra, code, want) in [
+        (
+            log.as_path(),
+            &["--sensor", "Alt"][..],
+            2,
+            "no number named Alt",
+        ),
+        (
+            polls.as_path(),
+            &["--protocol", "sport"][..],
+            10,
+            "carries a number",
+        ),
+    ] {
+        let out = Command::cargo_bin("busnoop")
+            .unwrap()
+            .arg("plot")
+            .arg(source)
+            .args(extra)
+            .arg("-o")
+            .arg(dir.path().join("x.svg"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{err}");
+        let last = err.lines().last().unwrap();
+        assert!(
+            last.contains(want) && !last.contains("cannot write"),
+            "{err}"
+        );
+        assert!(!dir.path().join("x.svg").exists());
+    }
+}
+
+/// `busnoop plot -` (or a FIFO) without `--protocol`: a pipe can be read only once, so its
+/// protocol cannot be detected before it is plotted. It is refused at once, naming the option.
+/// It used to be detected on the pipe's bytes, which the plot then did not get: `empty input:
+/// standard input holds no bytes` (exit 10), and a FIFO was waited on for a second writer for
+/// ever.
+#[test]
+fn a_pipe_needs_the_protocol_named() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let log = std::fs::read(fixture("edgetx-MODELE24-2014-07-11-sport.log")).unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
+        .args(["plot", "-", "-o"])
+        .arg(dir.path().join("x.svg"))
+        .stdin(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pipe = child.stdin.take().unwrap();
+    // busnoop may refuse before reading: a broken pipe is fine.
+    let _ = pipe.write_all(&log);
+    drop(pipe);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--protocol"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    // A FIFO no one writes to: refused without waiting.
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
+        .arg("plot")
+        .arg(&fifo)
+        .arg("-o")
+        .arg(dir.path().join("y.svg"))
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("busnoop plot FIFO waited");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

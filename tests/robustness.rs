@@ -330,6 +330,100 @@ fn output_file_that_fills_up_ends_with_a_whole_row() {
     assert!(n > 500, "rows decoded so far are kept: {n}");
 }
 
+/// The lengths of the records of a classic pcap (`pcapng`: of the blocks), or the byte where
+/// the file ends inside one.
+fn whole_records(bytes: &[u8], pcapng: bool) -> Result<usize, usize> {
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    let (mut at, mut n) = (if pcapng { 0 } else { 24 }, 0);
+    while at < bytes.len() {
+        let len = match (pcapng, bytes.len() - at) {
+            (true, left) if left >= 12 => u32_at(at + 4),
+            (false, left) if left >= 16 => 16 + u32_at(at + 8),
+            _ => return Err(at),
+        };
+        if len < 12 || at + len > bytes.len() {
+            return Err(at);
+        }
+        at += len;
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// A recording or an export on a disk that fills up during the run ends with its last whole
+/// record, like the table ends with its last whole row; it replays without a warning. Both
+/// used to end inside a record (Wireshark: "cut short in the middle of a packet").
+#[test]
+fn recording_and_export_that_fill_up_end_with_a_whole_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..20_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0300,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    for (option, name) in [
+        ("--record", "r.pcap"),
+        ("--record", "r.pcapng"),
+        ("--export", "e.pcapng"),
+    ] {
+        let file = dir.path().join(name);
+        let mut cmd = busnoop();
+        cmd.arg("sport")
+            .arg(&big)
+            .arg(option)
+            .arg(&file)
+            .args(["-o", "/dev/null"]);
+        // SAFETY: only signal() and setrlimit() in the child before exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                let lim = libc::rlimit {
+                    rlim_cur: 100_000,
+                    rlim_max: 100_000,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let out = cmd.output().unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{name}: {err}");
+        assert!(err.contains(&file.display().to_string()), "{err}");
+        let written = std::fs::read(&file).unwrap();
+        assert!(written.len() <= 100_000, "{name}: {}", written.len());
+        let records = whole_records(&written, name.ends_with("pcapng"));
+        assert!(
+            records.is_ok_and(|n| n > 10),
+            "{name}: {records:?} of {} bytes",
+            written.len()
+        );
+        if option == "--record" {
+            let out = busnoop()
+                .arg("sport")
+                .arg(&file)
+                .args(["-o", "/dev/null"])
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(0), "{name}");
+            assert!(
+                !text(&out.stderr).contains("cut short"),
+                "{}",
+                text(&out.stderr)
+            );
+        }
+    }
+}
+
 #[test]
 fn recording_to_a_full_disk() {
     let out = busnoop()
@@ -628,4 +722,151 @@ fn output_to_a_capture_name_points_to_record() {
         )
     );
     assert!(!target.exists(), "nothing is created");
+}
+
+/// Standard error on a full disk (`2>/dev/full`) or closed (`2>&-`): the messages are lost, but
+/// the run ends with its own exit code. Every message used to panic there (exit 101), a
+/// warning in the middle of a run ending it.
+#[test]
+fn a_full_or_closed_stderr_keeps_the_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let random = dir.path().join("random.bin");
+    std::fs::write(&random, noise(5000, 7)).unwrap();
+    let sample = fixture("sport-sample.bin");
+    let table = dir.path().join("table.tsv");
+    let runs: [(Vec<&std::ffi::OsStr>, i32); 5] = [
+        // Warnings and the problems line, then "no S.Port frame".
+        (vec!["sport".as_ref(), random.as_os_str()], 10),
+        (vec!["sport".as_ref(), "/no/such/capture".as_ref()], 3),
+        (
+            vec![
+                "sport".as_ref(),
+                sample.as_os_str(),
+                "--stats".as_ref(),
+                "-o".as_ref(),
+                table.as_os_str(),
+            ],
+            0,
+        ),
+        (vec!["detect".as_ref(), random.as_os_str()], 11),
+        (
+            vec![
+                "sport".as_ref(),
+                "-".as_ref(),
+                "--wide".as_ref(),
+                "-f".as_ref(),
+                "jsonl".as_ref(),
+            ],
+            2,
+        ),
+    ];
+    for (args, code) in runs {
+        for closed in [false, true] {
+            let mut cmd = busnoop();
+            cmd.args(&args).stdout(Stdio::null()).stdin(Stdio::null());
+            if closed {
+                // SAFETY: only closes a descriptor in the child before exec.
+                unsafe {
+                    cmd.pre_exec(|| {
+                        libc::close(2);
+                        Ok(())
+                    });
+                }
+            } else {
+                cmd.stderr(std::fs::File::create("/dev/full").unwrap());
+            }
+            let out = cmd.output().unwrap();
+            assert_eq!(
+                out.status.code(),
+                Some(code),
+                "{args:?}, stderr closed: {closed}"
+            );
+        }
+    }
+    // The table is whole: the --stats run wrote every row.
+    assert_eq!(text(&std::fs::read(&table).unwrap()).lines().count(), 31);
+}
+
+/// A character device that is not a terminal is read as a file, /dev/urandom as well as
+/// /dev/zero: its terminal ioctl fails with EINVAL rather than ENOTTY, and busnoop took it for a
+/// serial port it could not open (`cannot open the serial port: tcgetattr: Invalid argument`,
+/// exit 6).
+#[test]
+fn dev_urandom_is_read_as_a_file() {
+    if !std::path::Path::new("/dev/urandom").exists() {
+        return;
+    }
+    let out = busnoop().args(["detect", "/dev/urandom"]).output().unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(11), "{err}");
+    assert!(
+        text(&out.stdout).contains("2097"),
+        "2 MiB examined: {}",
+        text(&out.stdout)
+    );
+    // The decoders read it until Ctrl-C.
+    let child = busnoop()
+        .args(["sport", "/dev/urandom", "-f", "tsv"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    // SAFETY: kill() sends a signal to our own child; no memory is involved.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let out = child.wait_with_output().unwrap();
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).lines().count() > 100);
+}
+
+/// `busnoop detect /dev/zero` reads it as a file: stderr does not claim that busnoop listens to
+/// it at nine baud rates (it used to, before finding out it is no terminal).
+#[test]
+fn detect_on_a_device_that_is_no_terminal_does_not_claim_to_listen() {
+    let out = busnoop().args(["detect", "/dev/zero"]).output().unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(11), "{err}");
+    assert!(!err.contains("listening"), "{err}");
+    assert!(
+        text(&out.stdout).contains("/dev/zero: raw bytes"),
+        "{}",
+        text(&out.stdout)
+    );
+}
+
+/// Every command that prints on standard output ends quietly with 141 when the reader went
+/// away: `busnoop extcap --extcap-interfaces` into a closed pipe used to say `cannot write to
+/// standard output: Broken pipe` with exit 8, unlike `detect`, `ports`, `man` and the tables.
+#[test]
+fn every_command_on_a_closed_pipe_is_quiet() {
+    for args in [
+        &["extcap", "--extcap-interfaces"][..],
+        &[
+            "extcap",
+            "--extcap-interface",
+            "busnoop-sport",
+            "--extcap-dlts",
+        ][..],
+        &["man"][..],
+        &["completions", "bash"][..],
+    ] {
+        let mut fds = [0; 2];
+        // SAFETY: pipe() fills the two descriptors; the read end is closed at once, the write
+        // end handed to the child as its standard output (and closed here by the File).
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        unsafe { libc::close(fds[0]) };
+        let write_end = unsafe { <std::fs::File as std::os::fd::FromRawFd>::from_raw_fd(fds[1]) };
+        let out = busnoop().args(args).stdout(write_end).output().unwrap();
+        no_panic(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(141),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        assert_eq!(text(&out.stderr), "", "{args:?}");
+    }
 }

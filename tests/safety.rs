@@ -423,6 +423,56 @@ fn output_to_dev_stdout_closed_by_the_reader_exits_quietly() {
     assert_eq!(text(&out.stderr), "");
 }
 
+/// A recording into a pipe whose reader goes away (`--record FIFO`, `--record >(tshark -r -)`
+/// and tshark quits) ends like the table's and the export's pipe: quietly, 141. It used to be
+/// `cannot write recording …: Broken pipe`, exit 8.
+#[test]
+fn a_recording_pipe_closed_by_the_reader_exits_quietly() {
+    use std::io::Read;
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.bin");
+    let mut bytes = Vec::new();
+    for i in 0..100_000u32 {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            0x0100,
+            i,
+        );
+    }
+    std::fs::write(&big, bytes).unwrap();
+    let fifo = dir.path().join("r.pcap");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut head = [0u8; 100];
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_exact(&mut head)
+                .unwrap();
+            head
+        })
+    };
+    let out = output_within_10s(
+        busnoop()
+            .arg("sport")
+            .arg(&big)
+            .arg("--record")
+            .arg(&fifo)
+            .args(["-o", "/dev/null"]),
+        None,
+        Stdio::null(),
+    );
+    let head = reader.join().unwrap();
+    assert_eq!(&head[2..4], &[0xb2, 0xa1], "a pcap header");
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(141), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stderr), "");
+}
+
 #[test]
 fn the_capture_extension_guard_ignores_case() {
     let dir = tempfile::tempdir().unwrap();
@@ -540,6 +590,11 @@ fn numeric_options_out_of_range_are_refused() {
     out_of_range(&["sbus", "--udp-port", "0"], "1..=65535");
     out_of_range(&["sbus", "--port", "0"], "1..=65535");
     out_of_range(&["sab2", "--max-payload", "0"], "1..=255");
+    // --speed: 0, or 0.001 to 1000. A tiny speed (1e-300) panicked turning the first delay
+    // into a Duration; 1e-10 would wait centuries per second of capture.
+    for s in ["1e-300", "1e-10", "0.0009", "-1", "1001", "NaN"] {
+        out_of_range(&["sport", &format!("--speed={s}")], "0.001 to 1000");
+    }
     for cmd in ["sport", "sbus", "sab2"] {
         for b in ["0", "49", "12000001", "99999999999"] {
             out_of_range(&[cmd, "--baud", b], "50..=12000000");
@@ -616,4 +671,257 @@ fn time_going_back_in_an_edgetx_log_is_a_row_and_keeps_the_logged_time() {
     assert!(times[0].contains("22:41:05.000"), "{times:?}");
     assert!(times[3].contains("22:41:01.000"), "{times:?}");
     assert!(times[4].contains("22:41:01.012"), "{times:?}");
+}
+
+/// `--export` is an output like `-o` and `--record`: compared with them as files, not as
+/// names (`--record x.pcapng --export ./x.pcapng` used to write both into one file, the
+/// recording's blocks and the export's interleaved), and the message names `--export`.
+#[test]
+fn export_onto_the_recording_or_the_table_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let x = dir.path().join("x.pcapng");
+    // X does not exist yet: two spellings of one name (`Path`'s `==` would see through a
+    // `.`, not through `sub/..`).
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("--export")
+        .arg(dir.path().join("sub/../x.pcapng"))
+        .args(["-o", "/dev/null"])
+        .output()
+        .unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--export") && err.contains("same file"),
+        "{err}"
+    );
+    assert!(!x.exists(), "nothing is created");
+    // X exists, named through a symbolic link.
+    std::fs::write(&x, b"keep").unwrap();
+    let link = dir.path().join("link.pcapng");
+    std::os::unix::fs::symlink(&x, &link).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--record")
+        .arg(&x)
+        .arg("--export")
+        .arg(&link)
+        .args(["-o", "/dev/null"])
+        .output()
+        .unwrap();
+    refused(&out, &x, b"keep");
+    assert!(text(&out.stderr).contains("--export"));
+    // Standard output appended to the export: the message names --export, not --record.
+    let stdout = std::fs::OpenOptions::new().append(true).open(&x).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("--export")
+        .arg(&x)
+        .stdout(stdout)
+        .output()
+        .unwrap();
+    refused(&out, &x, b"keep");
+    let err = text(&out.stderr);
+    assert!(err.contains("standard output and --export"), "{err}");
+}
+
+/// An output named through a symbolic link whose target does not exist yet is created at the
+/// target: `-o out.csv --record r.pcap` with `out.csv -> r.pcap` used to pass the check (a
+/// dangling link had no name to compare) and wrote the table into the recording.
+#[test]
+fn outputs_meeting_through_a_dangling_link_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, bytes) = capture(dir.path(), "cap");
+    let rec = dir.path().join("r.pcap");
+    let link = dir.path().join("out.csv");
+    std::os::unix::fs::symlink("r.pcap", &link).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&link)
+        .arg("--record")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    assert!(!rec.exists(), "nothing is created");
+    // A chain of links, the last one dangling, to the export.
+    let hop = dir.path().join("hop.pcapng");
+    std::os::unix::fs::symlink("e.pcapng", &hop).unwrap();
+    let first = dir.path().join("first.csv");
+    std::os::unix::fs::symlink(&hop, &first).unwrap();
+    let out = busnoop()
+        .arg("sport")
+        .arg(&cap)
+        .arg("-o")
+        .arg(&first)
+        .arg("--export")
+        .arg(dir.path().join("e.pcapng"))
+        .output()
+        .unwrap();
+    refused(&out, &cap, &bytes);
+    assert!(!dir.path().join("e.pcapng").exists(), "nothing is created");
+}
+
+/// `busnoop plot`'s image name and folder are checked before the capture is read: they used
+/// to be checked only when the image was drawn, after the whole input (a pipe, a FIFO, a long
+/// capture) had been decoded, and a wrong extension was exit code 8. Here the input is a FIFO
+/// no one writes to: reading it would wait for ever.
+#[test]
+fn a_plot_checks_its_image_name_before_reading_the_capture() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let plot = |image: PathBuf| {
+        output_within_10s(
+            busnoop()
+                .arg("plot")
+                .arg(&fifo)
+                .args(["--protocol", "sport", "-o"])
+                .arg(image),
+            None,
+            Stdio::piped(),
+        )
+    };
+    let out = plot(dir.path().join("flight.txt"));
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(".svg or .png"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let out = plot(dir.path().join("no-such-folder").join("flight.svg"));
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(8), "{err}");
+    assert!(
+        err.contains("no-such-folder") && err.contains("No such file or directory"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+/// An output into a folder that does not exist is refused before any output is created: a
+/// typo in `-o` used to fail only after the recording and the export had been created (and an
+/// existing recording of that name emptied), a typo in `--record` after the table had.
+#[test]
+fn an_output_into_a_missing_folder_creates_no_other_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let missing = dir.path().join("no-such-folder");
+    let rec = dir.path().join("r.pcap");
+    std::fs::write(&rec, b"keep").unwrap();
+    let export = dir.path().join("e.pcapng");
+    let table = dir.path().join("t.csv");
+    let runs: [(&str, PathBuf, &str, PathBuf, &str, PathBuf); 3] = [
+        (
+            "-o",
+            missing.join("t.csv"),
+            "--record",
+            rec.clone(),
+            "--export",
+            export.clone(),
+        ),
+        (
+            "-o",
+            table.clone(),
+            "--record",
+            missing.join("r.pcap"),
+            "--export",
+            export.clone(),
+        ),
+        (
+            "-o",
+            table.clone(),
+            "--record",
+            rec.clone(),
+            "--export",
+            missing.join("e.pcapng"),
+        ),
+    ];
+    for (o, a, r, b, e, c) in runs {
+        let out = busnoop()
+            .arg("sport")
+            .arg(&cap)
+            .args([
+                o.as_ref(),
+                a.as_os_str(),
+                r.as_ref(),
+                b.as_os_str(),
+                e.as_ref(),
+                c.as_os_str(),
+            ])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{err}");
+        assert!(
+            err.contains("no-such-folder") && err.contains("No such file"),
+            "{err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(
+            std::fs::read(&rec).unwrap(),
+            b"keep",
+            "the recording was emptied"
+        );
+        assert!(
+            !export.exists() && !table.exists(),
+            "an output was created: {err}"
+        );
+    }
+}
+
+/// The project file is an input too: `-o busnoop.toml` (the one in the current folder, read
+/// without being named), `--config my.toml -o my.toml`, or a link to it, used to overwrite it
+/// with the table (a note said only that .toml is no table format).
+#[test]
+fn output_onto_the_project_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cap, _) = capture(dir.path(), "cap");
+    let project = b"[sport]\nnames = { Rx = 24 }\n";
+    let toml = dir.path().join("busnoop.toml");
+    std::fs::write(&toml, project).unwrap();
+    let link = dir.path().join("notes.txt");
+    std::os::unix::fs::symlink("busnoop.toml", &link).unwrap();
+    let mine = dir.path().join("my.toml");
+    std::fs::write(&mine, project).unwrap();
+    let runs: [(Vec<&OsStr>, &Path); 3] = [
+        (vec!["-o".as_ref(), "busnoop.toml".as_ref()], &toml),
+        (vec!["-o".as_ref(), link.as_os_str()], &toml),
+        (
+            vec![
+                "--config".as_ref(),
+                mine.as_os_str(),
+                "-o".as_ref(),
+                "./my.toml".as_ref(),
+            ],
+            &mine,
+        ),
+    ];
+    for (args, file) in runs {
+        let out = busnoop()
+            .current_dir(dir.path())
+            .arg("sport")
+            .arg(&cap)
+            .args(&args)
+            .output()
+            .unwrap();
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("project file"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read(file).unwrap(), project, "{args:?}");
+    }
 }

@@ -171,6 +171,67 @@ fn a_fifo_without_a_writer_ends_on_a_signal() {
     }
 }
 
+/// An output FIFO no one reads (`-o FIFO`, `--record FIFO`, `--export FIFO`): busnoop waits for
+/// a reader, and SIGINT/SIGTERM end the wait at once. A plain open() waits inside the kernel,
+/// where the handlers cannot end it: only a second signal (or SIGKILL) did.
+#[test]
+fn an_output_fifo_without_a_reader_ends_on_a_signal() {
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sport-sample.bin");
+    for (option, name) in [
+        ("-o", "table"),
+        ("--record", "rec.pcap"),
+        ("--export", "frames.pcapng"),
+    ] {
+        for (sig, code) in [(libc::SIGTERM, 143), (libc::SIGINT, 130)] {
+            let dir = tempfile::tempdir().unwrap();
+            let fifo = dir.path().join(name);
+            mkfifo(&fifo);
+            let mut cmd = busnoop();
+            cmd.arg("sport").arg(&sample).arg(option).arg(&fifo);
+            if option != "-o" {
+                cmd.args(["-o", "/dev/null"]);
+            }
+            let child = cmd.spawn().unwrap();
+            let mut guard = Guard(child);
+            wait_for_handlers(&guard.0);
+            std::thread::sleep(Duration::from_millis(200));
+            assert!(guard.0.try_wait().unwrap().is_none(), "{option}: no wait");
+            let (status, err) = signal_and_wait(&mut guard, sig, STOP_WITHIN);
+            assert_eq!(status.code(), Some(code), "{option}, signal {sig}: {err}");
+            assert!(!err.contains("panick"), "{err}");
+        }
+    }
+}
+
+/// `busnoop detect -` on a slow pipe (`cat /dev/ttyUSB0 | busnoop detect -`) waits for 2 MiB;
+/// Ctrl-C gives the evidence and the verdict on what arrived, says so, and exits 130. It used
+/// to end with nothing at all on either output.
+#[test]
+fn ctrl_c_during_detect_on_a_slow_pipe_gives_the_verdict_so_far() {
+    let sample =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sport-sample.bin"))
+            .unwrap();
+    let child = busnoop()
+        .args(["detect", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut guard = Guard(child);
+    let mut pipe = guard.0.stdin.take().unwrap();
+    pipe.write_all(&sample).unwrap();
+    wait_for_handlers(&guard.0);
+    std::thread::sleep(Duration::from_millis(300));
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGINT, STOP_WITHIN);
+    drop(pipe);
+    let mut out = String::new();
+    std::io::Read::read_to_string(guard.0.stdout.as_mut().unwrap(), &mut out).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(out.contains("220 bytes examined"), "{out}");
+    assert!(out.contains("verdict: S.Port"), "{out}");
+    assert!(err.contains("interrupted after 220 bytes"), "{err}");
+}
+
 #[test]
 fn a_fifo_waits_for_its_writer_and_ends_when_the_writer_closes() {
     let dir = tempfile::tempdir().unwrap();

@@ -288,3 +288,49 @@ fn sbus_media_are_columns() {
         .expect("R1 written with 181");
     assert!(r1[..at].iter().all(|v| *v == "100"), "{r1:?}");
 }
+
+/// The format check of `--wide` comes before anything is opened for writing: `--wide -o
+/// x.jsonl --record r.pcap` used to empty both files (and open the input, a serial port
+/// included) before refusing.
+#[test]
+fn wide_in_another_format_is_refused_before_any_file_is_touched() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("x.jsonl");
+    let rec = dir.path().join("r.pcap");
+    let export = dir.path().join("e.pcapng");
+    for p in [&table, &rec, &export] {
+        std::fs::write(p, b"keep").unwrap();
+    }
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .arg("--wide")
+        .arg("-o")
+        .arg(&table)
+        .arg("--record")
+        .arg(&rec)
+        .arg("--export")
+        .arg(&export)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--wide writes CSV or TSV"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for p in [&table, &rec, &export] {
+        assert_eq!(
+            std::fs::read(p).unwrap(),
+            b"keep",
+            "{} was changed",
+            p.display()
+        );
+    }
+    // Nor is a missing input looked for first: the usage error is the answer.
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .args(["sport", "/no/such/capture", "--wide", "-f", "jsonl"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

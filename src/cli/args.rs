@@ -80,7 +80,8 @@ pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "extcap", "comp
 /// `busnoop plot`.
 #[derive(Args, Debug, Clone)]
 pub struct PlotArgs {
-    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-`.
+    /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-` (a
+    /// pipe, like a FIFO, needs --protocol: it can be read only once).
     pub source: PathBuf,
     /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
     /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
@@ -89,7 +90,7 @@ pub struct PlotArgs {
     /// The image to write: FILE.svg or FILE.png.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
-    /// The protocol [default: detected as by `busnoop detect`].
+    /// The protocol [default: detected as by `busnoop detect`; required for `-` and FIFOs].
     #[arg(long, value_name = "NAME", value_parser = ["sport", "sbus", "sab2"])]
     pub protocol: Option<String>,
 }
@@ -408,11 +409,16 @@ pub struct OutputArgs {
     pub plot: Option<crate::plot::PlotSpec>,
 }
 
-/// `--speed`: a number from 0 to 1000.
+/// `--speed`: 0, or a number from 0.001 to 1000. Below a thousandth of real time the pacer's
+/// delays grow past what a `Duration` holds (`--speed 1e-300` panicked) or past any replay
+/// (`1e-10`: three centuries per second of capture).
 fn parse_speed(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if (0.0..=1000.0).contains(&v) => Ok(v),
-        _ => Err("expected a number from 0 (as fast as possible) to 1000 (1 = real time)".into()),
+        Ok(v) if v == 0.0 || (0.001..=1000.0).contains(&v) => Ok(v),
+        _ => Err(
+            "expected 0 (as fast as possible) or a number from 0.001 to 1000 (1 = real time)"
+                .into(),
+        ),
     }
 }
 
@@ -422,14 +428,20 @@ impl OutputArgs {
         self.output.as_deref().filter(|p| !is_dash(p))
     }
 
-    /// The table options for an output that is (or is not) a terminal, given whether the
-    /// `NO_COLOR` environment variable is set to a non-empty value.
-    pub(super) fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
-        let format = self.format.unwrap_or_else(|| match self.output_file() {
+    /// The table's format: `--format`, else `-o`'s extension, else pretty on a terminal and
+    /// TSV elsewhere.
+    pub(super) fn table_format(&self, to_terminal: bool) -> Format {
+        self.format.unwrap_or_else(|| match self.output_file() {
             Some(p) => Format::from_path(p).unwrap_or(Format::Tsv),
             None if to_terminal => Format::Pretty,
             None => Format::Tsv,
-        });
+        })
+    }
+
+    /// The table options for an output that is (or is not) a terminal, given whether the
+    /// `NO_COLOR` environment variable is set to a non-empty value.
+    pub(super) fn table_options(&self, to_terminal: bool, no_color_env: bool) -> TableOptions {
+        let format = self.table_format(to_terminal);
         let color = format == Format::Pretty
             && match self.color {
                 ColorChoice::Always => true,

@@ -7,7 +7,6 @@
 //! per frame into Wireshark's FIFO (the link types of [`crate::export`]), until Wireshark stops
 //! it (SIGTERM).
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -211,9 +210,7 @@ pub fn run(args: &ExtcapArgs) -> Result<(), Failure> {
         .map(|p| p.name)
         .collect();
     let text = describe(args, &ports)?;
-    std::io::stdout()
-        .write_all(text.as_bytes())
-        .map_err(|e| Failure::Output(format!("cannot write to standard output: {e}")))
+    crate::exit::write_stdout(text.as_bytes())
 }
 
 #[cfg(test)]

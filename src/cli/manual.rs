@@ -1,7 +1,6 @@
 //! `busnoop completions SHELL` and `busnoop man`: the shell completion scripts and the manual
 //! pages, generated from the command-line definition itself so they never drift from it.
 
-use std::io::Write;
 use std::path::Path;
 
 use clap::CommandFactory;
@@ -13,7 +12,7 @@ pub fn completions(shell: clap_complete::Shell) -> Result<(), Failure> {
     let mut cmd = crate::cli::Cli::command();
     let mut buf = Vec::new();
     clap_complete::generate(shell, &mut cmd, "busnoop", &mut buf);
-    write_stdout(&buf)
+    crate::exit::write_stdout(&buf)
 }
 
 /// The manual page of busnoop(1) in roff: every subcommand with its options (the pages of
@@ -31,7 +30,7 @@ pub fn man_page() -> Result<Vec<u8>, Failure> {
 /// (busnoop.1, busnoop-sport.1, …) written into that directory.
 pub fn man(dir: Option<&Path>) -> Result<(), Failure> {
     match dir {
-        None => write_stdout(&man_page()?),
+        None => crate::exit::write_stdout(&man_page()?),
         Some(d) => man_to_dir(d),
     }
 }
@@ -49,17 +48,6 @@ pub fn man_to_dir(dir: &Path) -> Result<(), Failure> {
     clap_mangen::generate_to(crate::cli::Cli::command(), dir)
         .map_err(|e| Failure::Output(format!("cannot write to {}: {e}", dir.display())))?;
     Ok(())
-}
-
-fn write_stdout(bytes: &[u8]) -> Result<(), Failure> {
-    let mut out = std::io::stdout().lock();
-    match out.write_all(bytes).and_then(|()| out.flush()) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot write to standard output: {e}"
-        ))),
-    }
 }
 
 #[cfg(test)]

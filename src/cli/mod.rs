@@ -87,9 +87,22 @@ fn init_tracing(verbose: u8) {
 
 /// `busnoop plot`: the protocol's command with its rows going to a plot.
 fn plot(a: &PlotArgs) -> Result<(), Failure> {
+    crate::plot::check(&a.output)?;
     let (command, extra): (&str, &[&str]) = match &a.protocol {
         Some(p) => (p.as_str(), &[]),
         None => {
+            // Detection reads the input's start, then the plot reads the input again: a pipe
+            // (standard input, a FIFO) would have given its bytes to the detection only.
+            use std::os::unix::fs::FileTypeExt;
+            let pipe = is_dash(&a.source)
+                || std::fs::metadata(&a.source).is_ok_and(|m| m.file_type().is_fifo());
+            if pipe {
+                return Err(Failure::Usage(format!(
+                    "busnoop plot {}: a pipe can be read only once, so its protocol cannot be \
+                     detected before it is plotted; name it with --protocol sport|sbus|sab2",
+                    a.source.display()
+                )));
+            }
             let (p, args) = crate::detect::protocol_of(&a.source)?;
             (p.command, args)
         }
@@ -269,6 +282,7 @@ pub fn run_capture(
         ));
     }
     check_top(args, record_to_stdout)?;
+    check_wide(&args.output)?;
     // The clash with the input first: the capture-name hint below would point at it again.
     // The table's file is the image for `busnoop plot`.
     let input = Input::parse(&args.source);
@@ -276,20 +290,30 @@ pub fn run_capture(
         Some(p) => Some(p.path.as_path()),
         None => args.output.output_file(),
     };
-    check_distinct(&input, table_file, args.live.record.as_deref())?;
+    check_distinct(
+        &input,
+        table_file,
+        args.live.record.as_deref(),
+        args.live.export.as_deref(),
+        project::File::path(&args.select).as_deref(),
+    )?;
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
     if let Some(p) = args.live.export.as_deref() {
         crate::export::check(p, protocol.command)?;
-        // The export is neither the input nor the table (nor the recording).
-        check_distinct(&input, table_file, Some(p))?;
-        if args.live.record.as_deref() == Some(p) {
-            return Err(Failure::Usage(format!(
-                "--record and --export name the same file {}",
-                p.display()
-            )));
-        }
+    }
+    // A missing folder in any output name, before the input is opened or any output created.
+    for p in [
+        table_file,
+        args.live.record.as_deref(),
+        args.live.export.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .filter(|p| !is_dash(p))
+    {
+        crate::sink::check_folder(p)?;
     }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
@@ -380,8 +404,9 @@ pub fn run_capture(
         (true, None) => None,
         (_, file) => {
             let output = match file {
-                Some(p) => Output::create(p)
-                    .map_err(|e| Failure::Output(format!("cannot create {}: {e}", p.display())))?,
+                Some(p) => Output::create(p).map_err(|e| {
+                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
+                })?,
                 None => Output::stdout(),
             };
             let to_terminal = file.is_none() && std::io::stdout().is_terminal();
@@ -396,12 +421,7 @@ pub fn run_capture(
                 table.set_plot(p.clone());
             }
             if out.wide {
-                let format = out.table_options(to_terminal, no_color_env).format;
-                if !matches!(format, Format::Csv | Format::Tsv) {
-                    return Err(Failure::Usage(
-                        "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
-                    ));
-                }
+                // CSV or TSV: check_wide refused the others before anything was opened.
                 let step = match out.every {
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
                     None => crate::sink::wide::Step::PollCycle,
@@ -527,6 +547,16 @@ pub fn run_capture(
             Advice::NothingDecoded(m) => return Err(Failure::NothingDecoded(m)),
         }
     }
+    // `busnoop plot`: drawn once the input is read, also after Ctrl-C (what was read so far),
+    // whose exit code then stays.
+    if let Some(plot) = table.as_mut().and_then(Table::take_plot)
+        && let Err(f) = plot.draw()
+    {
+        if result.is_ok() {
+            return Err(f);
+        }
+        eprintln!("busnoop: {f}");
+    }
     result
 }
 
@@ -589,6 +619,24 @@ fn check_top(args: &CaptureArgs, record_to_stdout: bool) -> Result<(), Failure> 
     Ok(())
 }
 
+/// `--wide` writes CSV or TSV. Checked with the other usage errors, before the input is opened
+/// and before anything is opened for writing: found later, the table file, the recording and
+/// the export had already been emptied. With `--top` and no `-o` there is no table to widen.
+fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
+    let file = out.output_file();
+    if !out.wide || (out.top && file.is_none()) {
+        return Ok(());
+    }
+    let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+    if matches!(out.table_format(to_terminal), Format::Csv | Format::Tsv) {
+        Ok(())
+    } else {
+        Err(Failure::Usage(
+            "--wide writes CSV or TSV; add -f csv (or -o FILE.csv)".into(),
+        ))
+    }
+}
+
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
 /// also hands on up to this many of its input bytes (for `--record`, the wrong-protocol check).
 fn open_source(
@@ -648,18 +696,7 @@ fn list_ports() -> Result<(), Failure> {
             p.by_id.map(|b| b.display().to_string()).unwrap_or_default()
         ));
     }
-    use std::io::Write;
-    let mut stdout = std::io::stdout().lock();
-    match stdout
-        .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush())
-    {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot write to standard output: {e}"
-        ))),
-    }
+    crate::exit::write_stdout(text.as_bytes())
 }
 
 /// Set for a capture Wireshark runs (`busnoop extcap --capture`): Wireshark shows whatever an

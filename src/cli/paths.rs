@@ -45,9 +45,12 @@ impl FileId {
         match std::fs::metadata(p) {
             Ok(m) => FileId::of_metadata(&m, devices),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                // A dangling symlink would be created at its target: no name to compare.
-                if std::fs::symlink_metadata(p).is_ok() {
-                    return None;
+                // A dangling symlink is created at its target (relative to the link's
+                // directory): `-o out.csv` with `out.csv -> r.pcap` writes r.pcap. A loop of
+                // links is ELOOP, not NotFound, so this ends.
+                if let Ok(target) = std::fs::read_link(p) {
+                    let base = p.parent().unwrap_or(Path::new(""));
+                    return FileId::of_path(&base.join(target), devices);
                 }
                 let name = p.file_name()?;
                 let dir = match p.parent() {
@@ -82,15 +85,20 @@ fn is_dev_null(m: &std::fs::Metadata) -> bool {
     std::fs::metadata("/dev/null").is_ok_and(|null| null.rdev() == m.rdev())
 }
 
-/// Refuses, before anything is opened for writing, an output (`-o`, standard output) or a
-/// recording that is the input itself: the input file (by device and inode: symlinks, hard
-/// links and `- < file` included), the pipe or FIFO it comes through (`… | busnoop sport - -o
-/// /dev/stdin` would feed busnoop its own rows and never end), or the serial port it listens
-/// to (writing there would send on the bus). Also an output and a recording that are one file.
+/// Refuses, before anything is opened for writing, an output (`-o`, standard output), a
+/// recording or an export that is the input itself: the input file (by device and inode:
+/// symlinks, hard links and `- < file` included), the pipe or FIFO it comes through (`… |
+/// busnoop sport - -o /dev/stdin` would feed busnoop its own rows and never end), or the serial
+/// port it listens to (writing there would send on the bus). Also two of the outputs that are
+/// one file, however they are named (`--record x.pcapng --export ./x.pcapng` would interleave
+/// the two), and an output that is the project file the run reads (`project`: `-o
+/// busnoop.toml`).
 pub(super) fn check_distinct(
     input: &Input,
     output: Option<&Path>,
     record: Option<&Path>,
+    export: Option<&Path>,
+    project: Option<&Path>,
 ) -> Result<(), Failure> {
     use std::os::fd::AsFd;
     // A serial port is compared with the outputs by its device number: writing there would
@@ -111,20 +119,28 @@ pub(super) fn check_distinct(
             format!("the input {}", p.display()),
         ),
     };
-    let (out, out_name) = match output {
+    let mut outputs = vec![match output {
         Some(p) => (FileId::of_path(p, devices), format!("-o {}", p.display())),
         None => (stdout_id(), "standard output".to_string()),
-    };
-    let (rec, rec_name) = match record {
-        Some(p) if is_dash(p) => (stdout_id(), "--record - (standard output)".to_string()),
-        Some(p) => (
+    }];
+    match record {
+        Some(p) if is_dash(p) => {
+            outputs.push((stdout_id(), "--record - (standard output)".to_string()));
+        }
+        Some(p) => outputs.push((
             FileId::of_path(p, devices),
             format!("--record {}", p.display()),
-        ),
-        None => (None, String::new()),
-    };
+        )),
+        None => {}
+    }
+    if let Some(p) = export {
+        outputs.push((
+            FileId::of_path(p, devices),
+            format!("--export {}", p.display()),
+        ));
+    }
     let same = |a: &Option<FileId>, b: &Option<FileId>| a.is_some() && a == b;
-    for (id, name) in [(&out, &out_name), (&rec, &rec_name)] {
+    for (id, name) in &outputs {
         if let Some(s) = source.as_ref().filter(|_| same(&source, id)) {
             return Err(Failure::Usage(format!(
                 "{name} is the same file as {source_name}: writing it would {}; write \
@@ -133,12 +149,26 @@ pub(super) fn check_distinct(
             )));
         }
     }
+    if let Some(p) = project {
+        let id = FileId::of_path(p, false);
+        if let Some((_, name)) = outputs.iter().find(|(o, _)| same(&id, o)) {
+            return Err(Failure::Usage(format!(
+                "{name} is the project file {}: writing it would destroy the project file; \
+                 write somewhere else",
+                p.display()
+            )));
+        }
+    }
     // Two outputs on one serial port are refused above already; on one terminal they are not
     // a clash.
-    if same(&out, &rec) && !matches!(out, Some(FileId::Device(_))) {
-        return Err(Failure::Usage(format!(
-            "{out_name} and {rec_name} are the same file; give them different names"
-        )));
+    for (i, (a, a_name)) in outputs.iter().enumerate() {
+        for (b, b_name) in &outputs[i + 1..] {
+            if same(a, b) && !matches!(a, Some(FileId::Device(_))) {
+                return Err(Failure::Usage(format!(
+                    "{a_name} and {b_name} are the same file; give them different names"
+                )));
+            }
+        }
     }
     Ok(())
 }

@@ -316,23 +316,31 @@ impl File {
         Ok(())
     }
 
-    /// Reads `--config FILE`, or ./busnoop.toml when it exists (and `--no-config` is not set).
-    /// Returns the file and its name (for messages).
-    pub fn load(args: &SelectArgs) -> Result<Option<(File, PathBuf)>, Failure> {
+    /// The project file a run reads: `--config FILE`, or ./busnoop.toml when it exists; none
+    /// with `--no-config`.
+    pub fn path(args: &SelectArgs) -> Option<PathBuf> {
         if args.no_config {
-            return Ok(None);
+            return None;
         }
-        let path = match &args.config {
-            Some(p) => p.clone(),
-            None => {
-                let p = PathBuf::from(FILE_NAME);
-                if !p.is_file() {
-                    return Ok(None);
-                }
-                p
-            }
+        match &args.config {
+            Some(p) => Some(p.clone()),
+            None => Some(PathBuf::from(FILE_NAME)).filter(|p| p.is_file()),
+        }
+    }
+
+    /// Reads the project file ([`File::path`]). Returns the file and its name (for messages).
+    pub fn load(args: &SelectArgs) -> Result<Option<(File, PathBuf)>, Failure> {
+        let Some(path) = File::path(args) else {
+            return Ok(None);
         };
-        let text = match std::fs::read(&path) {
+        let text = match read_limited(&path) {
+            Ok(b) if b.len() as u64 > MAX_SIZE => {
+                return Err(Failure::Config(format!(
+                    "{}: larger than 1 MiB, not a project file (busnoop.toml is a few lines of \
+                     TOML)",
+                    path.display()
+                )));
+            }
             Ok(b) => String::from_utf8(b)
                 .map_err(|_| Failure::Config(format!("{}: not UTF-8 text", path.display())))?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -359,6 +367,21 @@ impl File {
             _ => &self.sab2,
         }
     }
+}
+
+/// The largest project file read: ample for any TOML a person writes, and a bound on what
+/// `--config /dev/zero` (or a link to a capture) costs.
+const MAX_SIZE: u64 = 1 << 20;
+
+/// Reads `path` up to one byte past [`MAX_SIZE`], so that a larger file is told apart without
+/// being read whole (it used to be: `/dev/zero` grew memory until the machine ran out).
+fn read_limited(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_SIZE + 1)
+        .read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// A `0x`, `0o` or `0b` integer literal outside quotes and comments on a `key = …` line.

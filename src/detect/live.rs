@@ -18,12 +18,6 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
         args.bauds.clone()
     };
     let listen = Duration::from_millis(args.listen_ms);
-    eprintln!(
-        "busnoop: listening to {} for {} ms at each of {} baud rates",
-        path.display(),
-        args.listen_ms,
-        bauds.len()
-    );
     let mut listens = Vec::new();
     for &baud in &bauds {
         let cfg = SerialConfig {
@@ -37,6 +31,15 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             }
             Err(e) => return Err(LiveError::Failed(serial::open_failure(path, &e))),
         };
+        // Said once the device is known to be a serial port (/dev/zero is read as a file).
+        if listens.is_empty() {
+            eprintln!(
+                "busnoop: listening to {} for {} ms at each of {} baud rates",
+                path.display(),
+                args.listen_ms,
+                bauds.len()
+            );
+        }
         listens.push(listen_once(port.as_mut(), path, baud, listen).map_err(LiveError::Failed)?);
     }
     let mut text = format!("{}: a serial line\n", path.display());
@@ -72,7 +75,7 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             )))
         }
     };
-    write_stdout(&text).map_err(LiveError::Failed)?;
+    crate::exit::write_stdout(text.as_bytes()).map_err(LiveError::Failed)?;
     result.map_err(LiveError::Failed)
 }
 

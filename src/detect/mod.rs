@@ -10,7 +10,6 @@
 //!
 //! The same scoring tells a user who picked the wrong protocol ([`advise`], after a run).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -422,7 +421,12 @@ pub const INVERTED_FIX: &str = "the line is inverted: 0x81 arrives where S.Port'
 
 /// A file's content as batches: at most [`SCAN_BYTES`] wire bytes, read through the same
 /// readers as a capture.
-fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>), Failure> {
+/// The input's kind and its first [`SCAN_BYTES`] (fewer when it ends), and the signal that cut
+/// the reading short: SIGINT/SIGTERM end the wait of a slow pipe (`cat /dev/ttyUSB0 | busnoop
+/// detect -`), and what arrived is judged.
+fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure> {
+    let stop = crate::signal::Stop::install()
+        .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let (opened, progress) = crate::source::open(input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
@@ -433,22 +437,25 @@ fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>), Failure> {
     let feed = crate::source::spawn(reader, Some(progress));
     let mut batches = Vec::new();
     let mut bytes = 0;
-    loop {
-        match feed.rx.recv() {
+    let signal = loop {
+        if let Some(sig) = stop.signal() {
+            break Some(sig);
+        }
+        match feed.rx.recv_timeout(Duration::from_millis(50)) {
             Ok(Message::Data(b)) => {
                 bytes += b.bytes.len();
                 batches.push(b);
                 if bytes >= SCAN_BYTES {
-                    break;
+                    break None;
                 }
             }
-            Ok(Message::End) | Err(_) => break,
+            Ok(Message::End) | Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break None,
             Ok(Message::Failed(f)) => return Err(f),
-            Ok(_) => {}
+            Ok(_) | Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
         }
-    }
+    };
     feed.halt();
-    Ok((kind, batches))
+    Ok((kind, batches, signal))
 }
 
 fn kind_text(kind: Kind) -> &'static str {
@@ -461,12 +468,14 @@ fn kind_text(kind: Kind) -> &'static str {
     }
 }
 
-/// Runs `busnoop detect`.
 /// The protocol of a file or pipe (`busnoop plot` without `--protocol`): the detect verdict on
 /// its first megabytes, with the options of the variant found.
 pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'static str]), Failure> {
     let input = Input::parse(source);
-    let (kind, batches) = read_prefix(&input)?;
+    let (kind, batches, signal) = read_prefix(&input)?;
+    if let Some(sig) = signal {
+        return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+    }
     let ranked = rank(candidates(kind, None), &batches, kind);
     let name = source.display();
     match verdict(&ranked) {
@@ -478,6 +487,7 @@ pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'stat
     }
 }
 
+/// Runs `busnoop detect`.
 pub fn run(args: &Options) -> Result<(), Failure> {
     let input = Input::parse(&args.source);
     if let Input::Device(path) = &input {
@@ -487,7 +497,7 @@ pub fn run(args: &Options) -> Result<(), Failure> {
             Ok(()) => return Ok(()),
         }
     }
-    let (kind, batches) = read_prefix(&input)?;
+    let (kind, batches, signal) = read_prefix(&input)?;
     let examined: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
     let ranked = rank(candidates(kind, None), &batches, kind);
     let name = args.source.display();
@@ -545,7 +555,11 @@ pub fn run(args: &Options) -> Result<(), Failure> {
             Ok(())
         }
     };
-    write_stdout(&text)?;
+    crate::exit::write_stdout(text.as_bytes())?;
+    if let Some(sig) = signal {
+        eprintln!("busnoop: interrupted after {examined} bytes; the verdict is on them");
+        return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+    }
     result
 }
 
@@ -598,17 +612,6 @@ pub fn shell_quote(p: &Path) -> String {
         s.into_owned()
     } else {
         format!("'{}'", s.replace('\'', "'\\''"))
-    }
-}
-
-fn write_stdout(text: &str) -> Result<(), Failure> {
-    let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
-        Err(e) => Err(Failure::Output(format!(
-            "cannot write to standard output: {e}"
-        ))),
     }
 }
 

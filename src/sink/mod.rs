@@ -2,6 +2,7 @@
 
 mod line;
 pub mod output;
+pub(crate) use output::{Records, check_folder, create_file};
 mod spans;
 mod tap;
 pub mod wide;
@@ -88,7 +89,7 @@ pub struct Table {
     error: Option<OutputError>,
     /// `--wide`: rows go to the wide table instead.
     wide: Option<wide::Wide>,
-    /// `busnoop plot`: rows go to the plot, drawn at the end.
+    /// `busnoop plot`: rows go to the plot, drawn at the end of the run ([`Table::take_plot`]).
     plot: Option<crate::plot::Plot>,
     /// The cells ID to Sensor as written, per [`Row::stamp`].
     spans: Spans,
@@ -234,6 +235,11 @@ impl Table {
         self.plot = Some(crate::plot::Plot::new(spec));
     }
 
+    /// The plot's numbers, to draw at the end of the run (`busnoop plot`).
+    pub fn take_plot(&mut self) -> Option<crate::plot::Plot> {
+        self.plot.take()
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
@@ -331,12 +337,6 @@ impl Table {
     pub fn close(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
-        }
-        if let Some(p) = self.plot.take() {
-            p.draw().map_err(|e| OutputError {
-                path: Some(p.path().to_owned()),
-                error: std::io::Error::other(e),
-            })?;
         }
         if let Some(mut w) = self.wide.take() {
             let anchor = self.anchor;

@@ -26,6 +26,63 @@ enum Dest {
     Memory(Vec<u8>),
 }
 
+/// How often the wait for a FIFO's reader looks for a signal.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Creates (truncates) `path` for writing: the table, a recording, an export. A FIFO is opened
+/// non-blocking, retried until a reader comes: a plain open waits for the reader inside the
+/// kernel, where no signal can end it (`-o FIFO` with no reader ignored Ctrl-C). SIGINT/SIGTERM
+/// end the wait with an `Interrupted` error ([`crate::exit::Failure::from_create`]); once open,
+/// the FIFO is written blocking like any file.
+pub(crate) fn create_file(path: &Path) -> io::Result<File> {
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    if !std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
+        return File::create(path);
+    }
+    loop {
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(path)
+        {
+            Ok(f) => {
+                crate::source::set_blocking(&f)?;
+                return Ok(f);
+            }
+            // No reader yet.
+            Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                if crate::signal::Stop::received().is_some() {
+                    return Err(io::Error::new(
+                        io::ErrorKind::Interrupted,
+                        "stopped by a signal",
+                    ));
+                }
+                std::thread::sleep(SIGNAL_POLL);
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Refuses an output whose folder does not exist (or is no folder) before any output is
+/// created, with the message creating it would give: found only then, the outputs created
+/// before it (the recording, the export, the table) were left behind, an existing one emptied.
+pub(crate) fn check_folder(path: &Path) -> Result<(), crate::exit::Failure> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let problem = match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => return Ok(()),
+        Ok(_) => format!("{} is not a directory", dir.display()),
+        Err(e) => e.to_string(),
+    };
+    Err(crate::exit::Failure::Output(format!(
+        "cannot create {}: {problem}",
+        path.display()
+    )))
+}
+
 /// A buffered destination that only ever writes complete rows.
 pub struct Output {
     dest: Dest,
@@ -47,7 +104,7 @@ impl Output {
     /// Creates (truncates) `path`. It may also be a special file (`/dev/null`, `/dev/stdout`,
     /// a FIFO): those are written to but never synced.
     pub fn create(path: &Path) -> io::Result<Self> {
-        let file = File::create(path)?;
+        let file = create_file(path)?;
         let regular = file.metadata()?.is_file();
         Ok(Self::new(Dest::File {
             file,
@@ -171,6 +228,96 @@ impl Output {
         match &self.dest {
             Dest::Memory(v) => v,
             _ => &[],
+        }
+    }
+}
+
+/// A file of records (a recording's packets, an export's blocks) that never ends inside one:
+/// records are gathered whole and written out together, and when a write fails (a full disk)
+/// a regular file is cut back to the end of the last record that was written completely, as
+/// [`Output`] does with rows. (A `BufWriter` left the file ending inside a record, which
+/// Wireshark reports as "cut short in the middle of a packet".)
+pub(crate) struct Records {
+    out: Box<dyn Write>,
+    /// The file again, to cut it back: regular files only.
+    cut: Option<File>,
+    buf: Vec<u8>,
+    /// Bytes known to be in the file (whole records).
+    committed: u64,
+    /// A write failed: nothing more is written (the file ends with a whole record).
+    failed: bool,
+}
+
+impl Records {
+    /// Records into `file` (created by [`create_file`]).
+    pub(crate) fn file(file: File) -> Records {
+        let cut = file
+            .try_clone()
+            .ok()
+            .filter(|f| f.metadata().is_ok_and(|m| m.is_file()));
+        let mut r = Records::stream(Box::new(file));
+        r.cut = cut;
+        r
+    }
+
+    /// Records into a stream that cannot be cut back (standard output).
+    pub(crate) fn stream(out: Box<dyn Write>) -> Records {
+        Records {
+            out,
+            cut: None,
+            buf: Vec::with_capacity(HIGH_WATER * 2),
+            committed: 0,
+            failed: false,
+        }
+    }
+
+    /// Appends one whole record (or a few: a header with its first packet); writes out when
+    /// enough has gathered.
+    pub(crate) fn record(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.buf.extend_from_slice(bytes);
+        if self.buf.len() >= HIGH_WATER {
+            self.flush()
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Writes every gathered record; after a failed write, cuts the file back to its last whole
+    /// record (errors of the cut are ignored: the write error is what the user needs to see).
+    pub(crate) fn flush(&mut self) -> io::Result<()> {
+        if self.failed {
+            self.buf.clear();
+            return Ok(());
+        }
+        let result = self
+            .out
+            .write_all(&self.buf)
+            .and_then(|()| self.out.flush());
+        let written = self.buf.len() as u64;
+        self.buf.clear();
+        match result {
+            Ok(()) => {
+                self.committed += written;
+                Ok(())
+            }
+            Err(e) => {
+                self.failed = true;
+                if let Some(f) = &mut self.cut {
+                    let _ = f.set_len(self.committed);
+                    let _ = f.seek(SeekFrom::Start(self.committed));
+                }
+                Err(e)
+            }
+        }
+    }
+}
+
+/// What is gathered is written when the records are dropped without a last flush (an early
+/// return), as a `BufWriter` would.
+impl Drop for Records {
+    fn drop(&mut self) {
+        if !self.buf.is_empty() {
+            let _ = self.flush();
         }
     }
 }

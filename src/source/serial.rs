@@ -248,7 +248,12 @@ pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, seri
     // Closed on every early return.
     let fd =
         nix::fcntl::open(path, flags, nix::sys::stat::Mode::empty()).map_err(|e| os("open", e))?;
-    let mut t = termios::tcgetattr(&fd).map_err(|e| os("tcgetattr", e))?;
+    // A device that refuses the terminal ioctl is no terminal: /dev/null and /dev/zero answer
+    // ENOTTY, /dev/urandom EINVAL; both are read as files (`is_not_a_tty`).
+    let mut t = termios::tcgetattr(&fd).map_err(|e| match e {
+        Errno::EINVAL => os("tcgetattr", Errno::ENOTTY),
+        e => os("tcgetattr", e),
+    })?;
     // Exclusive, so that a second capture program gets "in use" (before touching any line of
     // a port that someone else holds).
     // SAFETY: TIOCEXCL takes no argument and `fd` is an open descriptor we own.
