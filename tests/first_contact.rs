@@ -162,6 +162,15 @@ fn detect_empty_input() {
         Some(3)
     );
     assert_eq!(run(&["detect"], dir.path()).status.code(), Some(3));
+    // One byte is "1 byte examined".
+    let one = dir.path().join("one.bin");
+    std::fs::write(&one, b"\x7e").unwrap();
+    let out = run(&["detect"], &one);
+    assert!(
+        text(&out.stdout).starts_with(&format!("{}: raw bytes, 1 byte examined\n", one.display())),
+        "{}",
+        text(&out.stdout)
+    );
 }
 
 #[test]

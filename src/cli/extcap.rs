@@ -92,12 +92,11 @@ fn interface(
     ),
     Failure,
 > {
-    let name = name.ok_or_else(|| {
-        Failure::Usage("busnoop extcap: --extcap-interface NAME is needed".into())
-    })?;
+    let name =
+        name.ok_or_else(|| Failure::Usage("extcap: --extcap-interface NAME is needed".into()))?;
     INTERFACES.iter().find(|i| i.0 == name).ok_or_else(|| {
         Failure::Usage(format!(
-            "busnoop extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2, \
+            "extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2, \
              busnoop-sbus"
         ))
     })
@@ -147,7 +146,7 @@ pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> 
         return Ok(s);
     }
     Err(Failure::Usage(
-        "busnoop extcap: give --extcap-interfaces, --extcap-dlts, --extcap-config or --capture \
+        "extcap: give --extcap-interfaces, --extcap-dlts, --extcap-config or --capture \
          (Wireshark does; see docs/wireshark.md)"
             .into(),
     ))
@@ -162,15 +161,15 @@ pub fn capture_command(args: &ExtcapArgs) -> Result<Vec<std::ffi::OsString>, Fai
         .is_some_and(|f| !f.trim().is_empty())
     {
         return Err(Failure::Usage(
-            "busnoop extcap: capture filters are not supported; use a display filter".into(),
+            "extcap: capture filters are not supported; use a display filter".into(),
         ));
     }
     let fifo = args
         .fifo
         .as_ref()
-        .ok_or_else(|| Failure::Usage("busnoop extcap: --capture needs --fifo PATH".into()))?;
+        .ok_or_else(|| Failure::Usage("extcap: --capture needs --fifo PATH".into()))?;
     let port = args.port.as_ref().ok_or_else(|| {
-        Failure::Usage("busnoop extcap: --capture needs --port DEVICE (a serial port)".into())
+        Failure::Usage("extcap: --capture needs --port DEVICE (a serial port)".into())
     })?;
     let mut cmd: Vec<std::ffi::OsString> = vec![
         i.2.into(),
@@ -195,7 +194,7 @@ pub fn run(args: &ExtcapArgs) -> Result<(), Failure> {
         let mut argv = vec![std::ffi::OsString::from("busnoop")];
         argv.extend(cmd);
         let cli = <crate::cli::Cli as clap::Parser>::try_parse_from(argv)
-            .map_err(|e| Failure::Usage(format!("busnoop extcap: {e}")))?;
+            .map_err(|e| Failure::Usage(format!("extcap: {e}")))?;
         // Wireshark shows an extcap's stderr as an error: no end-of-run summary.
         crate::cli::QUIET_REPORT.store(true, std::sync::atomic::Ordering::Relaxed);
         // Wireshark ends every capture with SIGTERM, or closes the FIFO: the normal end (exit

@@ -98,7 +98,7 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
                 || std::fs::metadata(&a.source).is_ok_and(|m| m.file_type().is_fifo());
             if pipe {
                 return Err(Failure::Usage(format!(
-                    "busnoop plot {}: a pipe can be read only once, so its protocol cannot be \
+                    "plot {}: a pipe can be read only once, so its protocol cannot be \
                      detected before it is plotted; name it with --protocol sport|sbus|sab2",
                     a.source.display()
                 )));

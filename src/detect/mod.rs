@@ -502,8 +502,9 @@ pub fn run(args: &Options) -> Result<(), Failure> {
     let ranked = rank(candidates(kind, None), &batches, kind);
     let name = args.source.display();
     let mut text = format!(
-        "{name}: {}, {examined} bytes examined{}\n",
+        "{name}: {}, {} examined{}\n",
         kind_text(kind),
+        crate::exit::count(examined, "byte", "bytes"),
         if examined as usize >= SCAN_BYTES {
             " (the start of the input)"
         } else {
