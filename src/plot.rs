@@ -66,49 +66,83 @@ pub fn check(path: &Path) -> Result<(), Failure> {
 /// wide, so a plot of more says nothing more.
 const MAX_POINTS: usize = 16_384;
 
-/// At most [`MAX_POINTS`] of a growing sequence, evenly spread over it: when full, every other
-/// one is dropped, and from then on only every second (fourth, …) newcomer is kept. Without a
-/// bound, memory grew with the capture, and a noisy one drew an SVG of gigabytes (a red line per
-/// broken frame).
-#[derive(Debug)]
-struct Thinned<T> {
-    kept: Vec<T>,
-    /// Every `stride`-th value is kept.
-    stride: u64,
-    seen: u64,
+/// Cells of time a full [`Thinned`] is cut into: four per pixel of the 1000-pixel-wide image.
+const CELLS: f64 = (MAX_POINTS / 4) as f64;
+
+/// Points (time, value) of a growing sequence, at most [`MAX_POINTS`], thinned by time so that
+/// the picture stays the same: when full, the span so far is cut into [`CELLS`] equal cells,
+/// and each run of points in one cell keeps its lowest and its highest point, in their order.
+/// A one-sample spike or dip and a lone mark survive however long the capture (dropping every
+/// other point would lose them half the time or more). Without a bound, memory grew with the
+/// capture, and a noisy one drew an SVG of gigabytes (a red line per broken frame). Broken
+/// frames' marks are kept with the value 0: one mark per cell.
+#[derive(Debug, Default)]
+struct Thinned {
+    kept: Vec<(f64, f64)>,
 }
 
-impl<T> Default for Thinned<T> {
-    fn default() -> Self {
-        Thinned {
-            kept: Vec::new(),
-            stride: 1,
-            seen: 0,
+impl Thinned {
+    fn push(&mut self, t: f64, v: f64) {
+        self.kept.push((t, v));
+        if self.kept.len() >= MAX_POINTS {
+            self.thin();
         }
     }
-}
 
-impl<T> Thinned<T> {
-    fn push(&mut self, v: T) {
-        if self.seen.is_multiple_of(self.stride) {
-            self.kept.push(v);
-            if self.kept.len() >= MAX_POINTS {
-                let mut odd = false;
-                self.kept.retain(|_| {
-                    odd = !odd;
-                    odd
-                });
-                self.stride *= 2;
+    /// Keeps each cell's extremes; when the times are too far out of order for runs in one
+    /// cell to form (a clock jumping back and forth), every other point, so that the bound
+    /// holds whatever the input.
+    fn thin(&mut self) {
+        let kept = &self.kept;
+        let (first, last) = kept
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.0), b.max(p.0))
+            });
+        let width = (last - first) / CELLS;
+        // `as` saturates: a width of 0 puts every point in cell 0.
+        let cell = |t: f64| {
+            if width > 0.0 {
+                ((t - first) / width) as u64
+            } else {
+                0
             }
+        };
+        let mut out = Vec::with_capacity(MAX_POINTS);
+        let mut i = 0;
+        while i < kept.len() {
+            let c = cell(kept[i].0);
+            let (mut lo, mut hi, mut j) = (i, i, i + 1);
+            while j < kept.len() && cell(kept[j].0) == c {
+                if kept[j].1 < kept[lo].1 {
+                    lo = j;
+                }
+                if kept[j].1 > kept[hi].1 {
+                    hi = j;
+                }
+                j += 1;
+            }
+            out.push(kept[lo.min(hi)]);
+            if lo != hi {
+                out.push(kept[lo.max(hi)]);
+            }
+            i = j;
         }
-        self.seen += 1;
+        if out.len() > MAX_POINTS / 2 + 2 {
+            let mut keep = false;
+            out.retain(|_| {
+                keep = !keep;
+                keep
+            });
+        }
+        self.kept = out;
     }
 
     fn is_empty(&self) -> bool {
         self.kept.is_empty()
     }
 
-    fn iter(&self) -> std::slice::Iter<'_, T> {
+    fn iter(&self) -> std::slice::Iter<'_, (f64, f64)> {
         self.kept.iter()
     }
 }
@@ -119,14 +153,14 @@ struct Series {
     id: Option<u32>,
     name: String,
     unit: String,
-    points: Thinned<(f64, f64)>,
+    points: Thinned,
 }
 
 /// Collects the rows of a capture, then draws them.
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
-    errors: Thinned<f64>,
+    errors: Thinned,
 }
 
 impl Plot {
@@ -142,7 +176,7 @@ impl Plot {
         let Some(us) = row.micros else { return };
         let t = us as f64 / 1e6;
         if row.class == Class::Error {
-            self.errors.push(t);
+            self.errors.push(t, 0.0);
         }
         for p in row.parts {
             if !p.value.is_finite() {
@@ -164,7 +198,7 @@ impl Plot {
                     self.series.len() - 1
                 }
             };
-            self.series[i].points.push((t, p.value));
+            self.series[i].points.push(t, p.value);
         }
     }
 
@@ -242,7 +276,7 @@ impl Plot {
         let t_end = chosen
             .iter()
             .flat_map(|(_, s)| s.points.iter().map(|p| p.0))
-            .chain(self.errors.iter().copied())
+            .chain(self.errors.iter().map(|p| p.0))
             .fold(0.0f64, f64::max)
             .max(1e-3);
         for ((unit, members), area) in groups.iter().zip(areas.iter()) {
@@ -291,7 +325,7 @@ impl Plot {
             }
             if !self.errors.is_empty() {
                 chart
-                    .draw_series(self.errors.iter().map(|&t| {
+                    .draw_series(self.errors.iter().map(|&(t, _)| {
                         PathElement::new(vec![(t, lo), (t, hi)], RED.mix(0.6).stroke_width(1))
                     }))?
                     .label("broken frame (bad CRC, truncated)")
@@ -364,8 +398,8 @@ mod tests {
     }];
 
     /// A long or noisy capture: the points of a series and the broken frames' marks are thinned
-    /// evenly to at most [`MAX_POINTS`] each (the image is 1000 pixels wide). They used to be
-    /// kept all: memory grew with the capture, and `busnoop plot /dev/urandom` drew an SVG of
+    /// to at most [`MAX_POINTS`] each (the image is 1000 pixels wide). They used to be kept
+    /// all: memory grew with the capture, and `busnoop plot /dev/urandom` drew an SVG of
     /// gigabytes, a red line per broken frame.
     #[test]
     fn long_captures_are_thinned_to_a_bounded_plot() {
@@ -381,20 +415,65 @@ mod tests {
             p.row(&row(i * 10_000, Class::Plain, ALT1));
             p.row(&row(i * 10_000 + 5_000, Class::Error, &[]));
         }
-        let points: Vec<f64> = p.series[0].points.kept.iter().map(|p| p.0).collect();
-        assert!(points.len() <= MAX_POINTS && points.len() > MAX_POINTS / 4);
-        assert!(p.errors.kept.len() <= MAX_POINTS && p.errors.kept.len() > MAX_POINTS / 4);
-        // Evenly spread from the start: equal steps.
-        assert_eq!(points[0], 0.0);
-        let step = points[1] - points[0];
-        assert!(
-            points
-                .windows(2)
-                .all(|w| ((w[1] - w[0]) - step).abs() < 1e-9)
-        );
+        let points = &p.series[0].points.kept;
+        assert!(points.len() <= MAX_POINTS && points.len() > MAX_POINTS / 8);
+        assert!(p.errors.kept.len() <= MAX_POINTS && p.errors.kept.len() > MAX_POINTS / 8);
+        // Spread over the whole capture, in time order.
+        assert_eq!(points[0].0, 0.0);
+        assert!(points.last().unwrap().0 > (n - 100) as f64 * 0.01);
+        assert!(points.windows(2).all(|w| w[0].0 < w[1].0));
         p.draw().unwrap();
         let size = std::fs::metadata(&path).unwrap().len();
         assert!(size < 8_000_000, "{size} bytes");
+    }
+
+    /// Thinning keeps what the eye looks for: a one-sample spike and dip in a long flat series,
+    /// and a lone broken frame after a burst of them (every other point dropped would lose each
+    /// of them half the time, or more).
+    #[test]
+    fn thinning_keeps_spikes_dips_and_lone_marks() {
+        let mut s = Thinned::default();
+        let mut marks = Thinned::default();
+        let n = 1_000_000u64;
+        let (spike, dip) = (123_457, 876_543);
+        for i in 0..n {
+            let t = i as f64 * 0.01;
+            let v = match i {
+                _ if i == spike => 100.0,
+                _ if i == dip => -50.0,
+                _ => (i % 7) as f64,
+            };
+            s.push(t, v);
+            if i < n / 2 || i == n - 3 {
+                marks.push(t, 0.0);
+            }
+        }
+        assert!(s.kept.len() <= MAX_POINTS);
+        assert!(s.kept.contains(&(spike as f64 * 0.01, 100.0)), "spike lost");
+        assert!(s.kept.contains(&(dip as f64 * 0.01, -50.0)), "dip lost");
+        // The envelope of the rest: its lowest and highest values are still there.
+        assert!(s.kept.iter().any(|p| p.1 == 0.0) && s.kept.iter().any(|p| p.1 == 6.0));
+        assert!(marks.kept.len() <= MAX_POINTS);
+        assert!(
+            marks.kept.contains(&((n - 3) as f64 * 0.01, 0.0)),
+            "the lone mark was lost"
+        );
+    }
+
+    /// Times out of order (a capture whose clock jumps back and forth) cannot be merged by cell,
+    /// and the bound still holds.
+    #[test]
+    fn thinning_is_bounded_whatever_the_order_of_times() {
+        let mut s = Thinned::default();
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            s.push((x % 1_000_000) as f64, (x >> 40) as f64);
+            assert!(s.kept.len() <= MAX_POINTS);
+        }
+        assert!(s.kept.len() > MAX_POINTS / 8);
     }
 
     /// A broken frame's moment is a red vertical line across the panel.
