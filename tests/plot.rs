@@ -222,8 +222,7 @@ fn a_pipe_needs_the_protocol_named() {
     assert_eq!(err.lines().count(), 1, "{err}");
     // A FIFO no one writes to: refused without waiting.
     let fifo = dir.path().join("fifo");
-    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    common::mkfifo(&fifo);
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
         .arg("plot")
         .arg(&fifo)

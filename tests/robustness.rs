@@ -6,7 +6,6 @@ mod common;
 use std::os::unix::process::CommandExt;
 use std::process::{Output, Stdio};
 
-use busnoop::sport::wire;
 use common::fixture;
 use common::{busnoop, noise, text};
 
@@ -282,18 +281,7 @@ fn output_file_that_fills_up_ends_with_a_whole_row() {
     // A file size limit makes the disk "full" after 100 kB: the file is cut back to the last
     // whole row, and the exit code says so.
     let dir = tempfile::tempdir().unwrap();
-    let big = dir.path().join("big.bin");
-    let mut bytes = Vec::new();
-    for i in 0..20_000u32 {
-        wire::encode_frame(
-            &mut bytes,
-            wire::header_for((i % 28) as u8),
-            0x10,
-            0x0300,
-            i,
-        );
-    }
-    std::fs::write(&big, bytes).unwrap();
+    let big = common::big_sport(dir.path(), 20_000, 0x0300);
     let csv = dir.path().join("out.csv");
     let mut cmd = busnoop();
     cmd.arg("sport").arg(&big).arg("-o").arg(&csv);
@@ -356,18 +344,7 @@ fn whole_records(bytes: &[u8], pcapng: bool) -> Result<usize, usize> {
 #[test]
 fn recording_and_export_that_fill_up_end_with_a_whole_record() {
     let dir = tempfile::tempdir().unwrap();
-    let big = dir.path().join("big.bin");
-    let mut bytes = Vec::new();
-    for i in 0..20_000u32 {
-        wire::encode_frame(
-            &mut bytes,
-            wire::header_for((i % 28) as u8),
-            0x10,
-            0x0300,
-            i,
-        );
-    }
-    std::fs::write(&big, bytes).unwrap();
+    let big = common::big_sport(dir.path(), 20_000, 0x0300);
     for (option, name) in [
         ("--record", "r.pcap"),
         ("--record", "r.pcapng"),

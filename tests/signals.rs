@@ -2,10 +2,14 @@
 //! file, or waiting for a FIFO's writer. Every decoded row is kept, the output ends with a whole
 //! row, and stderr says how much input was left.
 
+mod common;
+
 use std::io::Write;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
+
+use common::mkfifo;
 
 /// Generous bound for "stops at once": the old driver took 70-180 s here.
 const STOP_WITHIN: Duration = Duration::from_secs(5);
@@ -16,12 +20,6 @@ fn busnoop() -> Command {
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
     c
-}
-
-fn mkfifo(path: &Path) {
-    use std::os::unix::ffi::OsStrExt;
-    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
 }
 
 /// Kills the child if the test fails before it exited.

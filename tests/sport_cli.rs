@@ -376,18 +376,7 @@ fn usage_errors_exit_2() {
 fn closed_stdout_exits_quietly() {
     // `busnoop sport big.bin | head -1`: enough rows to fill the pipe, the reader goes away.
     let dir = tempfile::tempdir().unwrap();
-    let big = dir.path().join("big.bin");
-    let mut bytes = Vec::new();
-    for i in 0..200_000u32 {
-        wire::encode_frame(
-            &mut bytes,
-            wire::header_for((i % 28) as u8),
-            0x10,
-            0x0100,
-            i,
-        );
-    }
-    std::fs::write(&big, bytes).unwrap();
+    let big = common::big_sport(dir.path(), 200_000, 0x0100);
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("busnoop"))
         .arg("sport")
         .arg(&big)

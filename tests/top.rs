@@ -328,8 +328,7 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     // table's write blocks, so the first SIGTERM cannot end the run cleanly and the second one
     // has to end it at once.
     let fifo = dir.path().join("table.fifo");
-    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    common::mkfifo(&fifo);
     let reader = std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NONBLOCK)

@@ -119,3 +119,83 @@ pub fn as_nobody(cmd: &mut std::process::Command) {
         });
     }
 }
+
+/// Makes a FIFO at `path`.
+pub fn mkfifo(path: &std::path::Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+}
+
+/// Writes `dir/big.bin`: `n` valid S.Port frames of `app_id` (physical IDs 0 to 27 in turn,
+/// the values counting up), enough rows to fill a pipe or a file size limit.
+pub fn big_sport(dir: &std::path::Path, n: u32, app_id: u16) -> PathBuf {
+    use busnoop::sport::wire;
+    let mut bytes = Vec::new();
+    for i in 0..n {
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((i % 28) as u8),
+            0x10,
+            app_id,
+            i,
+        );
+    }
+    let p = dir.join("big.bin");
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// The run did not panic.
+pub fn no_panic(out: &std::process::Output) {
+    let err = text(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A copy of the S.Port sample, repeated so that it is more than one read chunk, in `dir` under
+/// `name` (no capture extension: the extension guard of `-o` must not be what saves it).
+pub fn capture(dir: &std::path::Path, name: &str) -> (PathBuf, Vec<u8>) {
+    let sample = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    let bytes = sample.repeat(400);
+    let p = dir.join(name);
+    std::fs::write(&p, &bytes).unwrap();
+    (p, bytes)
+}
+
+/// Runs `cmd` (standard input from `stdin`, written and closed by a thread; standard output to
+/// `stdout`) and returns its output; kills it and fails when it has not exited within 10 s (a
+/// run that writes into its own input pipe never ends).
+pub fn output_within_10s(
+    cmd: &mut std::process::Command,
+    stdin: Option<Vec<u8>>,
+    stdout: std::process::Stdio,
+) -> std::process::Output {
+    use std::io::Write;
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let mut child = cmd
+        .stdin(if stdin.is_some() {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        })
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    if let Some(bytes) = stdin {
+        let mut pipe = child.stdin.take().unwrap();
+        // busnoop may refuse before reading anything: a broken pipe is fine.
+        std::thread::spawn(move || pipe.write_all(&bytes));
+    }
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("busnoop did not exit within 10 s: {cmd:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().unwrap()
+}
