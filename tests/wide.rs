@@ -334,3 +334,89 @@ fn wide_in_another_format_is_refused_before_any_file_is_touched() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// A generated EdgeTX log of `cycles` poll cycles, 20 ms each: the receiver's SWR frame (ID
+/// 0x98), then 10 ms later an FLVSS frame (ID 1); every cycle writes one wide line.
+fn long_capture(dir: &std::path::Path, cycles: u32) -> std::path::PathBuf {
+    use std::fmt::Write as _;
+    let start = chrono::NaiveDate::from_ymd_opt(2014, 7, 11)
+        .unwrap()
+        .and_hms_opt(22, 0, 0)
+        .unwrap();
+    let mut log = String::from("\n");
+    for k in 0..cycles {
+        let at = |ms: u32| {
+            (start + chrono::Duration::milliseconds(i64::from(ms))).format("%Y-%m-%d,%H:%M:%S%.3f")
+        };
+        let t = 20 * k;
+        let _ = writeln!(log, "{}: 7E 98 10 05 F1 10 35 0F 96 0E", at(t));
+        let _ = writeln!(log, "{}: 7E A1 10 00 03 30 0D 88 81 A5", at(t + 10));
+    }
+    let path = dir.join(format!("long-{cycles}-sport.log"));
+    std::fs::write(&path, log).unwrap();
+    path
+}
+
+/// A long capture's table (more lines than busnoop keeps in memory, so most of them go through
+/// its temporary file) is the expected text to the byte: one header, a line per cycle at the
+/// time of its last frame, the cells of a short run of the same frames.
+#[test]
+fn a_long_capture_gives_the_whole_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let short = run(&[
+        "sport",
+        long_capture(dir.path(), 3).to_str().unwrap(),
+        "--wide",
+        "-f",
+        "csv",
+    ]);
+    let mut lines = short.split("\r\n");
+    let header = lines.next().unwrap();
+    let first = lines.next().unwrap();
+    let cells = first.strip_prefix("2014-07-11,22:00:00.010,").expect(first);
+    assert!(cells.contains("4.") && !header.is_empty(), "{short}");
+    let cycles = 60_000;
+    let mut expected = format!("{header}\r\n");
+    let start = chrono::NaiveDate::from_ymd_opt(2014, 7, 11)
+        .unwrap()
+        .and_hms_opt(22, 0, 0)
+        .unwrap();
+    for k in 0..cycles {
+        let t = start + chrono::Duration::milliseconds(20 * k + 10);
+        expected.push_str(&format!(
+            "{},{cells}\r\n",
+            t.format("%Y-%m-%d,%H:%M:%S%.3f")
+        ));
+    }
+    assert!(
+        expected.len() > 2 << 20,
+        "longer than busnoop keeps in memory"
+    );
+    let path = long_capture(dir.path(), cycles as u32);
+    let wide = run(&["sport", path.to_str().unwrap(), "--wide", "-f", "csv"]);
+    assert!(
+        wide == expected,
+        "the long table differs from the expected text"
+    );
+}
+
+/// A temporary folder that cannot take the spilled lines fails the run like any failed write:
+/// one line naming it, exit 8, no panic.
+#[test]
+fn an_unwritable_temporary_folder_is_a_failed_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = long_capture(dir.path(), 60_000);
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .env("TMPDIR", dir.path().join("missing"))
+        .args(["sport", path.to_str().unwrap(), "--wide", "-f", "csv"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(8), "{err}");
+    assert!(
+        err.contains("--wide temporary file") && err.contains("missing"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}

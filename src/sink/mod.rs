@@ -4,6 +4,7 @@ mod line;
 pub mod output;
 pub(crate) use output::{Records, check_folder, create_file};
 mod spans;
+mod spool;
 mod tap;
 pub mod wide;
 
@@ -305,7 +306,13 @@ impl Table {
         }
         if let Some(w) = &mut self.wide {
             let anchor = self.anchor;
-            self.out.append(|buf| w.row(row, anchor, buf));
+            let mut spooled = Ok(());
+            self.out.append(|buf| spooled = w.row(row, anchor, buf));
+            if let Err(e) = spooled {
+                // The table would lack a line: [`Table::close`] writes none of it.
+                self.wide = None;
+                return Err(spool_error(e));
+            }
             return self.out.row_done();
         }
         // The cells every format writes alike: the wall-clock time and the raw bytes.
@@ -340,7 +347,21 @@ impl Table {
         }
         if let Some(mut w) = self.wide.take() {
             let anchor = self.anchor;
-            self.out.append(|buf| w.finish(anchor, buf));
+            let mut done = Ok(());
+            self.out.append(|buf| done = w.finish(anchor, buf));
+            done.map_err(spool_error)?;
+            // A file's lines come back from the spool in pieces, written as they come: the
+            // output never holds the whole table.
+            loop {
+                let mut more = Ok(false);
+                self.out
+                    .append(|buf| more = w.lines(buf, output::HIGH_WATER));
+                let more = more.map_err(spool_error)?;
+                self.out.row_done()?;
+                if !more {
+                    break;
+                }
+            }
             if !w.has_columns() {
                 eprintln!(
                     "busnoop: note: --wide: no row carried a number, so the table has no columns"
@@ -801,6 +822,15 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             self.line.put(RESET);
         }
         self.line.byte(b'\n');
+    }
+}
+
+/// A failure of the wide table's temporary file (a full or unwritable `$TMPDIR`, a failed read
+/// back) is a failed write of the table: named after the folder, the output's exit code.
+fn spool_error(e: std::io::Error) -> OutputError {
+    OutputError {
+        path: Some(std::env::temp_dir()),
+        error: std::io::Error::new(e.kind(), format!("--wide temporary file: {e}")),
     }
 }
 

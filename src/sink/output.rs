@@ -12,7 +12,7 @@ use super::line::{self, W};
 use crate::row::OutputError;
 
 /// Flush the buffer once it holds this much.
-const HIGH_WATER: usize = 64 * 1024;
+pub(super) const HIGH_WATER: usize = 64 * 1024;
 
 enum Dest {
     Stdout(io::Stdout),

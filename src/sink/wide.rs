@@ -26,10 +26,12 @@
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
+use std::io;
 
 use chrono::{DateTime, Local};
 
 use super::Format;
+use super::spool::{self, Spool};
 use crate::row::Row;
 use crate::time::Anchor;
 
@@ -154,14 +156,21 @@ pub struct Wide {
     bucket: Option<u64>,
     /// Whether the time is Date and Time (wall clock) or Millis; decided at the first line.
     wall: Option<bool>,
-    /// Files: the lines written so far (without their end), and each line's end and cell count.
-    spool: Vec<u8>,
-    lines: Vec<(usize, usize)>,
+    /// Files: the lines written so far (without their end), each with its cell count; in
+    /// bounded memory, then a temporary file.
+    spool: Spool,
     line: String,
+    /// A line read back from the spool.
+    back: Vec<u8>,
 }
 
 impl Wide {
     pub fn new(format: Format, step: Step, utc: bool, live: bool) -> Self {
+        Self::with_memory(format, step, utc, live, spool::MEMORY)
+    }
+
+    /// [`Wide::new`] keeping up to `memory` bytes of a file's lines in memory (tests lower it).
+    fn with_memory(format: Format, step: Step, utc: bool, live: bool, memory: usize) -> Self {
         Wide {
             format,
             step,
@@ -174,24 +183,29 @@ impl Wide {
             pending: None,
             bucket: None,
             wall: None,
-            spool: Vec::new(),
-            lines: Vec::new(),
+            spool: Spool::new(memory),
             line: String::new(),
+            back: Vec::new(),
         }
     }
 
     /// Takes one row of the long table; writes the previous step (to `buf` when live) when this
-    /// row starts a new one.
-    pub fn row(&mut self, row: &Row<'_>, anchor: Option<Anchor>, buf: &mut Vec<u8>) {
+    /// row starts a new one. An error is the temporary file's (files only).
+    pub fn row(
+        &mut self,
+        row: &Row<'_>,
+        anchor: Option<Anchor>,
+        buf: &mut Vec<u8>,
+    ) -> io::Result<()> {
         let Some(t) = row.micros else {
-            return;
+            return Ok(());
         };
         match self.step {
             Step::PollCycle => {
                 if let Some(id) = row.id {
                     if self.seen.contains(&id) {
                         if let Some(at) = self.pending {
-                            self.emit(at, anchor, buf);
+                            self.emit(at, anchor, buf)?;
                         }
                         self.seen.clear();
                     }
@@ -204,7 +218,7 @@ impl Wide {
                     && b != cur
                     && self.pending.is_some()
                 {
-                    self.emit((cur + 1).saturating_mul(us), anchor, buf);
+                    self.emit((cur + 1).saturating_mul(us), anchor, buf)?;
                 }
                 self.bucket = Some(b);
             }
@@ -218,36 +232,48 @@ impl Wide {
             self.held[i].push_str(p.text);
         }
         self.pending = Some(t);
+        Ok(())
     }
 
-    /// Writes the open step and, for files, the whole table (end of input).
-    pub fn finish(&mut self, anchor: Option<Anchor>, buf: &mut Vec<u8>) {
+    /// Writes the open step and, for files, the header (end of input); the lines of a file
+    /// follow with [`Wide::lines`]. An error is the temporary file's.
+    pub fn finish(&mut self, anchor: Option<Anchor>, buf: &mut Vec<u8>) -> io::Result<()> {
         if let Some(at) = self.pending {
             let at = match (self.step, self.bucket) {
                 (Step::Every(us), Some(b)) => (b + 1).saturating_mul(us),
                 _ => at,
             };
-            self.emit(at, anchor, buf);
+            self.emit(at, anchor, buf)?;
         }
         if self.live {
             if self.header_cols.is_none() {
                 self.header(anchor, buf);
             }
-            return;
+            return Ok(());
         }
         self.cols.finalize();
         self.header(anchor, buf);
+        self.spool.rewind()
+    }
+
+    /// Files, after [`Wide::finish`]: writes the next lines, padded to every column, until `buf`
+    /// has grown by `budget` bytes, so that the output writes the table in pieces instead of
+    /// holding all of it; whole lines only. Says whether lines remain. An error is the
+    /// temporary file's.
+    pub fn lines(&mut self, buf: &mut Vec<u8>, budget: usize) -> io::Result<bool> {
         let n = self.cols.len();
         let sep = self.sep() as u8;
-        let mut start = 0;
-        for &(end, cells) in &self.lines {
-            buf.extend_from_slice(&self.spool[start..end]);
+        let eol = self.eol().as_bytes();
+        let start = buf.len();
+        while buf.len() - start < budget {
+            let Some(cells) = self.spool.next(&mut self.back)? else {
+                break;
+            };
+            buf.extend_from_slice(&self.back);
             buf.extend(std::iter::repeat_n(sep, n.saturating_sub(cells)));
-            buf.extend_from_slice(self.eol().as_bytes());
-            start = end;
+            buf.extend_from_slice(eol);
         }
-        self.spool = Vec::new();
-        self.lines = Vec::new();
+        Ok(self.spool.has_more())
     }
 
     /// Whether any row carried a number (the table has columns).
@@ -291,11 +317,11 @@ impl Wide {
         self.header_cols = Some(self.cols.len());
     }
 
-    fn emit(&mut self, at: u64, anchor: Option<Anchor>, buf: &mut Vec<u8>) {
+    fn emit(&mut self, at: u64, anchor: Option<Anchor>, buf: &mut Vec<u8>) -> io::Result<()> {
         self.pending = None;
         if self.cols.is_empty() {
             // No number yet (polls only): a line of empty cells says nothing.
-            return;
+            return Ok(());
         }
         let wall = *self.wall.get_or_insert(anchor.is_some());
         if self.live && self.header_cols != Some(self.cols.len()) {
@@ -339,9 +365,9 @@ impl Wide {
         if self.live {
             self.line.push_str(self.eol());
             buf.extend_from_slice(self.line.as_bytes());
+            Ok(())
         } else {
-            self.spool.extend_from_slice(self.line.as_bytes());
-            self.lines.push((self.spool.len(), self.cols.len()));
+            self.spool.push(self.cols.len(), self.line.as_bytes())
         }
     }
 }
@@ -388,6 +414,13 @@ mod tests {
         }
     }
 
+    /// Writes the table as [`super::super::Table::close`] does: the header, then the lines in
+    /// pieces of `budget` bytes.
+    fn finish(w: &mut Wide, buf: &mut Vec<u8>, budget: usize) {
+        w.finish(None, buf).unwrap();
+        while w.lines(buf, budget).unwrap() {}
+    }
+
     fn feed(live: bool, step: Step) -> String {
         let mut w = Wide::new(Format::Csv, step, false, live);
         let mut buf = Vec::new();
@@ -404,9 +437,9 @@ mod tests {
             row(50_000, 1, &[]),
         ];
         for r in &rows {
-            w.row(r, None, &mut buf);
+            w.row(r, None, &mut buf).unwrap();
         }
-        w.finish(None, &mut buf);
+        finish(&mut w, &mut buf, 1);
         String::from_utf8(buf).unwrap().replace("\r\n", "\n")
     }
 
@@ -419,6 +452,42 @@ mod tests {
              40,4.120,4.138,4.144,16\n\
              50,4.120,4.138,4.144,16\n"
         );
+    }
+
+    /// A long capture: the lines beyond the memory bound go to the temporary file, the memory
+    /// held stays bounded, and the table is the same byte for byte as when all of it fits in
+    /// memory, written in small pieces or in one.
+    #[test]
+    fn a_long_file_spills_to_a_temporary_file_with_the_same_table() {
+        let table = |memory: usize, budget: usize| {
+            let mut w = Wide::with_memory(Format::Tsv, Step::PollCycle, false, false, memory);
+            let mut buf = Vec::new();
+            let mut bound = 0;
+            for i in 0..20_000u64 {
+                // A second sensor appears halfway: earlier lines are padded at the end.
+                let parts: &[Part<'static>] = match i % 3 {
+                    0 => &[part("Cell1", "V", "4.122"), part("Cell2", "V", "4.138")],
+                    1 if i > 10_000 => &[part("SWR", "", "16")],
+                    _ => &[],
+                };
+                w.row(&row(i * 1000, (i % 3) as u32, parts), None, &mut buf)
+                    .unwrap();
+                bound = bound.max(w.spool.in_memory());
+            }
+            assert!(buf.is_empty(), "a file's table is written at the end");
+            let spilled = w.spool.spilled();
+            finish(&mut w, &mut buf, budget);
+            (String::from_utf8(buf).unwrap(), bound, spilled)
+        };
+        let (whole, _, spilled) = table(spool::MEMORY, usize::MAX);
+        assert!(!spilled);
+        let (pieces, bound, spilled) = table(4096, 100);
+        assert!(spilled);
+        assert!(bound < 4096, "memory held: {bound} bytes");
+        assert_eq!(pieces, whole);
+        assert!(whole.starts_with("Millis\tCell1(V)\tCell2(V)\tSWR\n2\t4.122\t4.138\t\n"));
+        assert!(whole.ends_with("\n19999\t4.122\t4.138\t16\n"));
+        assert_eq!(whole.lines().count(), 1 + 6667);
     }
 
     #[test]
