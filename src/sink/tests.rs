@@ -1,3 +1,4 @@
+use super::pretty::RESET;
 use super::*;
 use crate::row::Part;
 

@@ -1,0 +1,183 @@
+//! Pretty lines: cells padded to the column widths, trailing blanks trimmed, a row class's
+//! colour around the line (the table's default on a terminal and for `.txt`).
+
+use super::PRETTY_GROW_MAX;
+use super::line::{self, W};
+
+/// SGR codes of the row classes and the header, as owo-colors writes them.
+pub(super) const BOLD: &[u8] = b"\x1b[1m";
+pub(super) const DIMMED: &[u8] = b"\x1b[2m";
+pub(super) const YELLOW: &[u8] = b"\x1b[33m";
+pub(super) const RED: &[u8] = b"\x1b[31m";
+pub(super) const CYAN: &[u8] = b"\x1b[36m";
+pub(super) const RESET: &[u8] = b"\x1b[0m";
+
+/// One pretty line: cells padded to the column widths (the first three right-aligned),
+/// trailing blanks trimmed, optionally wrapped in a colour. Blanks are held back until a cell
+/// with text follows them, so that the blanks at the end of a line are never written.
+pub(super) struct PrettyLine<'b, 'l> {
+    pub(super) line: &'b mut W<'l>,
+    style: Option<&'static [u8]>,
+    /// Where the line's text starts (after the colour code).
+    start: usize,
+    /// Blanks owed before the next text.
+    pub(super) blanks: usize,
+}
+
+impl<'b, 'l> PrettyLine<'b, 'l> {
+    pub(super) fn start(line: &'b mut W<'l>, style: Option<&'static [u8]>) -> Self {
+        if let Some(s) = style {
+            line.put(s);
+        }
+        let start = line.len();
+        PrettyLine {
+            line,
+            style,
+            start,
+            blanks: 0,
+        }
+    }
+
+    /// Cell `i`; with `grow`, a column whose value is longer than its width (up to
+    /// [`PRETTY_GROW_MAX`]) widens for this row and every later one. Printable ASCII is one
+    /// column per byte; any other text is written char by char, control characters as blanks.
+    #[inline(always)]
+    pub(super) fn cell(
+        &mut self,
+        widths: &mut [usize],
+        i: usize,
+        cell: &str,
+        grow: bool,
+        last: bool,
+    ) {
+        let bytes = cell.as_bytes();
+        if i < 3 {
+            // Right-aligned: the padding goes first, so the length must be known first.
+            if line::scan(bytes, line::not_printable) == 0 {
+                self.right(widths, i, bytes, None, grow, last);
+            } else {
+                self.right(widths, i, bytes, Some(cell), grow, last);
+            }
+            return;
+        }
+        // Left-aligned: written after the blanks owed and checked in one go (a cell that is not
+        // printable ASCII is written again).
+        self.blanks += 2;
+        let len = if bytes.is_empty() {
+            0
+        } else {
+            self.pay_blanks();
+            let at = self.line.len();
+            if self.line.put_scan(bytes, line::not_printable) == 0 {
+                bytes.len()
+            } else {
+                self.line.truncate(at);
+                self.chars(cell)
+            }
+        };
+        let pad = fit(widths, i, len, grow, last);
+        if !last {
+            self.blanks += pad;
+        }
+    }
+
+    /// A cell of ASCII digits (Counter, Millis, ID).
+    #[inline(always)]
+    pub(super) fn digits(&mut self, widths: &mut [usize], i: usize, digits: &[u8]) {
+        self.right(widths, i, digits, None, true, false);
+    }
+
+    /// A right-aligned cell: `bytes`, printable ASCII, or the `chars` of a cell that is not.
+    #[inline(always)]
+    pub(super) fn right(
+        &mut self,
+        widths: &mut [usize],
+        i: usize,
+        bytes: &[u8],
+        chars: Option<&str>,
+        grow: bool,
+        last: bool,
+    ) {
+        if i > 0 {
+            self.blanks += 2;
+        }
+        let len = chars.map_or(bytes.len(), |c| c.chars().count());
+        self.blanks += fit(widths, i, len, grow, last);
+        if !bytes.is_empty() {
+            self.pay_blanks();
+            match chars {
+                None => self.line.put(bytes),
+                Some(cell) => {
+                    self.chars(cell);
+                }
+            }
+        }
+    }
+
+    /// Writes cells kept from an earlier row ([`Spans`]): their text, after the blanks owed
+    /// before it, and the blanks owed after it.
+    #[inline(always)]
+    pub(super) fn copy(&mut self, bytes: &[u8], blanks: usize) {
+        if bytes.is_empty() {
+            self.blanks += blanks;
+        } else {
+            self.pay_blanks();
+            self.line.put(bytes);
+            self.blanks = blanks;
+        }
+    }
+
+    /// Writes the blanks owed.
+    #[inline(always)]
+    fn pay_blanks(&mut self) {
+        self.line.spaces(self.blanks);
+        self.blanks = 0;
+    }
+
+    /// Writes a cell that is not printable ASCII char by char, control characters as blanks;
+    /// returns its width (one column per char).
+    fn chars(&mut self, cell: &str) -> usize {
+        self.line.aside(|w| {
+            for c in cell.chars() {
+                let c = if c.is_control() { ' ' } else { c };
+                let mut tmp = [0u8; 4];
+                w.put(c.encode_utf8(&mut tmp).as_bytes());
+            }
+        });
+        cell.chars().count()
+    }
+
+    /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
+    /// the line.
+    #[inline(always)]
+    pub(super) fn finish(self) {
+        let text = &self.line.bytes()[self.start..];
+        // Blanks held back were never written; a line that ends in printable ASCII other than
+        // a blank has nothing to trim.
+        let keep = match text.last() {
+            None | Some(0x21..=0x7E) => text.len(),
+            Some(_) => match std::str::from_utf8(text) {
+                Ok(t) => t.trim_end().len(),
+                Err(_) => text.len(),
+            },
+        };
+        self.line.truncate(self.start + keep);
+        if self.style.is_some() {
+            self.line.put(RESET);
+        }
+        self.line.byte(b'\n');
+    }
+}
+
+/// Column `i`'s width for a cell `len` columns wide: with `grow` (and not the last column), a
+/// longer cell up to [`PRETTY_GROW_MAX`] widens the column for this row and every later one.
+/// Returns the padding the cell needs.
+#[inline(always)]
+pub(super) fn fit(widths: &mut [usize], i: usize, len: usize, grow: bool, last: bool) -> usize {
+    let mut spare = 4;
+    let width = widths.get_mut(i).unwrap_or(&mut spare);
+    if grow && !last && len > *width && len <= PRETTY_GROW_MAX {
+        *width = len;
+    }
+    width.saturating_sub(len)
+}
