@@ -35,6 +35,8 @@ pub mod code {
     /// The project file (`busnoop.toml`, `--config`) cannot be used: bad TOML, an unknown key,
     /// a value out of range.
     pub const CONFIG: u8 = 12;
+    /// Hung up (SIGHUP: the SSH session or the terminal gone): 128 + 1.
+    pub const SIGHUP: u8 = 129;
     /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
     pub const SIGINT: u8 = 130;
     /// Standard output was closed by the reader (`busnoop … | head`): 128 + 13 (SIGPIPE).
@@ -62,7 +64,7 @@ pub enum Failure {
     Output(String),
     /// Input could not be read or used.
     Input(String),
-    /// Stopped by a signal (SIGINT or SIGTERM); not an error message.
+    /// Stopped by a signal (SIGINT, SIGTERM or SIGHUP); not an error message.
     Signal(Interrupt),
     /// Standard output closed by the reader: quiet.
     BrokenPipe,
@@ -81,7 +83,7 @@ pub enum Failure {
 /// How a run was stopped by a signal.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Interrupt {
-    /// SIGINT or SIGTERM.
+    /// SIGINT, SIGTERM or SIGHUP.
     pub signal: i32,
     /// How much of a file or stream was decoded and how much was left, e.g.
     /// "4194304 of 1073741824 bytes of the input decoded, 1069547520 not decoded"; `None` for
@@ -118,6 +120,7 @@ impl Failure {
             Failure::NothingDecoded(_) => code::NOTHING_DECODED,
             Failure::NoProtocol(_) => code::NO_PROTOCOL,
             Failure::Signal(i) if i.signal == libc::SIGTERM => code::SIGTERM,
+            Failure::Signal(i) if i.signal == libc::SIGHUP => code::SIGHUP,
             Failure::Signal(_) => code::SIGINT,
             Failure::BrokenPipe => code::BROKEN_PIPE,
             Failure::Internal(_) => code::INTERNAL,

@@ -1,12 +1,15 @@
-//! SIGINT/SIGTERM: asked once, busnoop stops cleanly (every decoded row written); asked twice,
-//! it ends at once (after [`at_exit`]: the live view gives the terminal back). The sources'
+//! SIGINT/SIGTERM/SIGHUP: asked once, busnoop stops cleanly (every decoded row written); asked
+//! twice, it ends at once (after [`at_exit`]: the live view gives the terminal back). The sources'
 //! waits and the driver both look here.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 
-/// SIGINT/SIGTERM catcher. The first signal asks busnoop to stop cleanly; a second one of the
-/// same kind ends the process at once. Signals are process-wide, so there is one catcher.
+/// SIGINT/SIGTERM/SIGHUP catcher. The first signal asks busnoop to stop cleanly; a second one of
+/// the same kind ends the process at once. A hangup (the SSH session or the terminal gone) is
+/// caught like SIGTERM, so that the rows still buffered reach `-o FILE`, unless SIGHUP is
+/// ignored (`nohup busnoop …`: the capture is meant to go on). Signals are process-wide, so
+/// there is one catcher.
 #[derive(Clone)]
 pub struct Stop {
     signal: Arc<AtomicUsize>,
@@ -31,7 +34,9 @@ impl Stop {
             return Ok(s.clone());
         }
         let signal = Arc::new(AtomicUsize::new(0));
-        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let hangup = (!hangup_ignored()).then_some(signal_hook::consts::SIGHUP);
+        let signals = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM];
+        for sig in signals.into_iter().chain(hangup) {
             let armed = Arc::new(AtomicBool::new(false));
             // Second signal: exit immediately with the conventional code, the live view's
             // terminal put back first (raw mode off, main screen).
@@ -66,5 +71,16 @@ impl Stop {
     /// driver, such as opening a FIFO).
     pub fn received() -> Option<i32> {
         STOP.get().and_then(Stop::signal)
+    }
+}
+
+/// Whether SIGHUP is ignored, as `nohup` starts a program: a handler would undo that.
+fn hangup_ignored() -> bool {
+    // SAFETY: `sigaction` with no new action only reads the current one into `old`, a plain C
+    // struct for which all zeros is a valid value.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(libc::SIGHUP, std::ptr::null(), &mut old) == 0
+            && old.sa_sigaction == libc::SIG_IGN
     }
 }

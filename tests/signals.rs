@@ -125,6 +125,70 @@ fn ctrl_c_stops_a_fast_endless_replay_at_once() {
     writer.join().unwrap();
 }
 
+/// Starts `busnoop sport -f tsv -o OUT FIFO` on an endless stream of 0x7E (garbage rows as fast
+/// as the pipe takes them), `ignore_hup`: with SIGHUP ignored, as `nohup` starts it. Returns
+/// the child once its first 1000 rows are written, with the writer thread.
+fn endless_replay(
+    fifo: &Path,
+    out: &Path,
+    ignore_hup: bool,
+) -> (Guard, std::thread::JoinHandle<()>) {
+    use std::os::unix::process::CommandExt;
+    mkfifo(fifo);
+    let writer = {
+        let fifo = fifo.to_owned();
+        std::thread::spawn(move || {
+            let mut f = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+            let buf = [0x7Eu8; 64 * 1024];
+            while f.write_all(&buf).is_ok() {}
+        })
+    };
+    let mut cmd = busnoop();
+    cmd.args(["sport", "-f", "tsv", "-o"]).arg(out).arg(fifo);
+    if ignore_hup {
+        // SAFETY: only signal() in the child before exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::signal(libc::SIGHUP, libc::SIG_IGN);
+                Ok(())
+            });
+        }
+    }
+    let guard = Guard(cmd.spawn().unwrap());
+    wait_for_rows(out, 1000);
+    (guard, writer)
+}
+
+/// A hangup (the SSH session or the terminal gone) stops busnoop like SIGTERM: every decoded
+/// row written, whole, exit code 129. It used to kill busnoop with the rows still buffered.
+#[test]
+fn a_hangup_stops_cleanly_with_every_row_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let (fifo, out) = (dir.path().join("feed"), dir.path().join("out.tsv"));
+    let (mut guard, writer) = endless_replay(&fifo, &out, false);
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGHUP, STOP_WITHIN);
+    assert_eq!(status.code(), Some(129), "{status:?} {err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.ends_with('\n'), "the output ends with a whole row");
+    let rows = text.lines().count() - 1;
+    assert!(err.contains(&format!("after {rows} rows")), "{err}");
+    writer.join().unwrap();
+}
+
+/// Under `nohup` (SIGHUP ignored) a hangup does not stop busnoop: it keeps capturing.
+#[test]
+fn a_hangup_under_nohup_is_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let (fifo, out) = (dir.path().join("feed"), dir.path().join("out.tsv"));
+    let (mut guard, writer) = endless_replay(&fifo, &out, true);
+    unsafe { libc::kill(guard.0.id() as i32, libc::SIGHUP) };
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(guard.0.try_wait().unwrap().is_none(), "a hangup stopped it");
+    let (status, err) = signal_and_wait(&mut guard, libc::SIGTERM, STOP_WITHIN);
+    assert_eq!(status.code(), Some(143), "{status:?} {err}");
+    writer.join().unwrap();
+}
+
 #[test]
 fn sigterm_stops_a_large_file_and_says_how_much_was_not_read() {
     let dir = tempfile::tempdir().unwrap();

@@ -19,7 +19,7 @@ use crate::source::serial;
     after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
                   10 nothing decoded (empty input, or no frame of the protocol), \
-                  11 detect: no known protocol, 12 bad project file, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  11 detect: no known protocol, 12 bad project file, 129 hangup, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]
