@@ -89,26 +89,8 @@ fn signal_and_wait(guard: &mut Guard, sig: i32, within: Duration) -> (ExitStatus
 #[test]
 fn ctrl_c_stops_a_fast_endless_replay_at_once() {
     let dir = tempfile::tempdir().unwrap();
-    let fifo = dir.path().join("feed");
-    let out = dir.path().join("out.tsv");
-    mkfifo(&fifo);
-    // An endless stream of 0x7E as fast as the pipe takes it, until busnoop closes its end.
-    let writer = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let mut f = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
-            let buf = [0x7Eu8; 64 * 1024];
-            while f.write_all(&buf).is_ok() {}
-        })
-    };
-    let child = busnoop()
-        .args(["sport", "-f", "tsv", "-o"])
-        .arg(&out)
-        .arg(&fifo)
-        .spawn()
-        .unwrap();
-    let mut guard = Guard(child);
-    wait_for_rows(&out, 1000);
+    let (fifo, out) = (dir.path().join("feed"), dir.path().join("out.tsv"));
+    let (mut guard, writer) = endless_replay(&fifo, &out, false);
     let (status, err) = signal_and_wait(&mut guard, libc::SIGINT, STOP_WITHIN);
     assert_eq!(status.code(), Some(130), "{err}");
     let text = std::fs::read_to_string(&out).unwrap();
@@ -126,7 +108,7 @@ fn ctrl_c_stops_a_fast_endless_replay_at_once() {
 }
 
 /// Starts `busnoop sport -f tsv -o OUT FIFO` on an endless stream of 0x7E (garbage rows as fast
-/// as the pipe takes them), `ignore_hup`: with SIGHUP ignored, as `nohup` starts it. Returns
+/// as the pipe takes them, until busnoop closes its end), `ignore_hup`: with SIGHUP ignored, as `nohup` starts it. Returns
 /// the child once its first 1000 rows are written, with the writer thread.
 fn endless_replay(
     fifo: &Path,
