@@ -27,7 +27,7 @@ use crate::exit::Failure;
 use crate::pcap::{linktype, write, write_ng};
 use crate::row::{Class, OutputError, Row, RowResult, Unframed};
 use crate::sbus::telegram::{self, AT_REQUEST};
-use crate::sink::{Records, Sink, Tap, Tapped};
+use crate::sink::{Output, Sink, Tap, Tapped};
 use crate::time::Anchor;
 
 /// LINKTYPE_USER1: SAB frames.
@@ -145,7 +145,7 @@ impl SbusWrap {
 pub struct Exporter {
     path: PathBuf,
     /// Whole blocks only: a full disk leaves the file ending with its last whole block.
-    out: Records,
+    out: Output,
     link_type: u32,
     interface: (String, String),
     /// Serial S-Bus: re-wrapped as Ether-S-Bus (otherwise the rows' bytes as they are).
@@ -170,12 +170,13 @@ impl Exporter {
         description: &str,
     ) -> Result<Exporter, Failure> {
         let (link_type, _) = check(path, command)?;
-        let file = crate::sink::create_file(path).map_err(|e| {
-            Failure::from_create(&format!("cannot create export {}", path.display()), &e)
-        })?;
+        let what = format!("cannot create export {}", path.display());
+        let out = crate::sink::create_file(path)
+            .and_then(|file| Output::file(file, path))
+            .map_err(|e| Failure::from_create(&what, &e))?;
         Ok(Exporter {
             path: path.to_owned(),
-            out: Records::file(file),
+            out,
             link_type,
             interface: (name.to_string(), description.to_string()),
             sbus: (command == "sbus").then(SbusWrap::default),
@@ -214,7 +215,7 @@ impl Exporter {
             Some(&self.interface.0),
             Some(&self.interface.1),
         );
-        self.out.record(&head)
+        self.out.record(&head).map_err(|e| e.error)
     }
 
     /// The packet for `row`, when it carries bytes of a new frame; `unframed`: its content
@@ -252,7 +253,7 @@ impl Exporter {
         };
         self.scratch.clear();
         write_ng::packet(&mut self.scratch, 0, ts, data, comment.as_deref());
-        self.out.record(&self.scratch)?;
+        self.out.record(&self.scratch).map_err(|e| e.error)?;
         self.packets += 1;
         let last = self.last.get_or_insert_with(|| (None, Vec::new()));
         last.0 = row.micros;
@@ -264,8 +265,8 @@ impl Exporter {
     /// Writes the headers (an export of no frames is still a valid pcapng) and everything
     /// buffered.
     pub fn flush(&mut self) -> Result<(), OutputError> {
-        let r = self.start().and_then(|()| self.out.flush());
-        r.map_err(|e| self.error(e))
+        self.start().map_err(|e| self.error(e))?;
+        self.out.flush()
     }
 }
 

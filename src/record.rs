@@ -35,7 +35,8 @@ use chrono::{DateTime, Utc};
 
 use crate::exit::Failure;
 use crate::pcap::{self, Packet, linktype, rtac};
-use crate::sink::Records;
+use crate::row::OutputError;
+use crate::sink::Output;
 use crate::time::Anchor;
 
 /// The pcapng `if_description` of a line: `FrSky S.Port, 57600 baud 8N1`.
@@ -57,7 +58,7 @@ pub struct Recorder {
     /// `None` for standard output.
     path: Option<PathBuf>,
     /// Whole records only: a full disk leaves the file ending with its last whole record.
-    out: Records,
+    out: Output,
     format: RecordFormat,
     content: Content,
     anchor: Option<DateTime<Utc>>,
@@ -189,24 +190,20 @@ impl Recorder {
     /// Creates the recording of `content` (its format checked first, [`format_for`]).
     pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
         let format = format_for(Some(path), content)?;
-        let file = crate::sink::create_file(path).map_err(|e| {
-            Failure::from_create(&format!("cannot create recording {}", path.display()), &e)
-        })?;
-        Ok(Self::new(Some(path), Records::file(file), format, content))
+        let what = format!("cannot create recording {}", path.display());
+        let out = crate::sink::create_file(path)
+            .and_then(|file| Output::file(file, path))
+            .map_err(|e| Failure::from_create(&what, &e))?;
+        Ok(Self::new(Some(path), out, format, content))
     }
 
     /// Records on standard output (`--record -`): a line's raw bytes, a capture's packets as
     /// classic pcap ([`format_for`]).
     pub fn stdout(content: Content) -> Recorder {
-        Self::new(
-            None,
-            Records::stream(Box::new(io::stdout())),
-            content.on_stdout(),
-            content,
-        )
+        Self::new(None, Output::stdout(), content.on_stdout(), content)
     }
 
-    fn new(path: Option<&Path>, out: Records, format: RecordFormat, content: Content) -> Recorder {
+    fn new(path: Option<&Path>, out: Output, format: RecordFormat, content: Content) -> Recorder {
         Recorder {
             path: path.map(Path::to_owned),
             out,
@@ -237,7 +234,8 @@ impl Recorder {
     /// A write error as the user sees it. A pipe whose reader went away (standard output, a
     /// FIFO, `--record >(tshark -r -)` and tshark quit) ends busnoop quietly, as the table's
     /// and the export's do.
-    fn fail(&self, e: io::Error) -> Failure {
+    fn fail(&self, e: OutputError) -> Failure {
+        let e = e.error;
         match &self.path {
             _ if e.kind() == io::ErrorKind::BrokenPipe => Failure::BrokenPipe,
             Some(p) => Failure::Output(format!("cannot write recording {}: {e}", p.display())),

@@ -3,7 +3,7 @@
 mod line;
 pub mod output;
 mod pretty;
-pub(crate) use output::{Records, check_folder, create_file};
+pub(crate) use output::{check_folder, create_file};
 mod spans;
 mod spool;
 mod tap;

@@ -83,7 +83,9 @@ pub(crate) fn check_folder(path: &Path) -> Result<(), crate::exit::Failure> {
     )))
 }
 
-/// A buffered destination that only ever writes complete rows.
+/// A buffered destination that only ever writes complete rows (or records of a binary file:
+/// recordings and exports, [`Output::record`]); a failed write cuts a regular file back to the
+/// last complete one.
 pub struct Output {
     dest: Dest,
     /// `buf[..len]` are the rows not written out yet; the rest is room for the next line
@@ -104,7 +106,11 @@ impl Output {
     /// Creates (truncates) `path`. It may also be a special file (`/dev/null`, `/dev/stdout`,
     /// a FIFO): those are written to but never synced.
     pub fn create(path: &Path) -> io::Result<Self> {
-        let file = create_file(path)?;
+        Self::file(create_file(path)?, path)
+    }
+
+    /// Writes into `file`, created from `path` with [`create_file`].
+    pub(crate) fn file(file: File, path: &Path) -> io::Result<Self> {
         let regular = file.metadata()?.is_file();
         Ok(Self::new(Dest::File {
             file,
@@ -143,6 +149,20 @@ impl Output {
     #[inline(always)]
     pub(super) fn line(&mut self, write: impl FnMut(&mut W<'_>)) {
         self.len += line::write_line(&mut self.buf, self.len, write);
+    }
+
+    /// Appends one whole record of a binary file (a recording's packet, an export's block, or
+    /// a header with its first packet) and writes out when enough has gathered: like a row, a
+    /// record is never cut by a failed write (a full disk), which Wireshark would report as
+    /// "cut short in the middle of a packet".
+    pub(crate) fn record(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
+        let end = self.len + bytes.len();
+        if self.buf.len() < end + line::ROOM {
+            self.buf.resize(end + line::ROOM, 0);
+        }
+        self.buf[self.len..end].copy_from_slice(bytes);
+        self.len = end;
+        self.row_done()
     }
 
     /// A complete row is in the buffer: write out when enough has gathered.
@@ -228,96 +248,6 @@ impl Output {
         match &self.dest {
             Dest::Memory(v) => v,
             _ => &[],
-        }
-    }
-}
-
-/// A file of records (a recording's packets, an export's blocks) that never ends inside one:
-/// records are gathered whole and written out together, and when a write fails (a full disk)
-/// a regular file is cut back to the end of the last record that was written completely, as
-/// [`Output`] does with rows. (A `BufWriter` left the file ending inside a record, which
-/// Wireshark reports as "cut short in the middle of a packet".)
-pub(crate) struct Records {
-    out: Box<dyn Write>,
-    /// The file again, to cut it back: regular files only.
-    cut: Option<File>,
-    buf: Vec<u8>,
-    /// Bytes known to be in the file (whole records).
-    committed: u64,
-    /// A write failed: nothing more is written (the file ends with a whole record).
-    failed: bool,
-}
-
-impl Records {
-    /// Records into `file` (created by [`create_file`]).
-    pub(crate) fn file(file: File) -> Records {
-        let cut = file
-            .try_clone()
-            .ok()
-            .filter(|f| f.metadata().is_ok_and(|m| m.is_file()));
-        let mut r = Records::stream(Box::new(file));
-        r.cut = cut;
-        r
-    }
-
-    /// Records into a stream that cannot be cut back (standard output).
-    pub(crate) fn stream(out: Box<dyn Write>) -> Records {
-        Records {
-            out,
-            cut: None,
-            buf: Vec::with_capacity(HIGH_WATER * 2),
-            committed: 0,
-            failed: false,
-        }
-    }
-
-    /// Appends one whole record (or a few: a header with its first packet); writes out when
-    /// enough has gathered.
-    pub(crate) fn record(&mut self, bytes: &[u8]) -> io::Result<()> {
-        self.buf.extend_from_slice(bytes);
-        if self.buf.len() >= HIGH_WATER {
-            self.flush()
-        } else {
-            Ok(())
-        }
-    }
-
-    /// Writes every gathered record; after a failed write, cuts the file back to its last whole
-    /// record (errors of the cut are ignored: the write error is what the user needs to see).
-    pub(crate) fn flush(&mut self) -> io::Result<()> {
-        if self.failed {
-            self.buf.clear();
-            return Ok(());
-        }
-        let result = self
-            .out
-            .write_all(&self.buf)
-            .and_then(|()| self.out.flush());
-        let written = self.buf.len() as u64;
-        self.buf.clear();
-        match result {
-            Ok(()) => {
-                self.committed += written;
-                Ok(())
-            }
-            Err(e) => {
-                self.failed = true;
-                if let Some(f) = &mut self.cut {
-                    let _ = f.set_len(self.committed);
-                    let _ = f.seek(SeekFrom::Start(self.committed));
-                }
-                Err(e)
-            }
-        }
-    }
-}
-
-/// What is gathered is written when the records are dropped without a last flush (an early
-/// return), as a `BufWriter` would.
-impl Drop for Records {
-    fn drop(&mut self) {
-        if !self.buf.is_empty() {
-            let _ = self.flush();
         }
     }
 }
