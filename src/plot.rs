@@ -48,18 +48,18 @@ impl ImageFormat {
 
 const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png";
 
-/// Checks the image's name and folder before the capture is read: the image is drawn only at
-/// the end, and finding then that it cannot be would waste the whole input (a pipe cannot be
-/// read twice). A name without `.svg`/`.png` is a usage error (exit 2), a missing folder an
-/// output error (exit 8) like `-o` into one.
+/// Checks the image's name before the capture is read: the image is drawn only at the end, and
+/// finding then that it cannot be would waste the whole input (a pipe cannot be read twice). A
+/// name without `.svg`/`.png` is a usage error (exit 2). Its folder is checked with the other
+/// outputs' before the input is opened (`cli::run_capture`).
 pub fn check(path: &Path) -> Result<(), Failure> {
-    if ImageFormat::of(path).is_none() {
-        return Err(Failure::Usage(format!(
+    match ImageFormat::of(path) {
+        Some(_) => Ok(()),
+        None => Err(Failure::Usage(format!(
             "-o {}: {IMAGE_NAMES}",
             path.display()
-        )));
+        ))),
     }
-    crate::sink::check_folder(path)
 }
 
 /// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels
