@@ -44,6 +44,7 @@ macro_rules! eprintln {
 }
 
 mod cli;
+pub mod crsf;
 mod detect;
 mod digits;
 mod exit;

@@ -1,0 +1,1 @@
+//! Decoder tests: every frame type against the public vectors' asserted values.
