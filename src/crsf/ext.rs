@@ -385,14 +385,13 @@ fn command(payload: &[u8], sc: &mut Scratch, st: &mut State) -> Described {
 fn radio(r: &mut Reader<'_>, sc: &mut Scratch) {
     match r.u8() {
         Some(0x10) => {
-            sc.data.push_str("timing correction");
             if let Some(v) = r.be_u32() {
                 sc.nums.fixed("Intv", "us", v.into(), 1);
             }
             if let Some(v) = r.be_i32() {
                 sc.nums.fixed("Offs", "us", v.into(), 1);
             }
-            sc.data.clear();
+            sc.note().push_str("timing correction");
         }
         Some(s) => {
             push_0x(&mut sc.data, s);

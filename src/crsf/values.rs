@@ -186,10 +186,9 @@ pub(crate) fn broadcast(ty: u8, payload: &[u8], sc: &mut Scratch) -> Option<Desc
         0x0E => group(&mut r, sc, "Cel", "V", 2, 3),
         0x10 => vtx(&mut r, sc),
         0x14 => {
-            for (i, name) in ["1RSS", "2RSS"].into_iter().enumerate() {
+            for name in ["1RSS", "2RSS"] {
                 if let Some(v) = r.u8() {
                     n.int(name, "dBm", rssi_dbm(v));
-                    let _ = i;
                 }
             }
             if let Some(v) = r.u8() {
