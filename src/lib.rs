@@ -51,6 +51,7 @@ mod exit;
 mod export;
 mod filter;
 pub mod fmt;
+pub mod ghst;
 mod numbers;
 mod pace;
 mod pairing;

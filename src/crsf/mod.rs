@@ -8,11 +8,11 @@
 //! `docs/crsf.md`. GHST (`crate::ghst`) reuses the frame format, the CRC, the reassembler
 //! ([`wire`]) and the decoder skeleton of this module.
 
-mod ext;
+pub(crate) mod ext;
 pub(crate) mod link;
 pub mod names;
 pub(crate) mod read;
-mod values;
+pub(crate) mod values;
 pub(crate) mod vocab;
 pub mod wire;
 

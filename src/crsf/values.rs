@@ -16,11 +16,17 @@ pub fn channel_us(raw: u16) -> i64 {
 }
 
 /// Writes the parts `CH<first+1>`… of `raw` channels with `us` giving each one's µs as
-/// `(value, decimals)`, the raw values into the Note (`raw 172 992 …`), and a compact Data cell
-/// of the µs values.
-fn channels(sc: &mut Scratch, first: usize, raw: &[u16], us: impl Fn(u16) -> (i64, u8)) {
+/// `(value, decimals)`, the raw values into the Note (`<label> 172 992 …`), and the µs values
+/// into a compact Data cell.
+pub(crate) fn channels(
+    sc: &mut Scratch,
+    first: usize,
+    raw: &[u16],
+    label: &str,
+    us: impl Fn(u16) -> (i64, u8),
+) {
     let note = sc.note();
-    note.push_str("raw");
+    note.push_str(label);
     for &r in raw {
         note.push(' ');
         push_uint(note, u64::from(r));
@@ -29,7 +35,7 @@ fn channels(sc: &mut Scratch, first: usize, raw: &[u16], us: impl Fn(u16) -> (i6
         let (v, prec) = us(r);
         sc.nums
             .fixed_with(|n| channel_name(n, first + i + 1), "us", v, prec);
-        if i > 0 {
+        if !sc.data.is_empty() {
             sc.data.push(' ');
         }
         sc.data.push_str(sc.nums.last_text());
@@ -56,7 +62,7 @@ pub fn rssi_dbm(b: u8) -> i64 {
 
 /// Notes payload bytes beyond the fields read (a newer sender: the TBS text says to ignore
 /// them), or a payload too short for them.
-fn note_length(sc: &mut Scratch, r: &Reader<'_>, want: usize) {
+pub(crate) fn note_length(sc: &mut Scratch, r: &Reader<'_>, want: usize) {
     let got = r.pos + r.rest().len();
     if got < want {
         let note = sc.note();
@@ -229,7 +235,7 @@ pub(crate) fn broadcast(ty: u8, payload: &[u8], sc: &mut Scratch) -> Option<Desc
         0x16 => {
             let mut raw = [0u16; 16];
             unpack_bits(payload, 11, 16, &mut raw);
-            channels(sc, 0, &raw, |r| (channel_us(r), 0));
+            channels(sc, 0, &raw, "raw", |r| (channel_us(r), 0));
             if payload.len() != 22 {
                 let note = sc.note();
                 note.push_str("payload of ");
@@ -241,7 +247,7 @@ pub(crate) fn broadcast(ty: u8, payload: &[u8], sc: &mut Scratch) -> Option<Desc
         0x18 => {
             let mut raw = [0u16; 16];
             unpack_bits(payload, 11, 16, &mut raw);
-            channels(sc, 0, &raw, |r| (9880 + i64::from(r) * 5, 1));
+            channels(sc, 0, &raw, "raw", |r| (9880 + i64::from(r) * 5, 1));
         }
         0x1C => {
             if let Some(v) = r.u8() {
@@ -548,7 +554,7 @@ fn subset(payload: &[u8], sc: &mut Scratch) {
     // µs × 10^res exactly: 988 + raw / 2^res.
     let scale = [1i64, 5, 25, 125][res as usize];
     let base = [988i64, 9_880, 98_800, 988_000][res as usize];
-    channels(sc, start, &raw[..count], |r| {
+    channels(sc, start, &raw[..count], "raw", |r| {
         (base + i64::from(r) * scale, res as u8)
     });
     let note = sc.note();
