@@ -391,6 +391,153 @@ pub fn sab(data: &[u8]) {
     }
 }
 
+/// CRSF: [`frame_shape`] with CRSF's start bytes.
+pub fn crsf(data: &[u8]) {
+    let o = crate::crsf::Options::default();
+    frame_shape(
+        &|| crate::crsf::decoder(o.clone()),
+        &crate::crsf::wire::CRSF_ADDRESSES,
+        data,
+    );
+}
+
+/// GHST: [`frame_shape`] with GHST's start bytes.
+pub fn ghst(data: &[u8]) {
+    let o = crate::ghst::Options::default();
+    frame_shape(
+        &|| crate::ghst::decoder(o.clone()),
+        &crate::ghst::ADDRESSES,
+        data,
+    );
+}
+
+/// The CRSF frame shape (`addr len type payload crc`, CRC-8 0xD5): chunking invariance, and
+/// the rows are exactly those of a second, deliberately naive reading of the resync rule
+/// (`crate::crsf::wire`) over the whole input: a frame at the earliest position where a
+/// complete candidate passes its CRC, a failed candidate with a valid frame starting inside it
+/// costs one byte of garbage, one without is a bad (or, cut by the end, truncated) frame,
+/// garbage in runs of at most 64 bytes. Times only grow.
+fn frame_shape(new: &dyn Fn() -> Box<dyn Decoder>, addrs: &[bool; 256], data: &[u8]) {
+    let rows = same_rows_however_chunked(new, data);
+    let want = naive_frames(addrs, data);
+    let got: Vec<(&str, &[u8])> = rows
+        .iter()
+        .map(|r| {
+            let k = match r.kind.as_str() {
+                "BadCRC" => "BadCRC",
+                "Truncated" => "Truncated",
+                "Garbage" => "Garbage",
+                _ => "Frame",
+            };
+            (k, r.raw.as_slice())
+        })
+        .collect();
+    let want: Vec<(&str, &[u8])> = want.iter().map(|(k, r)| (*k, &data[r.clone()])).collect();
+    assert_eq!(
+        got, want,
+        "rows differ from the naive reading of the resync rule"
+    );
+    let mut last = 0;
+    for r in &rows {
+        let m = r.micros.expect("every row has a time");
+        assert!(m >= last, "time went back: {r:?}");
+        last = m;
+        if r.kind == "Garbage" {
+            assert!(r.id.is_none() && r.parts.is_empty(), "{r:?}");
+        } else {
+            assert_eq!(r.id, Some(u32::from(r.raw[0])), "{r:?}");
+        }
+        if matches!(r.kind.as_str(), "BadCRC" | "Truncated") {
+            assert!(r.parts.is_empty(), "numbers of a broken frame: {r:?}");
+        }
+    }
+}
+
+/// CRC-8, polynomial 0xD5, bit by bit (a second reading of the table in `crsf::wire`).
+fn crc8_d5_bitwise(bytes: &[u8]) -> u8 {
+    let mut c = 0u8;
+    for &b in bytes {
+        c ^= b;
+        for _ in 0..8 {
+            c = if c & 0x80 != 0 {
+                (c << 1) ^ 0xD5
+            } else {
+                c << 1
+            };
+        }
+    }
+    c
+}
+
+/// The rows' kinds and byte ranges by the resync rule, over the whole input at once.
+fn naive_frames(addrs: &[bool; 256], data: &[u8]) -> Vec<(&'static str, std::ops::Range<usize>)> {
+    // (span, valid) of the candidate at p: `None` when p starts none.
+    let cand = |p: usize| -> Option<(usize, bool)> {
+        let a = *data.get(p)?;
+        if !addrs[a as usize] {
+            return None;
+        }
+        let Some(&len) = data.get(p + 1) else {
+            return Some((1, false));
+        };
+        if !(2..=62).contains(&len) {
+            return None;
+        }
+        let end = p + len as usize + 2;
+        if end > data.len() {
+            return Some((data.len() - p, false));
+        }
+        Some((
+            end - p,
+            crc8_d5_bitwise(&data[p + 2..end - 1]) == data[end - 1],
+        ))
+    };
+    let complete = |p: usize, span: usize| {
+        p + span <= data.len() && data.get(p + 1).is_some_and(|&l| l as usize + 2 == span)
+    };
+    let valid = |p: usize| matches!(cand(p), Some((span, true)) if complete(p, span));
+    let mut out: Vec<(&'static str, std::ops::Range<usize>)> = Vec::new();
+    let mut garbage: Option<usize> = None;
+    let flush = |out: &mut Vec<(&'static str, std::ops::Range<usize>)>,
+                 g: &mut Option<usize>,
+                 to: usize| {
+        if let Some(s) = g.take() {
+            let mut a = s;
+            while a < to {
+                let b = (a + crate::row::GARBAGE_ROW_MAX).min(to);
+                out.push(("Garbage", a..b));
+                a = b;
+            }
+        }
+    };
+    let mut p = 0;
+    while p < data.len() {
+        match cand(p) {
+            Some((span, true)) => {
+                flush(&mut out, &mut garbage, p);
+                out.push(("Frame", p..p + span));
+                p += span;
+            }
+            Some((span, false)) if !(p + 1..p + span).any(valid) => {
+                flush(&mut out, &mut garbage, p);
+                let kind = if complete(p, span) {
+                    "BadCRC"
+                } else {
+                    "Truncated"
+                };
+                out.push((kind, p..p + span));
+                p += span;
+            }
+            _ => {
+                garbage.get_or_insert(p);
+                p += 1;
+            }
+        }
+    }
+    flush(&mut out, &mut garbage, p);
+    out
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -421,5 +568,24 @@ pub(crate) mod tests {
         // The whole invariant check, every mode: it used to read the break-mode row as data
         // mode because it starts with B5, and panic "bad CRC accepted".
         sbus_serial(raw);
+    }
+
+    /// The EdgeTX resync stream and noise around frames satisfy the CRSF checks.
+    #[test]
+    fn crsf_and_ghst_checks_hold_on_frames_and_noise() {
+        let mut data = crate::testing::noise(600, 5);
+        for i in 0..20u8 {
+            crate::crsf::wire::encode(&mut data, 0xC8, 0x14, &[i; 10]);
+            crate::crsf::wire::encode(&mut data, 0x82, 0x10, &[i; 10]);
+            data.extend(crate::testing::noise(usize::from(i), u64::from(i) + 1));
+        }
+        data.extend([0xC8, 0x0A, 0x08]);
+        crsf(&data);
+        ghst(&data);
+        assert!(
+            naive_frames(&crate::crsf::wire::CRSF_ADDRESSES, &data)
+                .iter()
+                .any(|(k, _)| *k == "BadCRC")
+        );
     }
 }

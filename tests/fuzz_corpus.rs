@@ -62,3 +62,13 @@ fn sbus_ether_corpus() {
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }
+
+#[test]
+fn crsf_corpus() {
+    replay("crsf", busnoop::selfcheck::crsf);
+}
+
+#[test]
+fn ghst_corpus() {
+    replay("ghst", busnoop::selfcheck::ghst);
+}
