@@ -4,7 +4,7 @@
 //! reassembler, its name tables, the mapping of frames onto the log table ([`crate::row`]) and
 //! its [`Protocol`] descriptor. It implements [`Decoder`], the one interface the driver
 //! (`crate::run`) sees. A protocol never imports the command line, the sinks or the sources:
-//! everything it learns comes in through its options, [`Line`] and the input [`Kind`].
+//! everything it learns comes in through its options, [`Line`] and the input [`InputKind`].
 //!
 //! ## The reassembler contract
 //!
@@ -73,7 +73,7 @@ impl Line {
 
 /// What an input turned out to be.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
+pub enum InputKind {
     /// Bytes exactly as they were on the wire, without time.
     Raw,
     /// EdgeTX/OpenTX debug log: `YYYY-MM-DD,HH:MM:SS.mmm: 7E A1 …`.
@@ -98,7 +98,7 @@ pub struct Protocol {
     /// Character format and default speed of a live line.
     pub line: Line,
     /// The input kinds its decoder reads.
-    pub accepts: &'static [Kind],
+    pub accepts: &'static [InputKind],
     /// The same in words, for the message that refuses another kind ("raw wire bytes, EdgeTX
     /// logs or busnoop recordings").
     pub accepts_text: &'static str,
@@ -112,7 +112,7 @@ pub struct Protocol {
 
 impl Protocol {
     /// Whether this protocol's decoder reads inputs of `kind`.
-    pub fn reads(&self, kind: Kind) -> bool {
+    pub fn reads(&self, kind: InputKind) -> bool {
         self.accepts.contains(&kind)
     }
 }
@@ -126,7 +126,7 @@ pub trait Decoder {
     /// sources without time). Rows for every frame completed by these bytes are emitted at once.
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult;
 
-    /// One packet of a capture (sources of [`Kind::Pcap`] and [`Kind::Pcapng`]); `p.time` is µs
+    /// One packet of a capture (sources of [`InputKind::Pcap`] and [`InputKind::Pcapng`]); `p.time` is µs
     /// since the capture started. Rows for everything it completes are emitted at once. A
     /// byte-stream protocol takes its captured bytes as bytes that arrived at that time.
     fn packet(&mut self, p: &Packet<'_>, out: &mut dyn RowOut) -> RowResult {

@@ -13,7 +13,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::Kind;
+    use crate::protocol::InputKind;
 
     #[test]
     fn every_protocol_reads_raw_bytes_and_live_lines_and_has_its_own_command() {
@@ -22,7 +22,11 @@ mod tests {
         commands.dedup();
         assert_eq!(commands.len(), PROTOCOLS.len());
         for p in PROTOCOLS {
-            assert!(p.reads(Kind::Raw) && p.reads(Kind::Serial), "{}", p.name);
+            assert!(
+                p.reads(InputKind::Raw) && p.reads(InputKind::Serial),
+                "{}",
+                p.name
+            );
         }
     }
 }

@@ -9,7 +9,7 @@ use clap::Parser;
 use crate::exit::{Failure, code};
 use crate::filter::Selection;
 use crate::pace::{Paced, Pacer};
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Protocol};
 use crate::record::{Content, Recorder};
 use crate::run::{Context, drive};
 use crate::signal::Stop;
@@ -248,12 +248,12 @@ fn names_u8(names: &crate::filter::Names) -> Vec<(String, u8)> {
 }
 
 /// The failure for an input of a kind `protocol` cannot read.
-fn unusable(kind: Kind, protocol: &Protocol) -> Failure {
+fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
     let what = match kind {
-        Kind::Pcap | Kind::Pcapng => "a pcap of network traffic",
-        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
-        Kind::Recording => "a busnoop recording",
-        Kind::Raw | Kind::Serial => "raw serial data",
+        InputKind::Pcap | InputKind::Pcapng => "a pcap of network traffic",
+        InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        InputKind::Recording => "a busnoop recording",
+        InputKind::Raw | InputKind::Serial => "raw serial data",
     };
     Failure::Input(format!(
         "this is {what}; {} captures are {}",
@@ -273,7 +273,7 @@ pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
     selection: &Selection,
-    decoder_for: impl FnOnce(Kind, &Line) -> Box<dyn Decoder>,
+    decoder_for: impl FnOnce(InputKind, &Line) -> Box<dyn Decoder>,
 ) -> Result<(), Failure> {
     let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
     if record_to_stdout && args.output.output_file().is_none() {
@@ -350,7 +350,7 @@ pub fn run_capture(
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
     }
-    if args.live.export.is_some() && matches!(kind, Kind::Pcap | Kind::Pcapng) {
+    if args.live.export.is_some() && matches!(kind, InputKind::Pcap | InputKind::Pcapng) {
         // Only a serial line needs re-wrapping: network captures are Wireshark's already.
         return Err(Failure::Usage(format!(
             "--export re-wraps the frames of a serial line; {} is a network capture, which \
@@ -360,9 +360,11 @@ pub fn run_capture(
     }
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
-        Kind::Pcap | Kind::Pcapng => Content::Packets,
-        Kind::Serial | Kind::EdgeTxLog | Kind::Recording => Content::Line { timed: true },
-        Kind::Raw => Content::Line { timed: false },
+        InputKind::Pcap | InputKind::Pcapng => Content::Packets,
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+            Content::Line { timed: true }
+        }
+        InputKind::Raw => Content::Line { timed: false },
     };
     let mut recorder = match &args.live.record {
         Some(_) if record_to_stdout => Some(Recorder::stdout(content)),
@@ -382,7 +384,7 @@ pub fn run_capture(
         eprintln!("busnoop: note: {note}");
     }
     // Files and streams: keep their start, to tell a wrong protocol afterwards.
-    let (reader, kept): (Box<dyn ChunkReader>, _) = if kind == Kind::Serial {
+    let (reader, kept): (Box<dyn ChunkReader>, _) = if kind == InputKind::Serial {
         (reader, None)
     } else {
         let (tee, kept) = crate::detect::Tee::new(reader);
@@ -432,12 +434,12 @@ pub fn run_capture(
                          Date and Time columns come with any source that has wall-clock time"
                     );
                 }
-                table.set_wide(step, kind == Kind::Serial);
+                table.set_wide(step, kind == InputKind::Serial);
             }
             Some(table)
         }
     };
-    let live = kind == Kind::Serial;
+    let live = kind == InputKind::Serial;
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
     let pacer = if live { None } else { Pacer::new(speed) };
     let rx = source::spawn(reader, progress);
@@ -563,9 +565,9 @@ pub fn run_capture(
 /// Notes on options that cannot do what they ask for this input or output: `--time abs` on a
 /// source without times, `--utc` on times without a zone (or without `--time abs`), an `-o`
 /// extension that names no format.
-fn option_notes(out: &OutputArgs, kind: Kind) -> Vec<String> {
+fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
     let mut notes = Vec::new();
-    if out.time == TimeMode::Abs && kind == Kind::Raw {
+    if out.time == TimeMode::Abs && kind == InputKind::Raw {
         notes.push(
             "--time abs: raw wire bytes carry no wall-clock time, so the Time column stays \
              empty (a recording made with --record FILE.pcap keeps the times)"
@@ -574,7 +576,7 @@ fn option_notes(out: &OutputArgs, kind: Kind) -> Vec<String> {
     }
     if out.utc && out.time != TimeMode::Abs {
         notes.push("--utc has an effect only with --time abs".to_string());
-    } else if out.utc && kind == Kind::EdgeTxLog {
+    } else if out.utc && kind == InputKind::EdgeTxLog {
         notes.push(
             "--utc: an EdgeTX log's times have no time zone; they are shown as logged".to_string(),
         );
@@ -652,7 +654,7 @@ fn open_source(
                     eprintln!("busnoop: note: {w}");
                 }
                 let reader = SerialReader::new(path, port, *cfg, reconnect);
-                return Ok((Kind::Serial, Box::new(reader), None));
+                return Ok((InputKind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
             Err(e) if serial::is_not_a_tty(&e) => {}
@@ -662,12 +664,12 @@ fn open_source(
     let (opened, progress) = source::open(&input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
-        Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
-        Kind::Pcap | Kind::Pcapng => {
+        InputKind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
+        InputKind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
+        InputKind::Pcap | InputKind::Pcapng => {
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
-        Kind::Raw | Kind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
     };
     Ok((kind, reader, Some(progress)))
 }

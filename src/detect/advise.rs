@@ -78,7 +78,7 @@ pub enum Advice {
 /// protocol a much better fit, or did almost nothing decode? `kept` is the start of the input.
 pub fn advise(
     protocol: &Protocol,
-    kind: Kind,
+    kind: InputKind,
     kept: &Kept,
     valid_frames: u64,
     source: &Path,

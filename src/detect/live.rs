@@ -137,9 +137,9 @@ pub(super) fn judge_live(listens: &[Listen]) -> LiveReport {
     let mut per_rate: Vec<Option<Ranked>> = Vec::new();
     for l in listens {
         let ranked = rank(
-            candidates(Kind::Serial, Some(l.baud)),
+            candidates(InputKind::Serial, Some(l.baud)),
             &l.batches,
-            Kind::Serial,
+            InputKind::Serial,
         );
         let best = ranked.into_iter().next().filter(|r| r.score.recognised());
         per_rate.push(best);

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::exit::Failure;
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Protocol};
 use crate::protocols::PROTOCOLS;
 use crate::row::{Class, Row, RowOut, RowResult, kind as row_kind};
 use crate::source::serial::{self, ModemLines, SerialConfig};
@@ -68,9 +68,12 @@ pub struct Candidate {
 }
 
 /// The variants of every protocol that reads inputs of `kind`, at `baud`.
-pub fn candidates(kind: Kind, baud: Option<u32>) -> Vec<Candidate> {
+pub fn candidates(kind: InputKind, baud: Option<u32>) -> Vec<Candidate> {
     let mut out = Vec::new();
-    let byte_stream = matches!(kind, Kind::Raw | Kind::Serial | Kind::Recording);
+    let byte_stream = matches!(
+        kind,
+        InputKind::Raw | InputKind::Serial | InputKind::Recording
+    );
     for &p in PROTOCOLS {
         if !p.reads(kind) {
             continue;
@@ -293,9 +296,9 @@ impl RowOut for Tally {
 /// Feeds `segments` (bytes with their times) through every candidate and ranks them, best
 /// first. `total` is the number of bytes for the share (the wire bytes; for network captures,
 /// where the file holds more than the payloads, the payload bytes the decoder saw).
-pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: Kind) -> Vec<Ranked> {
+pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: InputKind) -> Vec<Ranked> {
     let wire: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
-    let network = matches!(kind, Kind::Pcap | Kind::Pcapng);
+    let network = matches!(kind, InputKind::Pcap | InputKind::Pcapng);
     let mut ranked: Vec<Ranked> = candidates
         .drain(..)
         .map(|mut c| {
@@ -424,14 +427,14 @@ pub const INVERTED_FIX: &str = "the line is inverted: 0x81 arrives where S.Port'
 /// The input's kind and its first [`SCAN_BYTES`] (fewer when it ends), and the signal that cut
 /// the reading short: SIGINT/SIGTERM end the wait of a slow pipe (`cat /dev/ttyUSB0 | busnoop
 /// detect -`), and what arrived is judged.
-fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure> {
+fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Failure> {
     let stop = crate::signal::Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let (opened, progress) = crate::source::open(input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
-        Kind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
+        InputKind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
+        InputKind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
         _ => Box::new(crate::source::RawReader::new(opened)),
     };
     let feed = crate::source::spawn(reader, Some(progress));
@@ -458,13 +461,13 @@ fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure
     Ok((kind, batches, signal))
 }
 
-fn kind_text(kind: Kind) -> &'static str {
+fn kind_text(kind: InputKind) -> &'static str {
     match kind {
-        Kind::Raw => "raw bytes",
-        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
-        Kind::Pcap | Kind::Pcapng => "a network capture",
-        Kind::Recording => "a busnoop recording",
-        Kind::Serial => "a serial line",
+        InputKind::Raw => "raw bytes",
+        InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        InputKind::Pcap | InputKind::Pcapng => "a network capture",
+        InputKind::Recording => "a busnoop recording",
+        InputKind::Serial => "a serial line",
     }
 }
 

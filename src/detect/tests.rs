@@ -18,7 +18,11 @@ fn untimed(bytes: &[u8]) -> Vec<Batch> {
 
 /// The ranking of raw bytes and the verdict's winner (label), or `None`.
 fn winner(bytes: &[u8]) -> (Option<&'static str>, Option<&'static str>) {
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(bytes), Kind::Raw);
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(bytes),
+        InputKind::Raw,
+    );
     match verdict(&ranked) {
         Verdict::Found(i, mixed) => (Some(ranked[i].label), mixed.map(|j| ranked[j].label)),
         _ => (None, None),
@@ -51,7 +55,7 @@ fn sbus_break_session() -> Vec<u8> {
 #[test]
 fn every_protocol_of_the_table_has_candidates() {
     for p in PROTOCOLS {
-        let raw = candidates(Kind::Raw, None);
+        let raw = candidates(InputKind::Raw, None);
         assert!(
             raw.iter().any(|c| c.protocol.command == p.command),
             "{} is not tried by detect",
@@ -59,8 +63,8 @@ fn every_protocol_of_the_table_has_candidates() {
         );
     }
     // Network captures: only what reads them.
-    let net = candidates(Kind::Pcap, None);
-    assert!(net.iter().all(|c| c.protocol.reads(Kind::Pcap)));
+    let net = candidates(InputKind::Pcap, None);
+    assert!(net.iter().all(|c| c.protocol.reads(InputKind::Pcap)));
     assert_eq!(net.len(), 1);
 }
 
@@ -86,9 +90,9 @@ fn each_fixture_names_its_protocol() {
 #[test]
 fn the_evidence_names_frames_and_their_start_bytes() {
     let ranked = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&fixture("sport-sample.bin")),
-        Kind::Raw,
+        InputKind::Raw,
     );
     let s = &ranked[0].score;
     assert_eq!((s.frames, s.valid_bytes, s.total), (30, 220, 220));
@@ -104,9 +108,9 @@ fn the_evidence_names_frames_and_their_start_bytes() {
 fn random_bytes_are_no_known_protocol() {
     for seed in [1u64, 0x2545_F491_4F6C_DD1D, 0x9E37_79B9_7F4A_7C15] {
         let ranked = rank(
-            candidates(Kind::Raw, None),
+            candidates(InputKind::Raw, None),
             &untimed(&noise(100_000, seed)),
-            Kind::Raw,
+            InputKind::Raw,
         );
         assert_eq!(verdict(&ranked), Verdict::Unknown, "seed {seed}");
     }
@@ -114,7 +118,7 @@ fn random_bytes_are_no_known_protocol() {
 
 #[test]
 fn empty_input_is_empty() {
-    let ranked = rank(candidates(Kind::Raw, None), &[], Kind::Raw);
+    let ranked = rank(candidates(InputKind::Raw, None), &[], InputKind::Raw);
     assert_eq!(verdict(&ranked), Verdict::Empty);
 }
 
@@ -135,7 +139,11 @@ fn frames_among_garbage_are_found() {
     let mut bytes = noise(300, 7);
     bytes.extend(fixture("sport-sample.bin"));
     bytes.extend(noise(100, 8));
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(&bytes), Kind::Raw);
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(&bytes),
+        InputKind::Raw,
+    );
     assert_eq!(verdict(&ranked), Verdict::Found(0, None));
     assert_eq!(ranked[0].label, "S.Port");
 }
@@ -155,7 +163,11 @@ fn a_mixed_file_names_both_protocols() {
 fn an_inverted_sport_line_is_recognised() {
     let inverted: Vec<u8> = fixture("sport-sample.bin").iter().map(|b| !b).collect();
     assert_eq!(inverted[0], 0x81, "0x81 where 0x7E belongs");
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(&inverted), Kind::Raw);
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(&inverted),
+        InputKind::Raw,
+    );
     assert!(matches!(verdict(&ranked), Verdict::Found(0, _)));
     assert!(ranked[0].inverted);
     let mut text = String::new();
@@ -179,9 +191,9 @@ fn an_inverted_sport_line_is_recognised() {
 #[test]
 fn the_command_carries_options_and_a_quoted_path() {
     let ranked = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&fixture("sport-sample.bin")),
-        Kind::Raw,
+        InputKind::Raw,
     );
     assert_eq!(
         ranked[0].command(Path::new("my capture.bin"), None),
@@ -197,9 +209,9 @@ fn the_command_carries_options_and_a_quoted_path() {
         "the protocol's own rate is not repeated"
     );
     let parity = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&sbus_break_session()),
-        Kind::Raw,
+        InputKind::Raw,
     )
     .into_iter()
     .find(|r| r.label == "S-Bus parity mode")
@@ -302,11 +314,23 @@ fn advice_after_a_run() {
     let sport = fixture("sport-sample.bin");
     // The right protocol: nothing to say.
     assert_eq!(
-        advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&sport), 30, src),
+        advise(
+            &crate::sport::PROTOCOL,
+            InputKind::Raw,
+            &kept(&sport),
+            30,
+            src
+        ),
         Advice::Fine
     );
     // S-Bus reads 16 telegrams in it: a note naming S.Port and the command.
-    match advise(&crate::sbus::PROTOCOL, Kind::Raw, &kept(&sport), 24, src) {
+    match advise(
+        &crate::sbus::PROTOCOL,
+        InputKind::Raw,
+        &kept(&sport),
+        24,
+        src,
+    ) {
         Advice::Note(n) => {
             assert!(n.contains("it looks like S.Port"), "{n}");
             assert!(n.ends_with("try: busnoop sport cap.bin"), "{n}");
@@ -314,7 +338,7 @@ fn advice_after_a_run() {
         a => panic!("{a:?}"),
     }
     // SAB finds nothing: the failure, naming S.Port.
-    match advise(&crate::sab::PROTOCOL, Kind::Raw, &kept(&sport), 0, src) {
+    match advise(&crate::sab::PROTOCOL, InputKind::Raw, &kept(&sport), 0, src) {
         Advice::NothingDecoded(m) => {
             assert!(
                 m.starts_with("no SAB frame in cap.bin; it looks like S.Port"),
@@ -325,13 +349,13 @@ fn advice_after_a_run() {
     }
     // Empty.
     assert_eq!(
-        advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&[]), 0, src),
+        advise(&crate::sport::PROTOCOL, InputKind::Raw, &kept(&[]), 0, src),
         Advice::NothingDecoded("empty input: cap.bin holds no bytes".into())
     );
     // Noise: no protocol fits.
     match advise(
         &crate::sport::PROTOCOL,
-        Kind::Raw,
+        InputKind::Raw,
         &kept(&noise(20_000, 5)),
         0,
         Path::new("-"),
@@ -344,7 +368,13 @@ fn advice_after_a_run() {
     }
     // Inverted S.Port given to sport: the fix.
     let inverted: Vec<u8> = sport.iter().map(|b| !b).collect();
-    match advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&inverted), 0, src) {
+    match advise(
+        &crate::sport::PROTOCOL,
+        InputKind::Raw,
+        &kept(&inverted),
+        0,
+        src,
+    ) {
         Advice::NothingDecoded(m) => assert!(m.contains("inverted"), "{m}"),
         a => panic!("{a:?}"),
     }
@@ -353,7 +383,7 @@ fn advice_after_a_run() {
 #[test]
 fn every_descriptor_has_a_pretty_width_per_column() {
     // The widths of the protocol descriptor follow its decoders' columns (every variant).
-    for kind in [Kind::Raw, Kind::Pcap] {
+    for kind in [InputKind::Raw, InputKind::Pcap] {
         for c in candidates(kind, None) {
             assert_eq!(
                 c.protocol.pretty_widths.len(),

@@ -1,7 +1,7 @@
 //! SAB settings: line defaults, the table's extra columns, `--framing` and the decoder options.
 
 use super::hdlc;
-use crate::protocol::{Kind, Line, Protocol};
+use crate::protocol::{InputKind, Line, Protocol};
 
 /// SAB runs at 115200 baud 8N1.
 pub const DEFAULT_BAUD: u32 = 115_200;
@@ -11,7 +11,7 @@ pub const PROTOCOL: Protocol = Protocol {
     name: "SAB",
     command: "sab2",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor#(0x10) Sensor Data | Unit Addr Resp ms Framing Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 36, 4, 4, 7, 7, 0],

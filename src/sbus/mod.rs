@@ -26,7 +26,7 @@ pub use ether_decoder::EtherDecoder;
 pub use serial_decoder::{Resolved, SerialDecoder};
 pub use stats::{MAX_PLCS, StationStats, Totals};
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Protocol};
 
 /// Default serial speed of S-Bus ports.
 pub const DEFAULT_BAUD: u32 = 9600;
@@ -37,11 +37,11 @@ pub const PROTOCOL: Protocol = Protocol {
     command: "sbus",
     line: Line::n81(DEFAULT_BAUD),
     accepts: &[
-        Kind::Raw,
-        Kind::Serial,
-        Kind::Recording,
-        Kind::Pcap,
-        Kind::Pcapng,
+        InputKind::Raw,
+        InputKind::Serial,
+        InputKind::Recording,
+        InputKind::Pcap,
+        InputKind::Pcapng,
     ],
     accepts_text: "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
     // Counter Millis ID Device(IP:port) Type Sensor#(DB4000[2]) Sensor(command) Data | Resp ms
@@ -106,10 +106,10 @@ impl Default for Options {
 
 /// The S-Bus decoder for an input of `kind` (one that [`PROTOCOL`] accepts): serial bytes
 /// (raw files, devices, busnoop recordings) or Ether-S-Bus captures (pcap, pcapng).
-pub fn decoder(opts: Options, kind: Kind) -> Box<dyn Decoder> {
+pub fn decoder(opts: Options, kind: InputKind) -> Box<dyn Decoder> {
     match kind {
-        Kind::Pcap | Kind::Pcapng => Box::new(EtherDecoder::new(&opts)),
-        Kind::Raw | Kind::Serial | Kind::Recording | Kind::EdgeTxLog => {
+        InputKind::Pcap | InputKind::Pcapng => Box::new(EtherDecoder::new(&opts)),
+        InputKind::Raw | InputKind::Serial | InputKind::Recording | InputKind::EdgeTxLog => {
             Box::new(SerialDecoder::new(opts))
         }
     }

@@ -10,7 +10,7 @@ pub mod wire;
 
 use crate::fmt::{push_0x, push_hex, push_hex_u8, push_u64};
 use crate::numbers::push_uint;
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Protocol};
 use crate::row::{Class, Row};
 use crate::row::{Latch, RowOut, RowResult};
 use crate::stats::{Column, Problems, Report};
@@ -28,7 +28,12 @@ pub const PROTOCOL: Protocol = Protocol {
     name: "S.Port",
     command: "sport",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::EdgeTxLog, Kind::Recording],
+    accepts: &[
+        InputKind::Raw,
+        InputKind::Serial,
+        InputKind::EdgeTxLog,
+        InputKind::Recording,
+    ],
     accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 30, 4, 0],
