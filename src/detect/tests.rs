@@ -17,14 +17,17 @@ fn untimed(bytes: &[u8]) -> Vec<Batch> {
 }
 
 /// The ranking of raw bytes and the verdict's winner (label), or `None`.
-fn winner(bytes: &[u8]) -> (Option<&'static str>, Option<&'static str>) {
+fn winner(bytes: &[u8]) -> (Option<String>, Option<String>) {
     let ranked = rank(
         candidates(InputKind::Raw, None),
         &untimed(bytes),
         InputKind::Raw,
     );
     match verdict(&ranked) {
-        Verdict::Found(i, mixed) => (Some(ranked[i].label), mixed.map(|j| ranked[j].label)),
+        Verdict::Found(i, mixed) => (
+            Some(ranked[i].label.clone()),
+            mixed.map(|j| ranked[j].label.clone()),
+        ),
         _ => (None, None),
     }
 }
@@ -70,19 +73,26 @@ fn every_protocol_of_the_table_has_candidates() {
 
 #[test]
 fn each_fixture_names_its_protocol() {
-    assert_eq!(winner(&fixture("sport-sample.bin")).0, Some("S.Port"));
+    assert_eq!(
+        winner(&fixture("sport-sample.bin")).0,
+        Some("S.Port".to_owned())
+    );
     assert_eq!(
         winner(&fixture("sab1-session.bin")).0,
-        Some("SAB v1 (sync framing)")
+        Some("SAB v1 (sync framing)".to_owned())
     );
     assert_eq!(
         winner(&fixture("sab2-session.bin")).0,
-        Some("SAB2 (HDLC framing)")
+        Some("SAB2 (HDLC framing)".to_owned())
     );
-    assert_eq!(winner(&sbus_data_session()).0, Some("S-Bus data mode"));
+    assert_eq!(
+        winner(&sbus_data_session()).0,
+        Some("S-Bus data mode".to_owned())
+    );
     let (b, _) = winner(&sbus_break_session());
     assert!(
-        b.is_some_and(|l| l.starts_with("S-Bus break") || l.starts_with("S-Bus parity")),
+        b.as_deref()
+            .is_some_and(|l| l.starts_with("S-Bus break") || l.starts_with("S-Bus parity")),
         "{b:?}"
     );
 }
@@ -125,11 +135,14 @@ fn empty_input_is_empty() {
 #[test]
 fn a_truncated_file_still_names_its_protocol() {
     let sport = fixture("sport-sample.bin");
-    assert_eq!(winner(&sport[..sport.len() / 2 + 3]).0, Some("S.Port"));
+    assert_eq!(
+        winner(&sport[..sport.len() / 2 + 3]).0,
+        Some("S.Port".to_owned())
+    );
     let sab = fixture("sab2-session.bin");
     assert_eq!(
         winner(&sab[5..sab.len() - 7]).0,
-        Some("SAB2 (HDLC framing)")
+        Some("SAB2 (HDLC framing)".to_owned())
     );
 }
 
@@ -153,8 +166,8 @@ fn a_mixed_file_names_both_protocols() {
     let mut bytes = fixture("sport-sample.bin");
     bytes.extend(fixture("sab1-session.bin"));
     let (first, second) = winner(&bytes);
-    assert_eq!(first, Some("S.Port"));
-    assert_eq!(second, Some("SAB v1 (sync framing)"));
+    assert_eq!(first, Some("S.Port".to_owned()));
+    assert_eq!(second, Some("SAB v1 (sync framing)".to_owned()));
     // S-Bus break mode reads S.Port's keep-alives, but only bytes S.Port covers: not mixed.
     assert_eq!(winner(&fixture("sport-sample.bin")).1, None);
 }
@@ -235,7 +248,7 @@ fn listen(baud: u32, bytes: &[u8]) -> Listen {
         })
         .collect();
     Listen {
-        baud,
+        line: Line::n81(baud),
         batches,
         bytes: bytes.len() as u64,
     }
@@ -245,20 +258,25 @@ fn listen(baud: u32, bytes: &[u8]) -> Listen {
 fn live_picks_the_rate_where_frames_decode() {
     // At the wrong rates a UART delivers garbage; at 57600 the S.Port frames.
     let sport = fixture("sport-sample.bin").repeat(4);
-    let listens: Vec<Listen> = USUAL_BAUDS
-        .iter()
-        .enumerate()
-        .map(|(i, &b)| {
-            if b == 57_600 {
-                listen(b, &sport)
-            } else {
-                listen(b, &noise(600, i as u64 + 1))
-            }
-        })
-        .collect();
+    let listens: Vec<Listen> = [
+        9600, 19200, 38400, 57600, 100_000, 115_200, 230_400, 400_000, 420_000,
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &b)| {
+        if b == 57_600 {
+            listen(b, &sport)
+        } else {
+            listen(b, &noise(600, i as u64 + 1))
+        }
+    })
+    .collect();
     let report = judge_live(&listens);
-    let (i, best) = report.best.expect("found");
-    assert_eq!(listens[i].baud, 57_600);
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
+    assert_eq!(listens[i].line.baud, 57_600);
     assert_eq!(best.label, "S.Port");
     assert!(!best.inverted);
 }
@@ -272,9 +290,12 @@ fn live_ties_go_to_the_protocols_own_rate() {
         .map(|&b| listen(b, &sab))
         .collect();
     let report = judge_live(&listens);
-    let (i, best) = report.best.expect("found");
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
     assert_eq!(best.protocol.command, "sab2");
-    assert_eq!(listens[i].baud, 115_200);
+    assert_eq!(listens[i].line.baud, 115_200);
 }
 
 #[test]
@@ -289,8 +310,12 @@ fn live_recognises_an_inverted_sport_line() {
         listen(57_600, &inverted),
         listen(115_200, &noise(500, 4)),
     ];
-    let (i, best) = judge_live(&listens).best.expect("found");
-    assert_eq!(listens[i].baud, 57_600);
+    let report = judge_live(&listens);
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
+    assert_eq!(listens[i].line.baud, 57_600);
     assert!(best.inverted);
     assert_eq!(best.protocol.command, "sport");
 }

@@ -27,8 +27,16 @@
 //!
 //! ## Adding a protocol
 //!
-//! See `docs/architecture.md`: a folder, one entry in `crate::protocols::PROTOCOLS`, a
-//! subcommand in `cli.rs`.
+//! A protocol is registered by its [`Protocol`] descriptor alone: a folder, one entry in
+//! `crate::protocols::PROTOCOLS` and `pub mod` in `lib.rs` (see `docs/architecture.md`,
+//! "Adding a protocol"). The command line, detection, the project file, the export, the
+//! Wireshark extcap and the filters all loop over the table.
+
+pub mod front;
+pub mod vocab;
+
+pub use front::{Export, Front, Options, Probe, Setup, Variant, Wrap};
+pub use vocab::Vocab;
 
 use crate::pcap::{Packet, PcapError, PcapStream};
 use crate::row::{Class, Row, RowOut, RowResult};
@@ -64,10 +72,83 @@ impl Line {
         }
     }
 
+    /// `data_bits`, `parity` and `stop_bits` at `baud` (`Line::new(100_000, 8, Parity::Even, 2)`).
+    pub const fn new(baud: u32, data_bits: u8, parity: Parity, stop_bits: u8) -> Self {
+        Line {
+            baud,
+            data_bits,
+            parity,
+            stop_bits,
+        }
+    }
+
     /// Bits per character on the wire (start + data + parity + stop).
     pub fn bits_per_char(&self) -> u32 {
         let parity = u32::from(self.parity != Parity::None);
         1 + u32::from(self.data_bits) + parity + u32::from(self.stop_bits)
+    }
+
+    /// Microseconds a character takes on the wire: the time of bytes that carry none (raw
+    /// captures) is rebuilt from it.
+    pub fn char_micros(&self) -> f64 {
+        f64::from(self.bits_per_char()) * 1e6 / f64::from(self.baud.max(1))
+    }
+
+    /// The character format as people write it: `8N1`, `8E2`.
+    pub fn format(&self) -> String {
+        let p = match self.parity {
+            Parity::None => 'N',
+            Parity::Even => 'E',
+            Parity::Odd => 'O',
+        };
+        format!("{}{p}{}", self.data_bits, self.stop_bits)
+    }
+
+    /// Whether two lines frame characters alike (the speed aside).
+    pub fn same_format(&self, other: &Line) -> bool {
+        (self.data_bits, self.parity, self.stop_bits)
+            == (other.data_bits, other.parity, other.stop_bits)
+    }
+
+    /// Reads `8E1`, `8N2`, `9600-8N2` or `19200` over this line: the format and the speed each
+    /// where given.
+    pub fn parse_over(mut self, text: &str) -> Result<Line, String> {
+        let bad = || {
+            format!(
+                "{text:?}: expected a character format like 8N1, 8E1 or 8N2, optionally after the \
+                 speed (9600-8E1)"
+            )
+        };
+        let t = text.trim();
+        let (speed, format) = match t.split_once(['-', ':', ' ']) {
+            Some((s, f)) => (Some(s), Some(f)),
+            None if t.bytes().all(|b| b.is_ascii_digit()) && t.len() > 2 => (Some(t), None),
+            None => (None, Some(t)),
+        };
+        if let Some(s) = speed {
+            self.baud = s.parse().map_err(|_| bad())?;
+        }
+        if let Some(f) = format {
+            let b = f.as_bytes();
+            if b.len() != 3 {
+                return Err(bad());
+            }
+            self.data_bits = match b[0] {
+                d @ b'5'..=b'8' => d - b'0',
+                _ => return Err(bad()),
+            };
+            self.parity = match b[1].to_ascii_uppercase() {
+                b'N' => Parity::None,
+                b'E' => Parity::Even,
+                b'O' => Parity::Odd,
+                _ => return Err(bad()),
+            };
+            self.stop_bits = match b[2] {
+                s @ (b'1' | b'2') => s - b'0',
+                _ => return Err(bad()),
+            };
+        }
+        Ok(self)
     }
 }
 
@@ -88,15 +169,33 @@ pub enum InputKind {
     Pcapng,
 }
 
-/// What a protocol tells the shared code: its name, its line and the inputs it reads.
-#[derive(Debug)]
+/// Everything the shared code knows of a protocol: the one place it is registered. The
+/// command line builds its subcommand from it (help, options, defaults), `detect` tries its
+/// variants at its line settings, the project file reads its section, the export and the
+/// Wireshark extcap use its link type, and the filters check against its vocabulary.
 pub struct Protocol {
     /// Name in messages ("S.Port").
     pub name: &'static str,
     /// The subcommand ("sport").
     pub command: &'static str,
+    /// Other names of the subcommand (and of its project-file section).
+    pub aliases: &'static [&'static str],
+    /// One line for `busnoop --help`.
+    pub summary: &'static str,
+    /// The subcommand's `--help` text before its options: what the protocol is, its line, what
+    /// it reads.
+    pub about: &'static str,
+    /// Commands to try, shown after the options (`busnoop sport -h`).
+    pub examples: &'static str,
+    /// What SOURCE may be, in the subcommand's help.
+    pub source_help: &'static str,
     /// Character format and default speed of a live line.
     pub line: Line,
+    /// The line idles low (an inverted UART signal: S.Port, F.Port, Futaba SBUS): a plain
+    /// adapter reads every byte inverted, which `detect` recognises.
+    pub inverted: bool,
+    /// The speeds `detect` listens at on a serial port, the default first.
+    pub rates: &'static [u32],
     /// The input kinds its decoder reads.
     pub accepts: &'static [InputKind],
     /// The same in words, for the message that refuses another kind ("raw wire bytes, EdgeTX
@@ -107,13 +206,35 @@ pub struct Protocol {
     /// a longer value.
     pub pretty_widths: &'static [usize],
     /// What its table can show (ID range, types, sensors, devices), for checking filters.
-    pub vocab: &'static crate::filter::Vocab,
+    pub vocab: &'static Vocab,
+    /// Its own options and how they become a decoder (`front.rs`).
+    pub front: Front,
+    /// The ways `detect` reads a capture as this protocol (modes, framings), each a decoder.
+    pub variants: fn(&Probe) -> Vec<Variant>,
+    /// The keys of its project-file section besides the shared ones (`baud`, `format`,
+    /// `stats`, `names`, `filter`), with what each sets, for the message that refuses others.
+    pub config_keys: &'static [(&'static str, &'static str)],
+    /// Frames as packets for Wireshark (`--export`, the extcap), when it has a dissector.
+    pub export: Option<Export>,
+}
+
+impl std::fmt::Debug for Protocol {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Protocol")
+            .field("command", &self.command)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Protocol {
     /// Whether this protocol's decoder reads inputs of `kind`.
     pub fn reads(&self, kind: InputKind) -> bool {
         self.accepts.contains(&kind)
+    }
+
+    /// Whether `name` is its subcommand or one of its aliases.
+    pub fn answers_to(&self, name: &str) -> bool {
+        self.command == name || self.aliases.contains(&name)
     }
 }
 
