@@ -10,6 +10,12 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sab::PROTOCOL,
 ];
 
+/// The protocols' subcommands for a message: `sport|sbus|sab2`.
+pub fn commands() -> String {
+    let names: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();
+    names.join("|")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -56,15 +56,8 @@ mod tests {
     fn the_manual_page_names_every_subcommand_and_the_exit_codes() {
         let page = String::from_utf8(man_page().unwrap()).unwrap();
         assert!(page.starts_with(".ie"), "{}", &page[..80]);
-        for sub in [
-            "sport",
-            "sbus",
-            "sab2",
-            "detect",
-            "ports",
-            "completions",
-            "man",
-        ] {
+        let protocols = crate::protocols::PROTOCOLS.iter().map(|p| p.command);
+        for sub in protocols.chain(["detect", "ports", "completions", "man"]) {
             assert!(page.contains(sub), "{sub}");
         }
         assert!(page.contains("Exit codes"));

@@ -98,7 +98,7 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
                     "plot {}: a pipe can be read only once, so its protocol cannot be \
                      detected before it is plotted; name it with --protocol {}",
                     a.source.display(),
-                    protocol_list()
+                    crate::protocols::commands()
                 )));
             }
             let (p, args) = crate::detect::protocol_of(&a.source)?;
@@ -135,15 +135,6 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
         ),
     });
     run_protocol(run)
-}
-
-/// The protocols' subcommands for a message: `sport|sbus|sab2`.
-pub(crate) fn protocol_list() -> String {
-    let names: Vec<&str> = crate::protocols::PROTOCOLS
-        .iter()
-        .map(|p| p.command)
-        .collect();
-    names.join("|")
 }
 
 /// Runs a parsed command line.

@@ -443,7 +443,7 @@ pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'stat
         _ => Err(Failure::NoProtocol(format!(
             "no known protocol in {name}; name it with --protocol {} (busnoop detect {name} \
              shows the evidence)",
-            crate::cli::protocol_list()
+            crate::protocols::commands()
         ))),
     }
 }

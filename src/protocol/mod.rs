@@ -10,7 +10,7 @@
 //!
 //! Every decoder wraps a reassembler that is **pure** (bytes and times in, frames out, no I/O)
 //! and **chunk-invariant**: feeding the same bytes with the same times in any split gives the
-//! same rows (`push` once or byte by byte). The three entry points are
+//! same rows (`push` once or byte by byte). The four entry points are
 //!
 //! * [`Decoder::push`]: bytes that arrived at a time; every frame they complete is emitted at
 //!   once, nothing is held back that is already known to be whole;
@@ -88,12 +88,6 @@ impl Line {
         1 + u32::from(self.data_bits) + parity + u32::from(self.stop_bits)
     }
 
-    /// Microseconds a character takes on the wire: the time of bytes that carry none (raw
-    /// captures) is rebuilt from it.
-    pub fn char_micros(&self) -> f64 {
-        f64::from(self.bits_per_char()) * 1e6 / f64::from(self.baud.max(1))
-    }
-
     /// The character format as people write it: `8N1`, `8E2`.
     pub fn format(&self) -> String {
         let p = match self.parity {
@@ -149,6 +143,20 @@ impl Line {
             };
         }
         Ok(self)
+    }
+}
+
+/// The time of byte `offset` of a source without times (a raw capture), in µs since its start:
+/// `bits` per character on a line of `baud`, each character right after the one before. The
+/// one rule every protocol uses for the Millis of untimed bytes ([`Line::bits_per_char`] gives
+/// `bits`).
+pub fn untimed_micros(offset: u64, bits: u32, baud: u32) -> u64 {
+    let baud = baud.max(1);
+    match offset.checked_mul(bits as u64 * 1_000_000) {
+        // The quotient of the u128 reading below, without its division routine, while the
+        // product fits (offsets below 10^12 bytes).
+        Some(p) => p / baud as u64,
+        None => (offset as u128 * bits as u128 * 1_000_000 / baud as u128) as u64,
     }
 }
 
@@ -353,6 +361,54 @@ impl<D: Decoder> Decoder for PcapBytes<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn untimed_micros_in_u64_is_the_u128_reading() {
+        let wide = |o: u64, bits: u32, baud: u32| {
+            (o as u128 * bits as u128 * 1_000_000 / baud as u128) as u64
+        };
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut offsets = vec![0, 1, 1 << 20, u64::MAX / 11_000_000, u64::MAX / 10_000_000];
+        offsets.extend([
+            u64::MAX / 10_000_000 + 1,
+            u64::MAX / 2,
+            u64::MAX - 1,
+            u64::MAX,
+        ]);
+        for _ in 0..2000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            offsets.push(x >> (x % 64));
+        }
+        for o in offsets {
+            for bits in [10, 11] {
+                for baud in [1, 300, 9600, 38_400, 115_200, u32::MAX] {
+                    assert_eq!(
+                        untimed_micros(o, bits, baud),
+                        wide(o, bits, baud),
+                        "{o} {bits} {baud}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn line_settings_as_people_write_them() {
+        let base = Line::n81(9600);
+        let e1 = base.parse_over("8E1").unwrap();
+        assert_eq!((e1.baud, e1.parity, e1.stop_bits), (9600, Parity::Even, 1));
+        assert_eq!(e1.format(), "8E1");
+        let n2 = base.parse_over("19200-8n2").unwrap();
+        assert_eq!((n2.baud, n2.format()), (19_200, "8N2".to_owned()));
+        assert_eq!(base.parse_over("115200").unwrap().baud, 115_200);
+        for bad in ["8X1", "9N1", "8N3", "fast-8N1", "8N"] {
+            assert!(base.parse_over(bad).is_err(), "{bad}");
+        }
+        assert!(e1.same_format(&Line::new(19_200, 8, Parity::Even, 1)));
+        assert!(!e1.same_format(&base));
+    }
 
     #[test]
     fn bits_per_char() {

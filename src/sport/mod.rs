@@ -538,17 +538,13 @@ impl Decoder for SportDecoder {
     }
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let table = &mut self.table;
-        self.re.push(data, time, &mut |e| table.event(e, &mut out));
-        out.result()
+        let (re, table) = (&mut self.re, &mut self.table);
+        Latch::with(out, |out| re.push(data, time, &mut |e| table.event(e, out)))
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let table = &mut self.table;
-        self.re.finish(&mut |e| table.event(e, &mut out));
-        out.result()
+        let (re, table) = (&mut self.re, &mut self.table);
+        Latch::with(out, |out| re.finish(&mut |e| table.event(e, out)))
     }
 
     fn valid_frames(&self) -> u64 {
