@@ -87,7 +87,9 @@ fn ghst_mixed_traffic() {
 #[test]
 fn time_follows_the_baud_rate() {
     let data = fixture("crsf-fc-to-rx.bin");
-    let mut d = busnoop::crsf::decoder(busnoop::crsf::Options { baud: 115_200 });
+    let mut d = busnoop::crsf::decoder(busnoop::crsf::Options {
+        line: busnoop::protocol::Line::n81(115_200),
+    });
     let rows = decode(&mut *d, [(&data[..], None)]);
     let last = rows.last().unwrap();
     let offset = (data.len() - last.raw.len()) as u64;

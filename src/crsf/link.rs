@@ -7,15 +7,12 @@ use std::collections::BTreeMap;
 use super::wire::{Addresses, Event, Kind, Reassembler};
 use crate::fmt::{push_0x, push_hex, push_u64};
 use crate::numbers::Numbers;
-use crate::protocol::Decoder;
+use crate::protocol::{Decoder, Line, untimed_micros};
 use crate::row::{Class, Latch, Parts, Row, RowOut, RowResult};
 use crate::stats::{Column, Problems, Report};
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
-
-/// Bits per byte on the wire (8N1: start, 8 data bits, stop), for the time of untimed inputs.
-pub const BITS_PER_BYTE: u64 = 10;
 
 /// The most numbers a frame carries (29 cell voltages or temperatures in a 60-byte payload).
 pub const MAX_NUMBERS: usize = 32;
@@ -129,35 +126,25 @@ struct Mapper<D: Dialect> {
     dialect: D,
     sc: Scratch,
     stats: Stats,
-    baud: u32,
+    line: Line,
 }
 
 impl<D: Dialect> LinkDecoder<D> {
-    /// `baud` is the line's rate, for the time of untimed inputs.
-    pub fn new(baud: u32) -> Self {
+    /// `line` gives untimed inputs their byte times.
+    pub fn new(line: Line) -> Self {
         LinkDecoder {
             re: Reassembler::new(D::ADDRESSES),
             map: Mapper {
                 dialect: D::default(),
                 sc: Scratch::default(),
                 stats: Stats::default(),
-                baud: baud.max(1),
+                line,
             },
         }
     }
 }
 
 impl<D: Dialect> Mapper<D> {
-    /// Microseconds of stream offset `offset` at the line's rate (the least time the bytes
-    /// before it took).
-    fn offset_micros(&self, offset: u64) -> u64 {
-        let bits = BITS_PER_BYTE * 1_000_000;
-        match offset.checked_mul(bits) {
-            Some(p) => p / u64::from(self.baud),
-            None => (u128::from(offset) * u128::from(bits) / u128::from(self.baud)) as u64,
-        }
-    }
-
     fn event(&mut self, ev: &Event<'_>, out: &mut Latch<'_>) {
         if out.stopped() {
             return;
@@ -166,7 +153,9 @@ impl<D: Dialect> Mapper<D> {
     }
 
     fn row(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) -> RowResult {
-        let micros = ev.time.unwrap_or_else(|| self.offset_micros(ev.offset));
+        let micros = ev.time.unwrap_or_else(|| {
+            untimed_micros(ev.offset, self.line.bits_per_char(), self.line.baud)
+        });
         self.sc.clear();
         let sc = &mut self.sc;
         let st = &mut self.stats;
@@ -217,9 +206,14 @@ impl<D: Dialect> Mapper<D> {
                 push_0x(note, got);
                 note.push_str(", expected ");
                 push_0x(note, want);
-                note.push_str(" (");
-                note.push_str(D::type_name(ev.addr(), ty).unwrap_or("unknown type"));
-                note.push_str(" frame)");
+                match D::type_name(ev.addr(), ty) {
+                    Some(name) => {
+                        note.push_str(" (");
+                        note.push_str(name);
+                        note.push_str(" frame)");
+                    }
+                    None => note.push_str(" (a frame of unknown type)"),
+                }
                 crate::row::kind::BAD_CRC
             }
             Kind::Truncated => {

@@ -8,6 +8,7 @@
 //! `docs/crsf.md`. GHST (`crate::ghst`) reuses the frame format, the CRC, the reassembler
 //! ([`wire`]) and the decoder skeleton of this module.
 
+mod args;
 pub(crate) mod ext;
 pub(crate) mod link;
 pub mod names;
@@ -19,12 +20,12 @@ pub mod wire;
 #[cfg(test)]
 mod tests;
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
 use crate::row::Class;
 use link::{Described, Dialect, LinkDecoder, Scratch};
 use wire::Event;
 
-pub use link::{BITS_PER_BYTE, COLUMNS};
+pub use link::COLUMNS;
 pub use values::{channel_us, rssi_dbm, vspeed_cm_s};
 
 /// The flight controller's wires (receiver to FC and back): 420000 baud 8N1, not inverted
@@ -35,35 +36,75 @@ pub const MIRROR_BAUD: u32 = 115_200;
 /// The module bay (radio to TX module, one wire, half duplex).
 pub const MODULE_BAUD: u32 = 400_000;
 
-/// What the command line needs to know: 420000 baud 8N1, not inverted.
+/// CRSF: 420000 baud 8N1, not inverted; 115200 on EdgeTX's mirror, 400000 in the module bay.
 pub const PROTOCOL: Protocol = Protocol {
     name: "CRSF",
     command: "crsf",
+    aliases: &["elrs", "crossfire"],
+    summary: "CRSF (TBS Crossfire, ExpressLRS): RC channels, link statistics and telemetry, CRC-8 \
+              checked (420000 baud)",
+    about: "CRSF, the protocol of TBS Crossfire and ExpressLRS: `[addr][len][type][payload][crc]` \
+            frames, CRC-8 0xD5, resynchronised byte by byte. One row per frame: ID the address, \
+            Type the frame type, RC channels in µs on Betaflight's scale, telemetry named as \
+            EdgeTX names it. 420000 baud 8N1, not inverted, on the receiver's wires to the flight \
+            controller (one adapter per wire; give both); --baud 115200 for EdgeTX's telemetry \
+            mirror, 400000 for the module bay (docs/crsf.md).",
+    examples: "Examples:\n  busnoop crsf /dev/ttyUSB0 /dev/ttyUSB1\n  busnoop crsf /dev/ttyUSB0 \
+               --baud 115200 --wide\n  busnoop crsf capture.bin --type LinkStats --stats\n  \
+               busnoop crsf capture.bin -f jsonl",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input; two devices for the two wires between receiver and flight \
+                  controller. File kinds are recognised by content; `--baud` also sets the byte \
+                  times of raw files.",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    inverted: false,
+    rates: &[DEFAULT_BAUD, MIRROR_BAUD, MODULE_BAUD],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 9, 9, 8, 6, 40, 4, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[],
+    export: Some(Export {
+        linktype: crate::pcap::linktype::USER2,
+        linktype_name: "USER2",
+        dissector: "busnoop-crsf.lua",
+        extcap: "CRSF (busnoop)",
+        wrap: None,
+    }),
 };
+
+/// `detect` reads CRSF one way, at the line it listens at.
+fn variants(probe: &Probe) -> Vec<Variant> {
+    vec![Variant {
+        label: "CRSF",
+        args: &[],
+        decoder: decoder(Options { line: probe.line }),
+    }]
+}
 
 /// Decoder settings.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// The line's rate, for the time of inputs without time (raw captures): byte *n* starts at
-    /// *n* × 10 bits / baud.
-    pub baud: u32,
+    /// The line, for the time of inputs without time (raw captures): byte *n* starts at *n* ×
+    /// its bits per character / baud.
+    pub line: Line,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { baud: DEFAULT_BAUD }
+        Options {
+            line: Line::n81(DEFAULT_BAUD),
+        }
     }
 }
 
 /// The CRSF decoder (every input kind [`PROTOCOL`] accepts is a byte stream).
 pub fn decoder(opts: Options) -> Box<dyn Decoder> {
-    Box::new(LinkDecoder::<Crsf>::new(opts.baud))
+    Box::new(LinkDecoder::<Crsf>::new(opts.line))
 }
 
 /// CRSF as a [`Dialect`] of the shared decoder.

@@ -604,6 +604,6 @@ fn stamps_never_change_the_table() {
     data.extend(crate::testing::noise(300, 4));
     data.extend(frame(0xC8, 0x14, &[60, 60, 100, 10, 0, 5, 3, 60, 100, 8]));
     let chunks: Vec<&[u8]> = data.chunks(17).collect();
-    let mut d = LinkDecoder::<Crsf>::new(DEFAULT_BAUD);
+    let mut d = LinkDecoder::<Crsf>::new(Line::n81(DEFAULT_BAUD));
     crate::testing::assert_stamps_hold(&mut d, &chunks);
 }

@@ -1,12 +1,12 @@
 //! What a CRSF table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab, hex_digits, no_hint};
 use crate::row::kind;
 
 /// Addresses 0-255 (the address byte); Sensor # is the frame type in hex (`0x16`); Sensor
 /// names the first number of a frame, as EdgeTX names it.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=255,
+    ids: Some(0..=255),
     id_name: "address",
     id_hint: no_hint,
     types: TYPES,
@@ -74,46 +74,104 @@ fn device(id: u32) -> &'static str {
     super::names::device(id as u8)
 }
 
-fn no_hint(_: u32) -> Option<String> {
-    None
-}
-
 /// A frame type in hex, `0x16` or `16`.
 pub(crate) fn frame_type(s: &str) -> bool {
-    let h = s
-        .strip_prefix("0x")
-        .or_else(|| s.strip_prefix("0X"))
-        .unwrap_or(s);
-    !h.is_empty() && h.len() <= 2 && h.bytes().all(|b| b.is_ascii_hexdigit())
+    hex_digits(s, 2)
 }
 
-/// The names the Sensor column shows: the first number of each frame type, and the words of
-/// the frames without numbers.
-fn sensors() -> Vec<String> {
-    let mut out: Vec<String> = [
-        "GPS", "Date", "Fix", "VSpd", "RxBt", "BAlt", "ASpd", "RPM1", "Tmp1", "Cel1", "Volt1",
-        "VPwr", "1RSS", "RRSS", "TRSS", "Ptch", "FM", "Intv",
-    ]
-    .iter()
-    .map(|s| (*s).to_owned())
-    .collect();
-    out.extend((1..=16).map(|n| format!("CH{n}")));
+/// A Sensor column value and the names of the numbers its rows carry.
+pub(crate) fn sensor(column: &str, parts: &[&str]) -> Sensor {
+    Sensor {
+        column: column.to_owned(),
+        parts: parts.iter().map(|p| (*p).to_owned()).collect(),
+    }
+}
+
+/// `<base>1` … `<base><n>`.
+pub(crate) fn numbered(base: &str, n: usize) -> Vec<String> {
+    (1..=n).map(|i| format!("{base}{i}")).collect()
+}
+
+/// The Sensor column's values (the first number of each frame type, the words of the frames
+/// without numbers), each with the names of the numbers of its rows (EdgeTX's).
+fn sensors() -> Vec<Sensor> {
+    let mut out = vec![
+        sensor("GPS", &["Lat", "Lon", "GSpd", "Hdg", "Alt", "Sats"]),
+        sensor("Date", &[]),
+        sensor(
+            "Fix",
+            &[
+                "Fix", "NSpd", "ESpd", "GVSp", "SAcc", "TAcc", "EAlt", "HAcc", "VAcc", "HDOP",
+                "VDOP",
+            ],
+        ),
+        sensor("VSpd", &["VSpd"]),
+        sensor("RxBt", &["RxBt", "Curr", "Capa", "Bat%"]),
+        sensor("BAlt", &["BAlt", "VSpd"]),
+        sensor("ASpd", &["ASpd"]),
+        sensor("VPwr", &["VPwr", "VFrq"]),
+        sensor(
+            "1RSS",
+            &[
+                "1RSS", "2RSS", "RQly", "RSNR", "ANT", "RFMD", "TPWR", "TRSS", "TQly", "TSNR",
+            ],
+        ),
+        sensor("RRSS", &["RRSS", "RRSP", "RQly", "RSNR", "TPWR"]),
+        sensor("TRSS", &["TRSS", "TRSP", "TQly", "TSNR", "RPWR", "TFPS"]),
+        sensor("Ptch", &["Ptch", "Roll", "Yaw"]),
+        sensor("FM", &[]),
+        sensor("Intv", &["Intv", "Offs"]),
+        Sensor {
+            column: "CH1".into(),
+            parts: numbered("CH", 16),
+        },
+        Sensor {
+            column: "RPM1".into(),
+            parts: numbered("RPM", 19),
+        },
+        Sensor {
+            column: "Tmp1".into(),
+            parts: numbered("Tmp", 29),
+        },
+        Sensor {
+            column: "Cel1".into(),
+            parts: (1..=29)
+                .map(|i| {
+                    if i < 10 {
+                        format!("Cel{i}")
+                    } else {
+                        format!("Cl{i}")
+                    }
+                })
+                .collect(),
+        },
+        Sensor {
+            column: "Volt1".into(),
+            parts: numbered("Volt", 29),
+        },
+    ];
+    // A subset frame's first channel.
+    out.extend((2..=32).map(|n| Sensor::named(&format!("CH{n}"))));
     for cmd in [0x01, 0x03, 0x05, 0x08, 0x09, 0x0A, 0x10, 0x20, 0x22, 0xFF] {
         for sub in 0..=0xFF {
             let (group, name) = super::names::command(cmd, sub);
             for s in [Some(group), name].into_iter().flatten() {
-                if !s.is_empty() && !out.iter().any(|o| o == s) {
-                    out.push(s.to_owned());
+                if !s.is_empty() && !out.iter().any(|o| o.column == s) {
+                    out.push(Sensor::named(s));
                 }
             }
         }
     }
-    for c in 0..=255 {
-        if let Some(n) = super::names::msp(c) {
-            out.push(n.to_owned());
-        }
-    }
+    out.extend(msp_sensors());
     out
+}
+
+/// The MSP commands busnoop names.
+pub(crate) fn msp_sensors() -> Vec<Sensor> {
+    (0..=255)
+        .filter_map(super::names::msp)
+        .map(Sensor::named)
+        .collect()
 }
 
 #[cfg(test)]
@@ -129,12 +187,13 @@ mod tests {
         for name in [
             "RxBt",
             "1RSS",
+            "RQly",
             "CH1",
             "CH16",
             "speed proposal",
             "MSP_STATUS",
         ] {
-            assert!(s.iter().any(|n| n == name), "{name}");
+            assert!(s.iter().any(|n| n.is(name)), "{name}");
         }
         assert!(frame_type("0x16") && frame_type("16") && !frame_type("0x123"));
     }

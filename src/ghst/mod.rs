@@ -4,6 +4,7 @@
 //! (0x80-0x89), the frame types, the 12-bit channels and the telemetry. The mapping onto the
 //! table and the units are in `docs/ghst.md`.
 
+mod args;
 pub mod names;
 mod values;
 pub(crate) mod vocab;
@@ -13,7 +14,7 @@ mod tests;
 
 use crate::crsf::link::{Described, Dialect, LinkDecoder, Scratch};
 use crate::crsf::wire::{self, Event};
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
 
 pub use crate::crsf::link::COLUMNS;
 pub use values::{aux_us, primary_us100};
@@ -31,35 +32,71 @@ pub const SLOW_TELEMETRY_BAUD: u32 = 115_200;
 pub const ADDRESSES: wire::Addresses =
     wire::addresses(&[0x80, 0x81, 0x82, 0x83, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89]);
 
-/// What the command line needs to know: 420000 baud 8N1, not inverted.
+/// GHST: 420000 baud 8N1, not inverted; 400000 in the module bay.
 pub const PROTOCOL: Protocol = Protocol {
     name: "GHST",
     command: "ghst",
+    aliases: &["ghost"],
+    summary: "GHST (ImmersionRC Ghost): 12-bit RC channels, link statistics and telemetry, CRC-8 \
+              checked (420000 baud)",
+    about: "GHST, the protocol of ImmersionRC Ghost: CRSF's frame shape (`[addr][len][type] \
+            [payload][crc]`, CRC-8 0xD5) with Ghost's addresses, 12-bit channels (CH1-4 in every \
+            RC frame, four aux channels per frame type) and telemetry. 420000 baud 8N1, not \
+            inverted, one wire between receiver and flight controller; --baud 400000 for the \
+            module bay (docs/ghst.md).",
+    examples: "Examples:\n  busnoop ghst /dev/ttyUSB0\n  busnoop ghst capture.bin --wide\n  \
+               busnoop ghst capture.bin --stats",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input. File kinds are recognised by content; `--baud` also sets the \
+                  byte times of raw files.",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    inverted: false,
+    rates: &[DEFAULT_BAUD, MODULE_BAUD, SLOW_TELEMETRY_BAUD],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 9, 9, 8, 6, 40, 4, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[],
+    export: Some(Export {
+        linktype: crate::pcap::linktype::USER3,
+        linktype_name: "USER3",
+        dissector: "busnoop-crsf.lua",
+        extcap: "GHST (busnoop)",
+        wrap: None,
+    }),
 };
+
+/// `detect` reads GHST one way, at the line it listens at.
+fn variants(probe: &Probe) -> Vec<Variant> {
+    vec![Variant {
+        label: "GHST",
+        args: &[],
+        decoder: decoder(Options { line: probe.line }),
+    }]
+}
 
 /// Decoder settings.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// The line's rate, for the time of inputs without time (raw captures): byte *n* starts at
-    /// *n* × 10 bits / baud.
-    pub baud: u32,
+    /// The line, for the time of inputs without time (raw captures).
+    pub line: Line,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { baud: DEFAULT_BAUD }
+        Options {
+            line: Line::n81(DEFAULT_BAUD),
+        }
     }
 }
 
 /// The GHST decoder.
 pub fn decoder(opts: Options) -> Box<dyn Decoder> {
-    Box::new(LinkDecoder::<Ghst>::new(opts.baud))
+    Box::new(LinkDecoder::<Ghst>::new(opts.line))
 }
 
 /// GHST as a [`Dialect`] of CRSF's decoder.

@@ -1,11 +1,12 @@
 //! What a GHST table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::crsf::vocab::{numbered, sensor};
+use crate::protocol::vocab::{Sensor, Vocab, no_hint};
 use crate::row::kind;
 
 /// Addresses 0-255 (the address byte; GHST uses 0x80-0x89); Sensor # is the frame type in hex.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=255,
+    ids: Some(0..=255),
     id_name: "address",
     id_hint: no_hint,
     types: TYPES,
@@ -42,25 +43,34 @@ pub const TYPES: &[&str] = &[
     kind::LINK_UP,
 ];
 
-fn no_hint(_: u32) -> Option<String> {
-    None
-}
-
 fn device(id: u32) -> &'static str {
     super::names::device(id as u8)
 }
 
-/// The names the Sensor column shows: the first number of each frame type.
-fn sensors() -> Vec<String> {
-    let mut out: Vec<String> = ["CH1", "Intv", "RSSI", "VFrq", "RxBt", "GPS", "GSpd", "MHdg"]
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    for c in 0..=255 {
-        if let Some(n) = crate::crsf::names::msp(c) {
-            out.push(n.to_owned());
-        }
-    }
+/// The Sensor column's values (the first number of each frame type), each with the names of the
+/// numbers of its rows.
+fn sensors() -> Vec<Sensor> {
+    let mut ch = numbered("CH", 16);
+    ch.extend(["RQly", "RSSI", "RFMD", "TPWR"].map(String::from));
+    let mut out = vec![
+        Sensor {
+            column: "CH1".into(),
+            parts: ch,
+        },
+        sensor("Intv", &["Intv", "Offs"]),
+        sensor(
+            "RSSI",
+            &["RSSI", "RQly", "RSNR", "TPWR", "FRat", "TLat", "RFMD"],
+        ),
+        sensor("VFrq", &["VFrq", "VPwr", "VChn"]),
+        sensor("RxBt", &["RxBt", "Curr", "Capa", "RxV"]),
+        sensor("GPS", &["Lat", "Lon", "Alt"]),
+        sensor("GSpd", &["GSpd", "Hdg", "Sats", "Dist", "HDir"]),
+        sensor("MHdg", &["MHdg", "BAlt", "VSpd"]),
+        sensor("BAlt", &["BAlt", "VSpd"]),
+        sensor("VSpd", &["VSpd"]),
+    ];
+    out.extend(crate::crsf::vocab::msp_sensors());
     out
 }
 
