@@ -332,7 +332,6 @@ fn command(payload: &[u8], sc: &mut Scratch, st: &mut State) -> Described {
                 note.push_str(" to ");
                 push_u64(note, baud.into());
                 note.push_str(" baud");
-                d.class = Class::Info;
             }
         }
         (0x0A, Some(0x71)) => {
@@ -355,8 +354,9 @@ fn command(payload: &[u8], sc: &mut Scratch, st: &mut State) -> Described {
                         }
                         None => note.push_str(", the line speed changes"),
                     }
+                    // busnoop keeps its rate: what follows will not decode.
+                    d.class = Class::Warning;
                 }
-                d.class = Class::Info;
             }
         }
         (0xFF, _) => {

@@ -114,7 +114,7 @@ fn betaflight_baud_rate_negotiation() {
         (r[0].kind.as_str(), r[0].sensor.as_str()),
         ("Command", "speed proposal")
     );
-    assert_eq!(r[0].class, Class::Info);
+    assert_eq!((r[0].class, r[1].class), (Class::Plain, Class::Warning));
     assert!(
         r[0].extra[1].contains("from Receiver (0xEC) to FC (0xC8)"),
         "{}",
