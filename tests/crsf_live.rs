@@ -50,7 +50,10 @@ fn rows_stream_live_and_the_recording_replays() {
     b.master.flush().unwrap();
     let asked = Instant::now();
     let (at, line) = next_line(&rx);
-    assert!(line.contains("\tGarbage\t") && line.contains("11 22 33"), "{line}");
+    assert!(
+        line.contains("\tGarbage\t") && line.contains("11 22 33"),
+        "{line}"
+    );
     assert!(at.duration_since(asked) < Duration::from_secs(5));
     live.push(line);
     drop(b.master);
@@ -99,6 +102,10 @@ fn detect_recognises_a_live_crsf_line() {
     }
     let out = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("verdict: CRSF"), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        text.contains("verdict: CRSF"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(text.contains("busnoop crsf"), "{text}");
 }
