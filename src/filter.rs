@@ -104,12 +104,16 @@ pub struct Filter {
     active: bool,
 }
 
-/// A `--sensor` value: the names it selects (the text, and both names of the sensor it names),
-/// and its value when it reads as a hex number (`0210`, `0x34`), so that `0210` and `210` match
+/// A `--sensor` value: rows whose Sensor or Sensor # column is the text or the column name of
+/// a sensor it names, or that carry a number of that name; and its value when it reads as a hex
+/// number (`0210`, `0x34`), so that `0210` and `210` match
 /// the Sensor # `0x0210`.
 #[derive(Clone, Debug)]
 struct Pattern {
-    names: Vec<Box<str>>,
+    /// The value as given: a Sensor or Sensor # text, or the name of a number (a part).
+    text: Box<str>,
+    /// The Sensor column of each sensor that has this name (`VFAS` → `Volts`).
+    columns: Vec<Box<str>>,
     number: Option<u32>,
 }
 
@@ -153,20 +157,23 @@ impl Filter {
             } else {
                 None
             };
-            let mut names: Vec<Box<str>> = vec![v.into()];
             let from_options = sensors.iter().any(|s| s.eq_ignore_ascii_case(v));
             let known = known.get_or_insert_with(|| (vocab.sensors)());
-            let mut found = false;
-            for e in known.iter().filter(|s| s.is(v)) {
-                // Either name selects the rows of both.
-                names.push(e.column.as_str().into());
-                names.extend(e.parts.iter().map(|p| p.as_str().into()));
-                found = true;
-            }
-            if !found && !from_options && !(vocab.sensor_no)(v) {
+            // Either name of a sensor selects its rows: a number's name also selects the rows
+            // of the sensor's column (broken frames carry no numbers, only the column).
+            let columns: Vec<Box<str>> = known
+                .iter()
+                .filter(|s| s.is(v))
+                .map(|s| s.column.as_str().into())
+                .collect();
+            if columns.is_empty() && !from_options && !(vocab.sensor_no)(v) {
                 return Err(unknown_sensor(v, known, sensors, vocab, protocol));
             }
-            f.sensors.push(Pattern { names, number });
+            f.sensors.push(Pattern {
+                text: v.into(),
+                columns,
+                number,
+            });
         }
         for v in split(&spec.device) {
             let named = names.pairs().any(|(n, _)| n.eq_ignore_ascii_case(v));
@@ -275,8 +282,15 @@ impl Filter {
 
 impl Pattern {
     fn matches(&self, row: &Row<'_>) -> bool {
-        let named = |s: &str| self.names.iter().any(|n| n.eq_ignore_ascii_case(s));
-        if named(row.sensor) || named(row.sensor_no) || row.parts.iter().any(|p| named(p.name)) {
+        let text = &*self.text;
+        if text.eq_ignore_ascii_case(row.sensor)
+            || text.eq_ignore_ascii_case(row.sensor_no)
+            || self
+                .columns
+                .iter()
+                .any(|c| c.eq_ignore_ascii_case(row.sensor))
+            || row.parts.iter().any(|p| text.eq_ignore_ascii_case(p.name))
+        {
             return true;
         }
         match self.number {
@@ -526,6 +540,7 @@ fn type_list(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::row::{Part, Parts};
 
     fn no_hint(_: u32) -> Option<String> {
         None
@@ -722,6 +737,24 @@ mod tests {
         }
         let f = filter(&spec(|s| s.sensor = vec!["VFAS".into()])).unwrap();
         assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
+        // A number's name selects the rows that carry it and its sensor's column, not the rows
+        // of other sensors that share an entry's other names.
+        let parts = [Part {
+            name: "Cell2",
+            unit: "V",
+            text: "4.1",
+            value: 4.1,
+        }];
+        let other = Row {
+            sensor: "Other",
+            parts: Parts::List(&parts),
+            ..row(Some(1), "Data", Class::Plain)
+        };
+        let f = filter(&spec(|s| s.sensor = vec!["Cell2".into()])).unwrap();
+        assert!(f.keep(&other), "carries Cell2");
+        let f = filter(&spec(|s| s.sensor = vec!["Cell3".into()])).unwrap();
+        assert!(!f.keep(&other), "Cell3 is Cels' name, not this row's");
+        assert!(f.keep(&row(Some(1), "Data", Class::Plain)), "a Cels row");
         let f = Filter::new(
             &spec(|s| s.sensor = vec!["speed".into()]),
             &VOCAB,
