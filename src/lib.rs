@@ -50,6 +50,7 @@ mod exit;
 mod export;
 mod filter;
 pub mod fmt;
+pub mod futaba;
 mod numbers;
 mod pace;
 mod pairing;
