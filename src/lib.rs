@@ -51,6 +51,7 @@ mod export;
 mod filter;
 pub mod fmt;
 pub mod futaba;
+pub mod ibus;
 mod numbers;
 mod pace;
 mod pairing;
