@@ -62,3 +62,13 @@ fn sbus_ether_corpus() {
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }
+
+#[test]
+fn futaba_corpus() {
+    replay("futaba", busnoop::selfcheck::futaba);
+}
+
+#[test]
+fn ibus_corpus() {
+    replay("ibus", busnoop::selfcheck::ibus);
+}

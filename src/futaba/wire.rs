@@ -302,21 +302,23 @@ impl Reassembler {
             return Some((FRAME_LEN, Step::Broken(Broken::WrongEnd)));
         }
         if self.slots.is_some() && slot_number(first).is_some() {
-            // A frame starting at the value bytes cuts the slot short; otherwise the three
-            // bytes are a slot (a value byte may be 0F).
-            for i in 1..SLOT_LEN {
-                if i >= b.len() {
-                    return end.then_some((b.len(), Step::Broken(Broken::AtEnd)));
-                }
-                if b[i] == START {
-                    if b.len() < i + FRAME_LEN {
-                        if !end {
-                            return None;
-                        }
-                    } else if end_ok(b[i + FRAME_LEN - 1]) {
-                        return Some((i, Step::Broken(Broken::SlotCut)));
-                    }
-                }
+            // A value byte may be 0F. The slot is cut short only when a frame starts at that
+            // 0F and none starts right after the three bytes read as a slot.
+            if b.len() < SLOT_LEN {
+                return end.then_some((b.len(), Step::Broken(Broken::AtEnd)));
+            }
+            if !b[1..SLOT_LEN].contains(&START) {
+                return Some((SLOT_LEN, Step::Slot));
+            }
+            if b.len() < SLOT_LEN + FRAME_LEN && !end {
+                return None;
+            }
+            let frame_at = |i: usize| {
+                b.get(i) == Some(&START) && b.get(i + FRAME_LEN - 1).is_some_and(|&e| end_ok(e))
+            };
+            let slot_fits = b.len() == SLOT_LEN || frame_at(SLOT_LEN);
+            if !slot_fits && let Some(i) = (1..SLOT_LEN).find(|&i| frame_at(i)) {
+                return Some((i, Step::Broken(Broken::SlotCut)));
             }
             return Some((SLOT_LEN, Step::Slot));
         }
