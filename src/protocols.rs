@@ -8,6 +8,8 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sport::PROTOCOL,
     &crate::sbus::PROTOCOL,
     &crate::sab::PROTOCOL,
+    &crate::futaba::PROTOCOL,
+    &crate::ibus::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.

@@ -101,10 +101,7 @@ impl Mapper {
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
         match time {
             Some(t) => t,
-            None => {
-                (u128::from(offset) * u128::from(wire::BITS_PER_CHAR) * 1_000_000
-                    / u128::from(self.baud)) as u64
-            }
+            None => crate::protocol::untimed_micros(offset, wire::BITS_PER_CHAR, self.baud),
         }
     }
 

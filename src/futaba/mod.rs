@@ -10,33 +10,63 @@
 //!
 //! The table mapping and the choices made where the wire is ambiguous are in `docs/futaba.md`.
 
+mod args;
 mod map;
 mod vocab;
 pub mod wire;
 
 pub use map::{CHANNELS_TYPE, SLOT_TYPE, Stats};
 
-use crate::protocol::{Decoder, Kind, Line, Parity, Protocol};
+use crate::protocol::{Decoder, Front, InputKind, Line, Parity, Probe, Protocol, Variant};
 use crate::row::{Latch, RowOut, RowResult};
 use crate::stats::{Problems, Report};
 
-/// What the shared code needs to know: 100000 baud 8E2. The line is inverted: the adapter
-/// must invert it (docs/futaba.md, "Wiring").
+/// Futaba SBUS / SBUS2: 100000 baud 8E2, inverted on the wire (the adapter must invert, see
+/// docs/futaba.md).
 pub const PROTOCOL: Protocol = Protocol {
     name: "Futaba SBUS",
     command: "futaba",
-    line: Line {
-        baud: wire::BAUD,
-        data_bits: 8,
-        parity: Parity::Even,
-        stop_bits: 2,
-    },
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    aliases: &[],
+    summary: "Futaba SBUS / SBUS2 (RC receivers): 25-byte channel frames, SBUS2 telemetry slots \
+              (100000 baud 8E2, inverted); not Saia S-Bus, which is `busnoop sbus`",
+    about: "Futaba SBUS / SBUS2, the channel bus of most RC receivers: a 25-byte frame every 6 to \
+            14 ms (`0F`, 16 channels of 11 bits, flags, end byte), one row each with CH1 … CH16 \
+            in µs (Betaflight's 5/8 × raw + 880), CH17, CH18, frame lost and failsafe; SBUS2 \
+            telemetry slot answers as rows with the slot number as ID. 100000 baud 8E2, \
+            inverted on the wire: the adapter must invert (docs/futaba.md). Saia S-Bus, the PLC \
+            bus of a similar name, is `busnoop sbus`.",
+    examples: "Examples:\n  busnoop futaba /dev/ttyUSB0\n  busnoop futaba capture.bin --type Slot\n  \
+               busnoop futaba capture.bin --wide -o channels.csv\n  busnoop plot capture.bin \
+               --protocol futaba --sensor CH1,CH2",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input. File kinds are recognised by content.",
+    line: Line::new(wire::BAUD, 8, Parity::Even, 2),
+    inverted: true,
+    rates: &[wire::BAUD, 200_000],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 2, 8, 8, 7, 5, 79, 4, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[],
+    export: None,
 };
+
+/// `detect` reads SBUS one way at the probe's speed (an inverted line is tried for every
+/// inverted protocol). Saia S-Bus (`busnoop sbus`) is told apart by the scores: its telegrams
+/// end in a CRC, not in an end byte 24 bytes after a `0F`, and SBUS frames fail S-Bus's CRC.
+fn variants(probe: &Probe) -> Vec<Variant> {
+    vec![Variant {
+        label: "Futaba SBUS",
+        args: &[],
+        decoder: decoder(Options {
+            baud: probe.line.baud,
+        }),
+    }]
+}
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
@@ -79,38 +109,19 @@ pub fn decoder(opts: Options) -> Box<dyn Decoder> {
     Box::new(FutabaDecoder::new(&opts))
 }
 
-/// The ways `busnoop detect` reads a capture as Futaba SBUS: `(label, inverted, decoder)`. The
-/// bytes as they are (an inverting adapter), and inverted back (an adapter that does not
-/// invert: a rough reading, the UART also misplaces the start bits, but frames often survive).
-/// Saia S-Bus (`busnoop sbus`) is told apart by scoring: its telegrams end in a CRC, not in
-/// `00`/`04`…`34` 25 bytes after a `0F`, and SBUS frames fail the S-Bus CRC.
-pub fn detect_variants(baud: Option<u32>) -> Vec<(&'static str, bool, Box<dyn Decoder>)> {
-    let opts = || Options {
-        baud: baud.unwrap_or(wire::BAUD),
-    };
-    vec![
-        ("Futaba SBUS", false, decoder(opts())),
-        ("Futaba SBUS, inverted line", true, decoder(opts())),
-    ]
-}
-
 impl Decoder for FutabaDecoder {
     fn columns(&self) -> &'static [&'static str] {
         COLUMNS
     }
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let map = &mut self.map;
-        self.re.push(data, time, &mut |e| map.event(e, &mut out));
-        out.result()
+        let (re, map) = (&mut self.re, &mut self.map);
+        Latch::with(out, |out| re.push(data, time, &mut |e| map.event(e, out)))
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let map = &mut self.map;
-        self.re.finish(&mut |e| map.event(e, &mut out));
-        out.result()
+        let (re, map) = (&mut self.re, &mut self.map);
+        Latch::with(out, |out| re.finish(&mut |e| map.event(e, out)))
     }
 
     fn valid_frames(&self) -> u64 {

@@ -132,10 +132,7 @@ impl Mapper {
     fn micros(&self, at: &Located<'_>) -> u64 {
         match at.time {
             Some(t) => t,
-            None => {
-                (u128::from(at.offset) * u128::from(wire::BITS_PER_CHAR) * 1_000_000
-                    / u128::from(self.baud)) as u64
-            }
+            None => crate::protocol::untimed_micros(at.offset, wire::BITS_PER_CHAR, self.baud),
         }
     }
 

@@ -8,6 +8,7 @@
 //!
 //! The table mapping, the sources and the check against a real capture are in `docs/ibus.md`.
 
+mod args;
 mod map;
 pub mod sensors;
 mod vocab;
@@ -17,21 +18,57 @@ pub use map::{
     AddrStats, CHANNELS, DISCOVER, Learned, MEASURE, OTHER, SENSOR_TYPE, Stats, UNKNOWN,
 };
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Front, InputKind, Line, Probe, Protocol, Variant};
 use crate::row::{Latch, RowOut, RowResult};
 use crate::stats::{Problems, Report};
 
-/// What the shared code needs to know: 115200 baud 8N1, normal levels.
+/// FlySky iBUS: 115200 baud 8N1, normal levels.
 pub const PROTOCOL: Protocol = Protocol {
     name: "FlySky iBUS",
     command: "ibus",
+    aliases: &[],
+    summary: "FlySky iBUS: RC channel frames and the sensor bus (polls paired with answers, sensor \
+              values in units; 115200 baud)",
+    about: "FlySky iBUS: the receiver's servo line (a frame `20 40` with 14 channels in µs every \
+            7.7 ms; channels 15-18 in the high nibbles of newer receivers) and its sensor line, \
+            polled half duplex like S.Port: discover, type and measurement polls (`04 cmd|addr \
+            chk`) paired with the sensors' answers, the sensor type named as EdgeTX names it \
+            and its value in units; polls nobody answered are poll rows (--hide-polls). \
+            115200 baud 8N1, normal levels (docs/ibus.md).",
+    examples: "Examples:\n  busnoop ibus /dev/ttyUSB0\n  busnoop ibus sensors.bin --hide-polls \
+               --sensor ExtV\n  busnoop ibus sensors.bin --sensor-type 1=ExtV --sensor-type \
+               2=RPM\n  busnoop ibus servo.bin --wide -o channels.csv",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input. File kinds are recognised by content.",
     line: Line::n81(wire::BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    inverted: false,
+    rates: &[wire::BAUD],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 1, 10, 7, 6, 30, 4, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[(
+        "sensor-types",
+        "the sensor type at an address (1 = \"ExtV\"), as --sensor-type",
+    )],
+    export: None,
 };
+
+/// `detect` reads iBUS one way (the line is not inverted).
+fn variants(probe: &Probe) -> Vec<Variant> {
+    vec![Variant {
+        label: "FlySky iBUS",
+        args: &[],
+        decoder: decoder(Options {
+            baud: probe.line.baud,
+            ..Options::default()
+        }),
+    }]
+}
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
@@ -112,33 +149,19 @@ pub fn decoder(opts: Options) -> Box<dyn Decoder> {
     Box::new(IbusDecoder::new(&opts))
 }
 
-/// The ways `busnoop detect` reads a capture as iBUS: `(label, inverted, decoder)`. The line is
-/// not inverted, so there is one.
-pub fn detect_variants(baud: Option<u32>) -> Vec<(&'static str, bool, Box<dyn Decoder>)> {
-    let opts = Options {
-        baud: baud.unwrap_or(wire::BAUD),
-        ..Options::default()
-    };
-    vec![("FlySky iBUS", false, decoder(opts))]
-}
-
 impl Decoder for IbusDecoder {
     fn columns(&self) -> &'static [&'static str] {
         COLUMNS
     }
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let map = &mut self.map;
-        self.re.push(data, time, &mut |e| map.event(e, &mut out));
-        out.result()
+        let (re, map) = (&mut self.re, &mut self.map);
+        Latch::with(out, |out| re.push(data, time, &mut |e| map.event(e, out)))
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let map = &mut self.map;
-        self.re.finish(&mut |e| map.event(e, &mut out));
-        out.result()
+        let (re, map) = (&mut self.re, &mut self.map);
+        Latch::with(out, |out| re.finish(&mut |e| map.event(e, out)))
     }
 
     fn valid_frames(&self) -> u64 {

@@ -2,14 +2,14 @@
 
 use super::map::{CHANNELS, DISCOVER, MEASURE, OTHER, SENSOR_TYPE, UNKNOWN};
 use super::sensors::TYPES;
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab, hex_digits};
 use crate::row::kind;
 
 /// Sensor addresses 0-15 (sensors use 1-15; RC frames have no ID); the Sensor column names the
 /// sensor type as EdgeTX does, Sensor # is the type code in hex. The sensor bus is polled: a
 /// poll nobody answered is a row of its own (`--hide-polls`).
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=15,
+    ids: Some(0..=15),
     id_name: "sensor address",
     id_hint,
     types: &[
@@ -46,24 +46,38 @@ fn id_hint(id: u32) -> Option<String> {
     })
 }
 
-/// Every sensor name of the type table, each once.
-fn sensors() -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
+/// Every sensor name of the type table, each once, with the names of its numbers where they
+/// differ (GPS: Lat, Lon; Sats: Fix; Pres: Tmp2), and the numbers no Sensor column shows: the
+/// channels CH1 … CH18 of RC frames and the raw values of unknown types (`Raw`).
+fn sensors() -> Vec<Sensor> {
+    let mut out: Vec<Sensor> = Vec::new();
     for t in TYPES {
-        if !out.iter().any(|n| n == t.name) {
-            out.push(t.name.to_owned());
+        let extra: &[&str] = match t.enc {
+            super::sensors::Enc::GpsStatus => &["Fix"],
+            super::sensors::Enc::Pressure => &["Tmp2"],
+            _ => &[],
+        };
+        let i = match out.iter().position(|s| s.column == t.name) {
+            Some(i) => i,
+            None => {
+                out.push(Sensor::named(t.name));
+                out.len() - 1
+            }
+        };
+        for p in std::iter::once(t.part).chain(extra.iter().copied()) {
+            if p != t.name && !out[i].parts.iter().any(|q| q == p) {
+                out[i].parts.push(p.to_owned());
+            }
         }
     }
+    out.extend((1..=18).map(|n| Sensor::named(&format!("CH{n}"))));
+    out.push(Sensor::named("Raw"));
     out
 }
 
 /// A type code in hex, with or without `0x`.
 fn sensor_no(s: &str) -> bool {
-    let h = s
-        .strip_prefix("0x")
-        .or_else(|| s.strip_prefix("0X"))
-        .unwrap_or(s);
-    !h.is_empty() && h.len() <= 2 && h.bytes().all(|b| b.is_ascii_hexdigit())
+    hex_digits(s, 2)
 }
 
 #[cfg(test)]
@@ -73,9 +87,10 @@ mod tests {
     #[test]
     fn names_the_types_and_hints_at_command_bytes() {
         let s = sensors();
-        for name in ["IntV", "Temp", "RPM", "ExtV", "Curr", "Fuel"] {
-            assert!(s.iter().any(|n| n == name), "{name}");
+        for name in ["IntV", "Temp", "RPM", "ExtV", "Curr", "Fuel", "Lat", "CH18"] {
+            assert!(s.iter().any(|n| n.is(name)), "{name}");
         }
+        assert!(s.iter().any(|n| n.is("GPS") && n.is("Lon")));
         assert!(id_hint(0xA1).unwrap().contains("address 1"));
         assert!(id_hint(40).is_none());
         assert!(sensor_no("0x03") && sensor_no("3") && !sensor_no("0x103"));
