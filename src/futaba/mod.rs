@@ -47,7 +47,7 @@ pub const PROTOCOL: Protocol = Protocol {
     accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
-    pretty_widths: &[7, 8, 2, 8, 8, 7, 5, 79, 4, 0],
+    pretty_widths: &[7, 8, 2, 8, 9, 7, 5, 79, 4, 0],
     vocab: &vocab::VOCAB,
     front: Front::of::<args::Args>(),
     variants,
