@@ -10,6 +10,8 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sab::PROTOCOL,
     &crate::crsf::PROTOCOL,
     &crate::ghst::PROTOCOL,
+    &crate::futaba::PROTOCOL,
+    &crate::ibus::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.

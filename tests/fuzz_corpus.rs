@@ -72,3 +72,13 @@ fn crsf_corpus() {
 fn ghst_corpus() {
     replay("ghst", busnoop::selfcheck::ghst);
 }
+
+#[test]
+fn futaba_corpus() {
+    replay("futaba", busnoop::selfcheck::futaba);
+}
+
+#[test]
+fn ibus_corpus() {
+    replay("ibus", busnoop::selfcheck::ibus);
+}

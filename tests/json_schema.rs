@@ -101,6 +101,9 @@ fn every_fixture_follows_the_schema() {
         ("sbus", "sbus_seeds_ether.pcap"),
         ("sab2", "sab1-session.bin"),
         ("sab2", "sab2-session.bin"),
+        ("futaba", "futaba-session.bin"),
+        ("ibus", "ibus-sensors.bin"),
+        ("ibus", "ibus-rc.bin"),
     ];
     let mut rows = 0;
     let mut with_parts = 0;

@@ -160,3 +160,18 @@ fn sbus_pretty() {
     assert_aligned("sbus-serial", &["sbus"], &p, &text);
     snapshot("sbus-serial.pretty", &text);
 }
+
+#[test]
+fn rc_buses_pretty() {
+    for (protocol, name) in [("futaba", "futaba-session"), ("ibus", "ibus-sensors")] {
+        let f = fixture(&format!("{name}.bin"));
+        let text = pretty(&[protocol], &f);
+        assert_aligned(name, &[protocol], &f, &text);
+        snapshot(&format!("{name}.pretty"), &text);
+    }
+    // iBUS's Data column is sized for the sensor bus: the channels of an RC frame (69 or 89
+    // characters) and a broken RC frame's hex (95) are longer than a column grows, so these
+    // rows overflow, each by its own length (not checked for alignment).
+    let f = fixture("ibus-rc.bin");
+    snapshot("ibus-rc.pretty", &pretty(&["ibus"], &f));
+}

@@ -354,3 +354,34 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     assert_eq!(term.lflag(), before, "terminal modes restored");
     drop(reader);
 }
+
+#[test]
+fn top_shows_the_rc_buses_sensors_and_channels() {
+    let _g = lock();
+    // iBUS: a sensor per address, with its value in units.
+    let term = terminal(140, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"ibus", &"--top", &"fixtures/ibus-sensors.bin"]);
+    let at = wait_for(&screen, 0, "FlySky iBUS");
+    let at = wait_for(&screen, at, "ExtV");
+    wait_for(&screen, at, "Curr");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    assert!(wait_exit(&mut child).success());
+    // Futaba: the channel frames and the receiver voltage slot.
+    let term = terminal(140, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"futaba", &"--top", &"fixtures/futaba-session.bin"]);
+    let at = wait_for(&screen, 0, "Futaba SBUS");
+    let at = wait_for(&screen, at, "SBUS2");
+    wait_for(&screen, at, "RxV");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    assert!(wait_exit(&mut child).success());
+}

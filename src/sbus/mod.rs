@@ -39,11 +39,12 @@ pub const PROTOCOL: Protocol = Protocol {
     command: "sbus",
     aliases: &[],
     summary: "Saia S-Bus (PCD controllers): serial data/secure/break/parity modes, and Ether-S-Bus \
-              (UDP 5050) captures",
+              (UDP 5050) captures; not Futaba SBUS, which is `busnoop futaba`",
     about: "Saia S-Bus, the bus of Saia PCD controllers: serial data, secure data, break and parity \
             modes (9600 baud by default; the mode is detected or set with --mode), and Ether-S-Bus \
             (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe. Requests are paired \
-            with their answers and timed.",
+            with their answers and timed. Futaba SBUS, the RC receiver bus of a similar name, is \
+            `busnoop futaba`.",
     examples: "Examples:\n  busnoop sbus /dev/ttyUSB0 --baud 19200\n  busnoop sbus plant.pcap \
                --station Boiler=10\n  tcpdump -U -w - udp port 5050 | busnoop sbus -",
     source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
