@@ -45,8 +45,18 @@ fn fport_rows(variant: Variant, bytes: &[u8]) -> Vec<OwnedRow> {
     decode(d.as_mut(), [(bytes, None)])
 }
 
+/// Sensor #, Sensor, Data, Value, Unit and the parts (name, unit, text).
+type Cells<'a> = (
+    &'a str,
+    &'a str,
+    &'a str,
+    &'a str,
+    &'a str,
+    &'a [(String, String, String)],
+);
+
 /// The cells the output contract names, and Data.
-fn cells(r: &OwnedRow) -> (&str, &str, &str, &str, &str, &Vec<(String, String, String)>) {
+fn cells(r: &OwnedRow) -> Cells<'_> {
     (
         &r.sensor_no,
         &r.sensor,
