@@ -62,3 +62,8 @@ fn sbus_ether_corpus() {
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }
+
+#[test]
+fn fport_corpus() {
+    replay("fport", busnoop::fport::selfcheck::check);
+}
