@@ -2,6 +2,7 @@
 //! one inverted wire. Reassembly of both framings, the choice between them, the log table
 //! mapping (telemetry through the S.Port table) and statistics. See `docs/fport.md`.
 
+mod args;
 mod decoder;
 pub mod detect;
 pub mod frame;
@@ -18,7 +19,7 @@ pub use decoder::{FportDecoder, Reason};
 pub use map::{COLUMNS, RECEIVER, V1_PHYS, V1_REQUEST_PHYS};
 pub use stats::{PhysStats, Stats};
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Front, InputKind, Line, Probe, Protocol};
 
 /// F.Port and F.Port 2 run at 115200 baud 8N1.
 pub const DEFAULT_BAUD: u32 = 115_200;
@@ -28,17 +29,60 @@ pub const FBUS_BAUD: u32 = 460_800;
 /// receivers have an uninverted F.Port 2 pad).
 pub const INVERTED: bool = true;
 
-/// What the command line needs to know: 115200 baud 8N1, inverted.
+/// FrSky F.Port, F.Port 2 and FBUS: 115200 baud 8N1 (FBUS 460800), inverted on the wire.
 pub const PROTOCOL: Protocol = Protocol {
     name: "F.Port",
     command: "fport",
+    aliases: &[],
+    summary: "FrSky F.Port, F.Port 2, FBUS: receiver channels in µs and S.Port telemetry on one \
+              wire (115200 baud, FBUS 460800)",
+    about: "FrSky F.Port (v1), F.Port 2 and FBUS: the receiver's control frames (16 channels in \
+            µs on Betaflight's scale 5/8 x + 880, flags, RSSI), its telemetry polls and the \
+            flight controller's answers, decoded as S.Port sensor frames; OTA firmware-update \
+            frames. The framing (v1: 0x7E-delimited and byte-stuffed; F.Port 2 and FBUS: \
+            length-prefixed) is chosen from the stream or set with --variant. 115200 baud 8N1, \
+            FBUS 460800, inverted on the wire: the adapter must invert (docs/fport.md).",
+    examples: "Examples:\n  busnoop fport /dev/ttyUSB0\n  busnoop fport /dev/ttyUSB0 --variant \
+               fbus\n  busnoop fport flight.bin --hide-polls --sensor VFAS\n  busnoop fport \
+               flight.bin --wide -o channels.csv",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input. File kinds are recognised by content; `--baud` also sets the \
+                  byte times of raw files.",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    inverted: INVERTED,
+    rates: &[DEFAULT_BAUD, FBUS_BAUD],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Frame Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 30, 4, 8, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[],
+    export: None,
 };
+
+/// `detect` tries each framing on its own; at FBUS speed the F.Port 2 framing is FBUS.
+fn variants(probe: &Probe) -> Vec<crate::protocol::Variant> {
+    let baud = probe.line.baud;
+    let v2 = if baud >= FBUS_BAUD {
+        ("FBUS", &["--variant", "fbus"][..], Variant::Fbus)
+    } else {
+        ("F.Port 2", &["--variant", "v2"][..], Variant::V2)
+    };
+    [("F.Port v1", &["--variant", "v1"][..], Variant::V1), v2]
+        .into_iter()
+        .map(|(label, args, variant)| crate::protocol::Variant {
+            label,
+            args,
+            decoder: decoder(Options {
+                variant,
+                baud: Some(baud),
+            }),
+        })
+        .collect()
+}
 
 /// `--variant`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

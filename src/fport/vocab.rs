@@ -1,12 +1,12 @@
 //! What an F.Port table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab};
 use crate::row::kind;
 
 /// Physical IDs 0-31 as in S.Port (telemetry rows; control frames have none); the Sensor
 /// column names app IDs as S.Port does, control frames `Channels`, OTA frames `OTA`.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=31,
+    ids: Some(0..=31),
     id_name: "physical ID",
     id_hint,
     types: &[
@@ -50,10 +50,16 @@ fn id_hint(id: u32) -> Option<String> {
     })
 }
 
-/// S.Port's sensor names, and the names of control and OTA rows.
-fn sensors() -> Vec<String> {
+/// S.Port's sensors, the control frames' `Channels` with the names of their numbers, and `OTA`.
+fn sensors() -> Vec<Sensor> {
     let mut out = (crate::sport::PROTOCOL.vocab.sensors)();
-    out.extend(["Channels".to_owned(), "OTA".to_owned()]);
+    let mut parts: Vec<String> = (1..=24).map(|i| format!("CH{i}")).collect();
+    parts.extend(["FrameLost", "Failsafe", "RSSI"].map(String::from));
+    out.push(Sensor {
+        column: "Channels".to_owned(),
+        parts,
+    });
+    out.push(Sensor::named("OTA"));
     out
 }
 
