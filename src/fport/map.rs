@@ -27,6 +27,9 @@ pub const V1_PHYS: u8 = 27;
 /// none, so read and write requests are shown with it.
 pub const V1_REQUEST_PHYS: u8 = 13;
 
+/// Channels shown in the Data cell of a control row (in whole µs); the rest follow as `…`.
+const DATA_CHANNELS: usize = 8;
+
 /// `CH1` … `CH24`.
 const CH: [&str; 24] = [
     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11", "CH12", "CH13",
@@ -189,12 +192,19 @@ impl Mapper {
         let flags = data.get(bytes).copied().unwrap_or(0);
         let rssi = data.get(bytes + 1).copied().unwrap_or(0);
         for (i, &raw) in ch[..n].iter().enumerate() {
-            let (v, prec) = trimmed(wire::micros_milli(raw), 3);
+            let milli = wire::micros_milli(raw);
+            let (v, prec) = trimmed(milli, 3);
             sc.control.fixed(CH[i], "µs", v, prec);
-            if i > 0 {
-                sc.data.push(' ');
+            // Data: the first channels in whole µs as Betaflight shows them (the pretty table
+            // keeps a cell of up to 60 characters aligned); every channel exactly in the parts.
+            if i < DATA_CHANNELS {
+                if i > 0 {
+                    sc.data.push(' ');
+                }
+                push_uint(&mut sc.data, (milli / 1000) as u64);
+            } else if i == DATA_CHANNELS {
+                sc.data.push_str(" …");
             }
-            sc.data.push_str(sc.control.last_text());
         }
         let bit = |mask: u8| i64::from(flags & mask != 0);
         if n <= 16 {

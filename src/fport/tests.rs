@@ -92,10 +92,8 @@ fn a_control_frame_shows_channels_in_microseconds_and_flags_as_parts() {
         ["0", "1", "1", "0", "87"]
     );
     assert_eq!(r.parts.len(), 21);
-    assert!(
-        r.data
-            .starts_with("987.5 2011.875 1005 1505 2005 1500.625 1500")
-    );
+    // Data: the first 8 channels in whole µs, as Betaflight shows them.
+    assert_eq!(r.data, "987 2011 1005 1505 2005 1500 1500 1500 …");
     assert!(
         note(r).starts_with("flags 0x06: CH18, frame lost; raw 172 1811 200 1000 1800 993 992"),
         "{}",
