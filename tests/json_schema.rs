@@ -101,6 +101,8 @@ fn every_fixture_follows_the_schema() {
         ("sbus", "sbus_seeds_ether.pcap"),
         ("sab2", "sab1-session.bin"),
         ("sab2", "sab2-session.bin"),
+        ("fport", "fport-v1-session.bin"),
+        ("fport", "fport2-session.bin"),
     ];
     let mut rows = 0;
     let mut with_parts = 0;
