@@ -113,7 +113,7 @@ impl Mapper {
 
     /// Time of a row: the source's, or 10 bits per byte at the line's speed.
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
-        time.unwrap_or_else(|| (u128::from(offset) * 10 * 1_000_000 / u128::from(self.baud)) as u64)
+        time.unwrap_or_else(|| crate::protocol::untimed_micros(offset, 10, self.baud))
     }
 
     fn frame(&mut self, framing: Framing, f: &Frame<'_>, out: &mut dyn RowOut) -> RowResult {
