@@ -18,8 +18,8 @@
 //!   ([`row::Row`], [`row::RowOut`], the collectors [`row::Collected`] and [`row::Discard`])
 //!   and the capture clock [`time::Anchor`];
 //! * one module per protocol, each with its decoder, its options and its wire format:
-//!   [`sport`] (FrSky S.Port), [`sbus`] (Saia S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB
-//!   v1 and SAB2);
+//!   [`sport`] (FrSky S.Port), [`fport`] (FrSky F.Port, F.Port 2 and FBUS), [`sbus`] (Saia
+//!   S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB v1 and SAB2);
 //! * capture files: [`pcap`] (reading pcap/pcapng, writing pcap and per-frame exports),
 //!   [`Recorder`] (busnoop's recordings of a line's bytes or a capture's packets,
 //!   [`RecordContent`]), [`edgetx`] (EdgeTX/OpenTX debug-log lines);
@@ -53,6 +53,7 @@ mod exit;
 mod export;
 mod filter;
 pub mod fmt;
+pub mod fport;
 pub mod futaba;
 pub mod ghst;
 pub mod ibus;

@@ -6,6 +6,7 @@ use crate::protocol::Protocol;
 /// Every protocol busnoop decodes, in the order of the command line's subcommands.
 pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sport::PROTOCOL,
+    &crate::fport::PROTOCOL,
     &crate::sbus::PROTOCOL,
     &crate::sab::PROTOCOL,
     &crate::crsf::PROTOCOL,

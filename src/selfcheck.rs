@@ -639,4 +639,3 @@ pub fn ibus(data: &[u8]) {
         }
     }
 }
-

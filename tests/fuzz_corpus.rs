@@ -82,3 +82,8 @@ fn futaba_corpus() {
 fn ibus_corpus() {
     replay("ibus", busnoop::selfcheck::ibus);
 }
+
+#[test]
+fn fport_corpus() {
+    replay("fport", busnoop::fport::selfcheck::check);
+}

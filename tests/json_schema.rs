@@ -104,6 +104,8 @@ fn every_fixture_follows_the_schema() {
         ("futaba", "futaba-session.bin"),
         ("ibus", "ibus-sensors.bin"),
         ("ibus", "ibus-rc.bin"),
+        ("fport", "fport-v1-session.bin"),
+        ("fport", "fport2-session.bin"),
     ];
     let mut rows = 0;
     let mut with_parts = 0;

@@ -2,7 +2,8 @@
 # Golden outputs for refactors that must not change behaviour.
 #
 # Runs target/release/busnoop over every file in fixtures/ and fuzz/seeds/ with each subcommand
-# (sport; sbus --mode auto/data/break; sab2 --framing auto/sync/hdlc; futaba; ibus) and each format
+# (sport; sbus --mode auto/data/break; sab2 --framing auto/sync/hdlc; futaba; ibus; fport
+# --variant auto/v1/v2) and each format
 # (tsv, csv, jsonl, pretty --color always), with --raw and --stats, and stores stdout, stderr
 # and the exit code of every run in one directory (sbus and sport once more with --time abs
 # --utc, for the capture times of pcaps, recordings and logs). Prints one sha256 over that directory.
@@ -29,6 +30,7 @@ commands=(
   "sbus --mode auto" "sbus --mode data" "sbus --mode break"
   "sab2 --framing auto" "sab2 --framing sync" "sab2 --framing hdlc"
   "futaba" "ibus"
+  "fport" "fport --variant v1" "fport --variant v2"
 )
 formats=("tsv" "csv" "jsonl" "pretty --color always")
 

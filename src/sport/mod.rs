@@ -492,6 +492,40 @@ fn describe_other(
     }
 }
 
+/// The cells this table shows for a frame body `[type][app ID LE16][value LE32]` from physical
+/// ID `phys` whose check passed, for protocols that carry S.Port payloads (F.Port, FBUS): the
+/// Sensor #, Sensor, Data and Note cells and the numbers are written into the (cleared)
+/// buffers; returns the unit.
+pub(crate) fn payload_cells(
+    phys: u8,
+    body: [u8; 7],
+    sensor_no: &mut String,
+    sensor: &mut String,
+    data: &mut String,
+    note: &mut String,
+    nums: &mut values::SportNumbers,
+) -> &'static str {
+    let mut sc = Scratch {
+        sensor_no: None,
+        sensor: std::mem::take(sensor),
+        data: std::mem::take(data),
+        note: std::mem::take(note),
+        nums: std::mem::take(nums),
+    };
+    let app_id = u16::from_le_bytes([body[1], body[2]]);
+    let value = u32::from_le_bytes([body[3], body[4], body[5], body[6]]);
+    let d = describe(body[0], phys & 0x1F, app_id, value, &mut sc);
+    sc.sensor.push_str(d.sensor.unwrap_or(""));
+    if d.data_is_value {
+        sc.data.push_str(sc.nums.first_text());
+    }
+    if let Some(id) = sc.sensor_no {
+        values::push_sensor_no(sensor_no, id);
+    }
+    (*sensor, *data, *note, *nums) = (sc.sensor, sc.data, sc.note, sc.nums);
+    d.unit
+}
+
 /// `value=0x` and the value as eight upper-case hex digits.
 fn push_value_hex(out: &mut String, value: u32) {
     out.push_str("value=0x");
