@@ -26,6 +26,23 @@ mod tests {
     use super::*;
     use crate::protocol::InputKind;
 
+    /// Two protocols' exports in one link type would be read by the wrong dissector.
+    #[test]
+    fn every_export_has_its_own_link_type() {
+        let mut seen: Vec<(u32, &str)> = Vec::new();
+        for p in PROTOCOLS {
+            if let Some(e) = p.export {
+                if let Some((_, other)) = seen.iter().find(|(l, _)| *l == e.linktype) {
+                    panic!(
+                        "{} and {other} both export as link type {}",
+                        p.command, e.linktype
+                    );
+                }
+                seen.push((e.linktype, p.command));
+            }
+        }
+    }
+
     #[test]
     fn every_protocol_reads_raw_bytes_and_live_lines_and_has_its_own_command() {
         let mut commands: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();

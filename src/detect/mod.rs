@@ -342,16 +342,22 @@ fn starts_text(starts: &[(u8, u64)]) -> String {
     }
 }
 
-/// The evidence table, one line per candidate.
+/// The evidence table, one line per candidate (the label column as wide as the longest label).
 pub fn evidence(ranked: &[Ranked]) -> String {
+    let w = ranked
+        .iter()
+        .map(|r| r.label.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(24);
     let mut s = format!(
-        "  {:<24} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
+        "  {:<w$} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
         "candidate", "in frames", "frames", "CRC err", "truncated", "garbage", "frames start with"
     );
     for r in ranked {
         let sc = &r.score;
         s.push_str(&format!(
-            "  {:<24} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
+            "  {:<w$} {:>9} {:>8} {:>7} {:>9} {:>8}  {}\n",
             r.label,
             percent(sc.share()),
             sc.frames,
