@@ -234,13 +234,77 @@ pub struct CaptureArgs {
 
     #[command(flatten)]
     pub select: project::SelectArgs,
+
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// When to stop, and what a script is told.
+#[derive(Args, Debug, Clone, Default)]
+#[command(next_help_heading = "Stopping and scripts")]
+pub struct RunArgs {
+    /// Stop after N rows are written (after the filters; busnoop's own notes not counted),
+    /// like candump -n and tshark -c.
+    #[arg(short = 'c', long, value_name = "N",
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 1, u64::MAX))]
+    pub count: Option<u64>,
+
+    /// Stop after this much capture time: on a serial port, seconds since the start; for a
+    /// file, its own time (Millis) [units: 1.5, 90, 500ms, 2m, 1h].
+    #[arg(long, value_name = "TIME", value_parser = parse_seconds)]
+    pub duration: Option<std::time::Duration>,
+
+    /// Stop when no row came for this long (a serial port: the bus went quiet; a file: a gap
+    /// in its times) [units as for --duration].
+    #[arg(long, value_name = "TIME", value_parser = parse_seconds)]
+    pub until_idle: Option<std::time::Duration>,
+
+    /// No table on standard output (it still goes to -o FILE); for --record, --export and
+    /// --stats runs, and for the exit code alone.
+    #[arg(short, long)]
+    pub quiet: bool,
+
+    /// Exit 0 even when most of a file's bytes are not valid frames of the protocol (exit code
+    /// 13 otherwise: the wrong protocol, or noise; the rows are written either way).
+    #[arg(long)]
+    pub lenient: bool,
+}
+
+/// A time as people write it: seconds (`1.5`, `90`), or with a unit: `500ms`, `30s`, `2m`,
+/// `1h`; more than 0, at most a week.
+pub fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
+    let t = s.trim();
+    let bad =
+        || "expected a time: seconds (1.5, 90) or with a unit (500ms, 30s, 2m, 1h)".to_string();
+    let (number, unit) = match t.find(|c: char| c.is_ascii_alphabetic()) {
+        Some(i) => (&t[..i], &t[i..]),
+        None => (t, "s"),
+    };
+    let factor = match unit {
+        "ms" => 0.001,
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        _ => return Err(bad()),
+    };
+    if number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit() || b == b'.') {
+        return Err(bad());
+    }
+    let v: f64 = number.parse().map_err(|_| bad())?;
+    let secs = v * factor;
+    if !(secs > 0.0 && secs <= 7.0 * 86_400.0) {
+        return Err(format!(
+            "{t} is out of range: more than 0, at most a week (168h)"
+        ));
+    }
+    Ok(std::time::Duration::from_secs_f64(secs))
 }
 
 /// Options for live capture.
 #[derive(Args, Debug, Clone, Default)]
 pub struct LiveArgs {
     // The help names the protocol's default (see `protocol_command`).
-    #[arg(long, value_name = "BAUD", value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
+    #[arg(long, value_name = "BAUD", value_parser = parse_baud)]
     pub baud: Option<u32>,
 
     // The help names the protocol's default (see `protocol_command`).
@@ -354,12 +418,16 @@ pub struct OutputArgs {
 
     /// With --wide: one line per MS milliseconds of capture time instead of per poll cycle.
     #[arg(long, value_name = "MS", requires = "wide",
-          value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 1, 3_600_000))]
     pub every: Option<u64>,
 
     /// `busnoop plot`: rows go to a plot instead.
     #[arg(skip)]
     pub plot: Option<crate::plot::PlotSpec>,
+
+    /// Pretty output: the line above the column names (what the project file sets).
+    #[arg(skip)]
+    pub preface: Option<String>,
 }
 
 /// `--speed`: 0, or a number from 0.001 to 1000. Below a thousandth of real time the pacer's
@@ -415,6 +483,43 @@ impl OutputArgs {
 /// bus busnoop reads runs above 12 Mbaud (the fastest USB adapters, FT232H).
 pub const BAUD_RANGE: std::ops::RangeInclusive<i64> = 50..=12_000_000;
 
+/// A line speed as people write it: `57600`, `57.6k`, `420k`, `1M`, `1.5M`; from 50 to
+/// 12000000 baud ([`BAUD_RANGE`]).
+pub fn parse_baud(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    let bad = || "expected a speed in baud: 57600, 57.6k or 1M".to_string();
+    let (number, scale) = match t.as_bytes().last() {
+        Some(b'k' | b'K') => (&t[..t.len() - 1], 1_000u64),
+        Some(b'M') => (&t[..t.len() - 1], 1_000_000),
+        _ => (t, 1),
+    };
+    let (whole, frac) = number.split_once('.').unwrap_or((number, ""));
+    let digits = |d: &str| d.bytes().all(|b| b.is_ascii_digit());
+    if whole.is_empty() || !digits(whole) || !digits(frac) || frac.len() > 6 {
+        return Err(bad());
+    }
+    let whole: u64 = whole.parse().map_err(|_| bad())?;
+    let frac_value: u64 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse().map_err(|_| bad())?
+    };
+    let denom = 10u64.pow(frac.len() as u32);
+    let scaled = frac_value * scale;
+    if !scaled.is_multiple_of(denom) {
+        return Err(format!("{t} is not a whole number of baud"));
+    }
+    let baud = whole.saturating_mul(scale).saturating_add(scaled / denom);
+    if !BAUD_RANGE.contains(&(baud.min(i64::MAX as u64) as i64)) {
+        return Err(format!(
+            "{t} is out of range: from {} to {} baud",
+            BAUD_RANGE.start(),
+            BAUD_RANGE.end()
+        ));
+    }
+    Ok(baud as u32)
+}
+
 /// `busnoop detect`.
 #[derive(Args, Debug)]
 pub struct DetectArgs {
@@ -425,13 +530,13 @@ pub struct DetectArgs {
 
     /// Serial devices: how long to listen at each baud rate.
     #[arg(long, value_name = "MS", default_value_t = 1500,
-          value_parser = clap::value_parser!(u64).range(10..=60_000))]
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 10, 60_000))]
     pub listen_ms: u64,
 
     /// Serial devices: the baud rates to try, comma-separated [default: 9600, 19200, 38400,
     /// 57600, 100000, 115200, 230400, 400000, 420000].
     #[arg(long = "baud", value_name = "BAUD", value_delimiter = ',',
-          value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
+          value_parser = parse_baud)]
     pub bauds: Vec<u32>,
 
     /// Serial devices: DTR and RTS, as for the protocol commands.

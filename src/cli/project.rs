@@ -339,6 +339,46 @@ impl File {
         &self.path
     }
 
+    /// What the file sets for `protocol`, in one line (`[sport] filter.id = [1], format =
+    /// "csv"`); `None` when it has no section for it.
+    pub fn settings(&self, protocol: &Protocol) -> Option<String> {
+        fn flatten(prefix: &str, v: &toml::Value, out: &mut Vec<String>) {
+            match v {
+                toml::Value::Table(t) => {
+                    for (k, v) in t {
+                        flatten(&format!("{prefix}{k}."), v, out);
+                    }
+                }
+                v => out.push(format!("{} = {}", prefix.trim_end_matches('.'), text(v))),
+            }
+        }
+        fn text(v: &toml::Value) -> String {
+            match v {
+                toml::Value::String(s) => format!("{s:?}"),
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::Float(f) => f.to_string(),
+                toml::Value::Boolean(b) => b.to_string(),
+                toml::Value::Datetime(d) => d.to_string(),
+                toml::Value::Array(a) => {
+                    let items: Vec<String> = a.iter().map(text).collect();
+                    format!("[{}]", items.join(", "))
+                }
+                toml::Value::Table(t) => {
+                    let items: Vec<String> = t
+                        .iter()
+                        .map(|(k, v)| format!("{k} = {}", text(v)))
+                        .collect();
+                    format!("{{ {} }}", items.join(", "))
+                }
+            }
+        }
+        let table: toml::Table = self.text.parse().ok()?;
+        let (name, section) = table.iter().find(|(k, _)| protocol.answers_to(k))?;
+        let mut parts = Vec::new();
+        flatten("", section, &mut parts);
+        Some(format!("[{name}] {}", parts.join(", ")))
+    }
+
     /// The section of `protocol`, if the file has one.
     pub fn section(&self, protocol: &Protocol) -> Option<&Section> {
         self.sections.get(protocol.command)

@@ -27,9 +27,15 @@ pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
     out
 }
 
+/// What a live detection heard: the report `busnoop detect` prints, and the winner.
+pub(super) struct Heard {
+    pub(super) text: String,
+    pub(super) result: Result<Chosen, Failure>,
+}
+
 /// `busnoop detect /dev/ttyUSB0`: listens at each line setting in turn, passively (the device
 /// is opened read-only, as for a capture), and ranks every (setting, protocol) pair.
-pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
+pub(super) fn live(path: &Path, args: &Options) -> Result<Heard, LiveError> {
     let lines = listen_lines(&args.bauds);
     let listen = Duration::from_millis(args.listen_ms);
     let mut listens = Vec::new();
@@ -84,8 +90,9 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
         ))),
         Some(i) => {
             let r = report.per_rate[*i].as_ref().expect("the winner's row");
-            found_text(&mut text, r, path, Some(listens[*i].line.baud));
-            Ok(())
+            let baud = listens[*i].line.baud;
+            found_text(&mut text, r, path, Some(baud));
+            Ok(Chosen::of(r, Some(baud)))
         }
         None => {
             text.push_str("verdict: no known protocol at any of these rates\n");
@@ -96,8 +103,7 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             )))
         }
     };
-    crate::exit::write_stdout(text.as_bytes()).map_err(LiveError::Failed)?;
-    result.map_err(LiveError::Failed)
+    Ok(Heard { text, result })
 }
 
 /// Reads `port` for `listen`, stamping every read with its time since the start.

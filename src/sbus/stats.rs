@@ -191,14 +191,13 @@ pub(super) fn report<'a>(
         }
     }
     r.totals.push(format!(
-        "valid telegrams {}, CRC errors {}, cut/broken {}, garbage {} bytes in {} runs, \
+        "valid telegrams {}, CRC errors {}, cut/broken {}, garbage {}, \
          retries {}, timeouts {}, NAKs {}, answers without request {}, length mismatches {}, late {}, \
          unanswered at the end {}",
         t.valid,
         t.crc_errors,
         t.broken,
-        t.garbage_bytes,
-        t.garbage_runs,
+        crate::stats::garbage(t.garbage_bytes, t.garbage_runs),
         t.retries,
         t.timeouts,
         t.naks,

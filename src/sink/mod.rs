@@ -1,5 +1,6 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
+pub mod limit;
 mod line;
 pub mod output;
 mod pretty;
@@ -87,6 +88,8 @@ pub struct Table {
     skipped: u64,
     anchor: Option<Anchor>,
     header_written: bool,
+    /// Pretty output: a line above the column names (what the project file changes).
+    preface: Option<String>,
     scratch: String,
     hex: Vec<u8>,
     error: Option<OutputError>,
@@ -183,6 +186,7 @@ impl Table {
             wide: None,
             plot: None,
             header_written: false,
+            preface: None,
             scratch: String::new(),
             hex: Vec::new(),
             error: None,
@@ -243,6 +247,12 @@ impl Table {
         self.plot.take()
     }
 
+    /// Pretty output: a line to write above the column names (TSV, CSV and JSON Lines are
+    /// for programs, which read only the table).
+    pub fn set_preface(&mut self, line: Option<String>) {
+        self.preface = line;
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
@@ -274,6 +284,13 @@ impl Table {
                 w.put(b"\r\n");
             }),
             Format::Pretty => {
+                if let Some(p) = &self.preface {
+                    self.out.line(|w| {
+                        w.put(p.as_bytes());
+                        w.byte(b'\n');
+                    });
+                    self.out.row_done()?;
+                }
                 let style = self.opts.color.then_some(BOLD);
                 if self.widths.len() < cols.len() {
                     self.widths.resize(cols.len(), 4);

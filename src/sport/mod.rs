@@ -394,10 +394,15 @@ impl Mapper {
             sc.note.push_str("0x7E without a header byte");
         } else {
             push_u64(&mut sc.note, g.bytes().len() as u64);
-            sc.note.push_str(if g.after_slot.is_some() {
-                " bytes after a complete frame"
+            sc.note.push_str(if g.bytes().len() == 1 {
+                " byte"
             } else {
-                " bytes before the first 0x7E"
+                " bytes"
+            });
+            sc.note.push_str(if g.after_slot.is_some() {
+                " after a complete frame"
+            } else {
+                " before the first 0x7E"
             });
         }
         let extra = ["", sc.note.as_str()];
@@ -646,10 +651,9 @@ impl Decoder for SportDecoder {
         cells.extend(counts(&total));
         r.row(cells);
         r.totals.push(format!(
-            "valid frames {}, garbage {} bytes in {} runs, non-standard check bits {}, unusual escapes {}, repeated frames {}",
+            "valid frames {}, garbage {}, non-standard check bits {}, unusual escapes {}, repeated frames {}",
             st.valid_frames,
-            st.garbage_bytes,
-            st.garbage_runs,
+            crate::stats::garbage(st.garbage_bytes, st.garbage_runs),
             st.check_bits,
             st.unusual_escapes,
             st.repeats
