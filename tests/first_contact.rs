@@ -331,7 +331,7 @@ fn help_names_only_the_sources_each_protocol_reads() {
     );
     let top = text(&busnoop().arg("--help").output().unwrap().stdout);
     assert!(top.contains("10 nothing decoded"), "{top}");
-    assert!(top.contains("11 detect: no known protocol"), "{top}");
+    assert!(top.contains("11 no known protocol (detect)"), "{top}");
 }
 
 #[test]

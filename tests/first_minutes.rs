@@ -588,3 +588,88 @@ fn quiet_writes_the_recording_and_no_table() {
     assert_eq!(out.status.code(), Some(13));
     assert!(out.stdout.is_empty());
 }
+
+/// The protocols' subcommands.
+const PROTOCOLS: &[&str] = &[
+    "sport", "fport", "sbus", "sab2", "crsf", "ghst", "futaba", "ibus",
+];
+
+/// Finding 8: `-h` was 79 to 111 lines, listed filters the protocol refuses, the `--baud`
+/// default of every protocol, `--wide` in S.Port's words for everyone, and three ways to name a
+/// device. `-h` is a summary, `--help` the whole; each shows only what applies.
+#[test]
+fn finding_8_help_per_protocol() {
+    for p in PROTOCOLS {
+        let short = ok(&run(&[p, "-h"]));
+        let long = ok(&run(&[p, "--help"]));
+        assert!(short.lines().count() <= 42, "{p} -h: {short}");
+        assert!(long.lines().count() > short.lines().count() + 60, "{p}");
+        assert!(short.contains("Examples:"), "{p}");
+        assert!(short.contains(&format!("busnoop {p} --help")), "{p}");
+        // One line per option in -h (no next-line layout).
+        assert!(
+            !short
+                .lines()
+                .any(|l| l.trim_start().starts_with("--") && l.trim_end().ends_with('>')),
+            "{p}: {short}"
+        );
+        // Only its own default speed.
+        let flat = long.split_whitespace().collect::<Vec<_>>().join(" ");
+        let baud = flat
+            .split("--baud <BAUD>")
+            .nth(1)
+            .and_then(|t| t.split("[default: ").nth(1))
+            .and_then(|t| t.split(']').next())
+            .unwrap_or_else(|| panic!("{p}: {long}"))
+            .to_owned();
+        assert!(baud.parse::<u32>().is_ok(), "{p}: {baud}");
+        // One way to name a device.
+        assert!(!long.contains("--station"), "{p}");
+        assert!(
+            !long.contains("motor=5") && !long.contains("A value with `=`"),
+            "{p}"
+        );
+    }
+    // Filters a protocol always refuses are not offered.
+    for p in ["sbus", "sab2", "crsf", "futaba"] {
+        let long = ok(&run(&[p, "--help"]));
+        assert!(!long.contains("--hide-polls"), "{p}");
+        assert!(!long.contains("--hide-null"), "{p}");
+    }
+    let sport = ok(&run(&["sport", "--help"]));
+    assert!(sport.contains("--hide-polls") && sport.contains("--hide-null"));
+    let flat = sport.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(flat.contains("[default: 57600]") && !flat.contains("115200"));
+    // --wide in the protocol's words.
+    let sab = ok(&run(&["sab2", "--help"]));
+    let wide = sab.split("--wide").nth(1).unwrap();
+    let wide = &wide[..wide.find("--every").unwrap()];
+    assert!(wide.contains("each address's next frame"), "{wide}");
+    assert!(!wide.contains("poll") && !wide.contains("Cell1"), "{wide}");
+    // The hidden aliases still work.
+    let file = path("sbus-digimat.pcap");
+    let named = ok(&run(&["sbus", &file, "-f", "tsv", "--name", "Boiler=10"]));
+    assert!(named.contains("\tBoiler\t"));
+    assert_eq!(
+        ok(&run(&[
+            "sbus",
+            &file,
+            "-f",
+            "tsv",
+            "--station",
+            "Boiler=10"
+        ])),
+        named
+    );
+    assert_eq!(
+        ok(&run(&["sbus", &file, "-f", "tsv", "--device", "Boiler=10"])),
+        named
+    );
+    // busnoop -h: the bare SOURCE and every exit code.
+    let top = ok(&run(&["-h"]));
+    assert!(top.contains("busnoop <SOURCE> [OPTIONS]"), "{top}");
+    assert!(
+        top.contains("13 mostly not frames of the protocol"),
+        "{top}"
+    );
+}

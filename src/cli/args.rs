@@ -18,10 +18,17 @@ use crate::source::serial;
     about = "Passive bus sniffer: listens to a serial bus (or replays a capture), reassembles \
              every frame and prints the S-Port_Snoop log table as coloured text, TSV, CSV or \
              JSON Lines.",
-    after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
+    override_usage = "busnoop <SOURCE> [OPTIONS]            detect the protocol, then decode\n       \
+                      busnoop <PROTOCOL> <SOURCE> [OPTIONS] decode as PROTOCOL (sport, sbus …)\n       \
+                      busnoop <COMMAND> …",
+    after_help = "SOURCE: a serial device (/dev/ttyUSB0), a capture file, or - (standard input, \
+                  with a PROTOCOL). `busnoop PROTOCOL -h` lists its options.\n\n\
+                  Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
                   10 nothing decoded (empty input, or no frame of the protocol), \
-                  11 detect: no known protocol, 12 bad project file, 129 hangup, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  11 no known protocol (detect), 12 bad project file, 13 mostly not frames of \
+                  the protocol (--lenient accepts), 129 hangup, 130 Ctrl-C, 141 output closed, \
+                  143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -128,14 +135,35 @@ pub fn command() -> clap::Command {
 /// The subcommand of `p`.
 fn protocol_command(p: &'static Protocol) -> clap::Command {
     let mut cmd = CaptureArgs::augment_args(clap::Command::new(p.command));
-    cmd = (p.front.args)(cmd);
+    let own_before: Vec<String> = cmd
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .collect();
+    cmd = (p.front.args)(cmd.next_help_heading("Protocol options"));
+    // The protocol's own options: the first words of their help in `-h`.
+    let own: Vec<String> = cmd
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .filter(|id| !own_before.contains(id))
+        .collect();
+    for id in own {
+        cmd = cmd.mut_arg(id, |a| {
+            let long = a.get_long_help().or(a.get_help()).cloned();
+            match long {
+                Some(long) => {
+                    let text = long.to_string();
+                    a.help(first_words(&text)).long_help(long)
+                }
+                None => a,
+            }
+        });
+    }
     let line = p.line;
     // After the protocol's options: a derived `Args` struct sets the help from its doc comment.
     cmd = cmd
         .about(p.summary)
         .long_about(p.about)
         .visible_aliases(p.aliases.iter().copied())
-        .after_help(p.examples)
         .mut_arg("source", |a| a.help(p.source_help))
         .mut_arg("record", |a| a.help(record_help(p)))
         .mut_arg("baud", |a| {
@@ -152,6 +180,7 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
                 line.format()
             ))
         });
+    cmd = protocol_help(cmd, p);
     // Filters that cannot apply to this protocol stay out of its help (and are refused with the
     // reason when given).
     let v = p.vocab;
@@ -169,7 +198,190 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
     if p.export.is_none() {
         cmd = cmd.mut_arg("export", |a| a.hide(true));
     }
+    if (v.sensors)().is_empty() && !v.sensor_no_hex {
+        cmd = cmd.mut_arg("sensor", |a| a.hide(true));
+    }
+    if v.ids.is_none() && v.devices.is_none() {
+        cmd = cmd.mut_arg("device", |a| a.hide(true));
+    }
     cmd
+}
+
+/// The start of a help text, up to its first colon, parenthesis or sentence end (the text of
+/// an option in `-h`).
+fn first_words(text: &str) -> String {
+    let cut = [": ", " (", ". ", "; ", ", e.g."]
+        .iter()
+        .filter_map(|sep| text.find(sep))
+        .filter(|&i| i >= 12)
+        .min()
+        .unwrap_or(text.len());
+    text[..cut].trim_end_matches('.').to_string()
+}
+
+/// The shared options `-h` shows (one line each, with this text); `--help` shows every option
+/// with its long text. The protocol's own options are in both.
+fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
+    let v = p.vocab;
+    let mut out = vec![
+        (
+            "source",
+            "A serial device, a capture file, or - (standard input)".to_string(),
+        ),
+        (
+            "format",
+            "pretty, tsv, csv or jsonl [default: pretty on a terminal]".into(),
+        ),
+        (
+            "output",
+            "Write the table to FILE (.csv, .tsv, .jsonl pick the format)".into(),
+        ),
+        ("stats", "A summary per device on stderr at the end".into()),
+        (
+            "wide",
+            "One line per cycle, one column per number (CSV or TSV)".into(),
+        ),
+        (
+            "top",
+            "Full-screen live view: one line per device and sensor".into(),
+        ),
+        (
+            "baud",
+            format!("Line speed of a device [default: {}]", p.line.baud),
+        ),
+        (
+            "record",
+            "Keep the bytes from the wire: FILE.pcap, FILE.pcapng, FILE.bin".into(),
+        ),
+        ("types", "Only rows of these types (Data,BadCRC)".into()),
+        ("count", "Stop after N frames".into()),
+    ];
+    if v.ids.is_some() {
+        out.push((
+            "id",
+            format!("Only rows of these IDs ({}): 2,8 or 0-9", v.id_name),
+        ));
+        out.push((
+            "name",
+            format!(
+                "Name an ID ({}) in the Device column: --name Pack=1",
+                v.id_name
+            ),
+        ));
+    }
+    if let Some(s) = (v.sensors)().first() {
+        out.push((
+            "sensor",
+            format!("Only rows of these sensors ({})", s.column),
+        ));
+    }
+    out
+}
+
+/// The protocol's own words in the shared options' help (its defaults, its ID, its types and
+/// sensors, its export), and the split between `-h` (a summary) and `--help` (everything).
+fn protocol_help(mut cmd: clap::Command, p: &'static Protocol) -> clap::Command {
+    let v = p.vocab;
+    let sensors = (v.sensors)();
+    let cycle = match (&v.ids, v.polls) {
+        (_, true) => format!("one line per poll cycle (each {}'s next poll)", v.id_name),
+        (Some(_), false) => format!("one line per cycle (each {}'s next frame)", v.id_name),
+        (None, false) => "one line per frame".to_string(),
+    };
+    let wide = format!(
+        "Wide table (CSV or TSV): {cycle}, one column per number seen, named `Name(unit)`, the \
+         last value held; Date and Time when the source has wall-clock time, else Millis. See \
+         docs/wide.md"
+    );
+    cmd = cmd.mut_arg("wide", |a| a.long_help(wide));
+    let types: Vec<&str> = v.types.iter().copied().take(6).collect();
+    cmd = cmd.mut_arg("types", |a| {
+        a.long_help(format!(
+            "Show only rows of these types, comma-separated and case-insensitive: {}{}",
+            types.join(", "),
+            if v.types.len() > types.len() {
+                " …"
+            } else {
+                ""
+            }
+        ))
+    });
+    if let Some(ids) = &v.ids {
+        let id = v.id_name;
+        cmd = cmd
+            .mut_arg("id", |a| {
+                a.long_help(format!(
+                    "Show only rows of these IDs ({id}, {} to {}): `2,8`, `0x1B`, ranges `0-9` \
+                     (repeatable)",
+                    ids.start(),
+                    ids.end()
+                ))
+            })
+            .mut_arg("name", |a| {
+                a.long_help(format!(
+                    "Name an ID ({id}) in the Device column (repeatable): `--name Pack=1`, \
+                     `--name Boiler=0x0A`; the name first, then the ID"
+                ))
+            });
+    }
+    if let Some(s) = sensors.first() {
+        let example = sensors
+            .iter()
+            .take(2)
+            .map(|s| s.column.as_str())
+            .collect::<Vec<_>>()
+            .join(",");
+        cmd = cmd.mut_arg("sensor", |a| {
+            a.long_help(format!(
+                "Show only rows whose Sensor or Sensor # column is one of these, or that carry a \
+                 number of that name: `{example}`{} (case-insensitive{})",
+                if s.parts.is_empty() {
+                    String::new()
+                } else {
+                    format!(", `{}`", s.parts[0])
+                },
+                if v.sensor_no_hex {
+                    "; hex numbers match with or without `0x` and leading zeros"
+                } else {
+                    ""
+                }
+            ))
+        });
+    }
+    if let Some(e) = &p.export {
+        cmd = cmd.mut_arg("export", |a| {
+            a.long_help(format!(
+                "Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with \
+                 its capture time, for Wireshark: link type {} ({}), decoded by {} (docs/\
+                 wireshark.md). Filters apply, as to the table",
+                e.linktype, e.linktype_name, e.dissector
+            ))
+        });
+    }
+    // `-h`: the short list; every other shared option only in `--help`.
+    let short = short_help(p);
+    let shared: Vec<String> = CaptureArgs::augment_args(clap::Command::new("x"))
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .collect();
+    for id in shared {
+        cmd = match short.iter().find(|(s, _)| *s == id) {
+            Some((_, text)) => cmd.mut_arg(id, |a| {
+                let long = a
+                    .get_long_help()
+                    .or(a.get_help())
+                    .cloned()
+                    .unwrap_or_default();
+                a.help(text.clone()).long_help(long)
+            }),
+            None => cmd.mut_arg(id, |a| a.hide_short_help(true)),
+        };
+    }
+    cmd.after_help(format!(
+        "{}\nEvery option, the defaults and the filters' values: busnoop {} --help",
+        p.examples, p.command
+    ))
+    .after_long_help(p.examples)
 }
 
 /// A parsed command line.
@@ -311,8 +523,9 @@ pub struct LiveArgs {
     #[arg(long, value_name = "FORMAT")]
     pub line: Option<String>,
 
-    /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
-    /// number), go on, and mark the gap with a row.
+    /// Wait for the adapter: when it is not plugged in yet, until it appears; when it is
+    /// unplugged, until it is back (by its /dev/serial/by-id name or USB serial number), and
+    /// mark the gap with rows.
     #[arg(long)]
     pub reconnect: bool,
 
@@ -365,8 +578,9 @@ pub enum TimeMode {
 /// Options shared by every protocol.
 #[derive(Args, Debug, Clone)]
 pub struct OutputArgs {
-    /// Output format [default: pretty on a terminal, tsv otherwise, or from the -o extension].
-    #[arg(short, long, value_enum)]
+    /// Output format: pretty, tsv, csv or jsonl [default: pretty on a terminal, tsv otherwise,
+    /// or from the -o extension].
+    #[arg(short, long, value_enum, hide_possible_values = true)]
     pub format: Option<Format>,
 
     /// Write the table to FILE instead of standard output (.csv, .tsv, .jsonl, .txt pick

@@ -48,11 +48,11 @@ pub struct SelectArgs {
     #[arg(long = "not-type", value_name = "LIST")]
     pub not_types: Vec<String>,
 
-    /// Hide polls nobody answered (S.Port).
+    /// Hide polls nobody answered.
     #[arg(long)]
     pub hide_polls: bool,
 
-    /// Hide keep-alive rows (S.Port `Null`).
+    /// Hide keep-alive rows (`Null`).
     #[arg(long)]
     pub hide_null: bool,
 
@@ -66,8 +66,10 @@ pub struct SelectArgs {
     #[arg(long, value_name = "LIST")]
     pub sensor: Vec<String>,
 
-    /// Show only rows whose Device column is one of these names (case-insensitive). A value
-    /// with `=` names a device instead, like --name (`--device motor=5`).
+    /// Show only rows whose Device column is one of these names (case-insensitive), the names
+    /// --name gives included.
+    // A value with `=` names a device instead, as --name does (`--device motor=5`): the older
+    // way, kept working but no longer shown.
     #[arg(long, value_name = "LIST")]
     pub device: Vec<String>,
 

@@ -22,12 +22,13 @@ pub struct Args {
     #[arg(long, value_name = "NAME=CODE", value_parser = super::parse_command)]
     pub command: Vec<(String, u8)>,
 
-    /// Read a command's payloads as numbers of a type (repeatable): `--value distance=u16*0.01:m`,
-    /// `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32 (little endian); SCALE multiplies
+    /// Read a command's payloads as numbers of a type (repeatable): CMD=TYPE[*SCALE][:UNIT], as
+    /// `--value distance=u16*0.01:m`, `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32
+    /// (little endian); SCALE multiplies
     /// (a plain decimal); UNIT goes to the Unit column. CMD is a code or a --command name, with
     /// `.req` or `.ack` for one direction only. Undeclared payloads of 1, 2 or 4 bytes are
     /// unsigned integers.
-    #[arg(long, value_name = "CMD=TYPE[*SCALE][:UNIT]")]
+    #[arg(long, value_name = "CMD=TYPE")]
     pub value: Vec<String>,
 
     /// Master timeout: a request without a response within this time gets a `Timeout` row

@@ -27,7 +27,9 @@ pub struct Args {
 
     /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`; the same
     /// as --name.
-    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = super::parse_station)]
+    // Hidden: `--name` is the one way to name a device; this stays for older command lines.
+    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = super::parse_station,
+          hide = true)]
     pub stations: Vec<(String, u8)>,
 
     /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
