@@ -13,6 +13,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::ghst::PROTOCOL,
     &crate::futaba::PROTOCOL,
     &crate::ibus::PROTOCOL,
+    &crate::logs::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.

@@ -613,6 +613,36 @@ pub fn futaba(data: &[u8]) {
     }
 }
 
+/// Telemetry logs: chunking invariance, every byte in at most one row (blank bytes at the end
+/// and a header without lines are in none), rows of at most one line, garbage rows of at most
+/// `GARBAGE_ROW_MAX` bytes, and every number part a plain decimal of the row's line.
+pub fn logs(data: &[u8]) {
+    let rows = same_rows_however_chunked(&crate::logs::decoder, data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert!(total <= data.len(), "bytes duplicated");
+    let mut at = 0;
+    for r in &rows {
+        // Rows are the input's bytes in order.
+        let found = data[at..]
+            .windows(r.raw.len().max(1))
+            .position(|w| r.raw.is_empty() || w == &r.raw[..]);
+        let found = found.unwrap_or_else(|| panic!("row bytes not in the input: {r:?}"));
+        at += found + r.raw.len();
+        if r.kind == crate::row::kind::GARBAGE {
+            assert_eq!(r.class, Class::Error, "{r:?}");
+            continue;
+        }
+        let line = String::from_utf8_lossy(&r.raw);
+        for (name, _, text) in &r.parts {
+            assert!(
+                text.parse::<f64>().is_ok(),
+                "part {name}={text} not a number: {r:?}"
+            );
+            assert!(line.contains(text.as_str()), "{r:?}");
+        }
+    }
+}
+
 /// FlySky iBUS: chunking invariance, every byte in exactly one row, and every row that is not
 /// flagged holds whole frames (a poll and its answer, or one frame) whose checksums pass.
 pub fn ibus(data: &[u8]) {

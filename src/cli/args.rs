@@ -198,9 +198,6 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
     if p.export.is_none() {
         cmd = cmd.mut_arg("export", |a| a.hide(true));
     }
-    if (v.sensors)().is_empty() && !v.sensor_no_hex {
-        cmd = cmd.mut_arg("sensor", |a| a.hide(true));
-    }
     if v.ids.is_none() && v.devices.is_none() {
         cmd = cmd.mut_arg("device", |a| a.hide(true));
     }
@@ -269,12 +266,10 @@ fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
             ),
         ));
     }
-    if let Some(s) = (v.sensors)().first() {
-        out.push((
-            "sensor",
-            format!("Only rows of these sensors ({})", s.column),
-        ));
-    }
+    out.push((
+        "sensor",
+        "Only rows of these sensors, by name or number".into(),
+    ));
     out
 }
 
@@ -282,7 +277,6 @@ fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
 /// sensors, its export), and the split between `-h` (a summary) and `--help` (everything).
 fn protocol_help(mut cmd: clap::Command, p: &'static Protocol) -> clap::Command {
     let v = p.vocab;
-    let sensors = (v.sensors)();
     let cycle = match (&v.ids, v.polls) {
         (_, true) => format!("one line per poll cycle (each {}'s next poll)", v.id_name),
         (Some(_), false) => format!("one line per cycle (each {}'s next frame)", v.id_name),
@@ -324,30 +318,15 @@ fn protocol_help(mut cmd: clap::Command, p: &'static Protocol) -> clap::Command 
                 ))
             });
     }
-    if let Some(s) = sensors.first() {
-        let example = sensors
-            .iter()
-            .take(2)
-            .map(|s| s.column.as_str())
-            .collect::<Vec<_>>()
-            .join(",");
-        cmd = cmd.mut_arg("sensor", |a| {
-            a.long_help(format!(
-                "Show only rows whose Sensor or Sensor # column is one of these, or that carry a \
-                 number of that name: `{example}`{} (case-insensitive{})",
-                if s.parts.is_empty() {
-                    String::new()
-                } else {
-                    format!(", `{}`", s.parts[0])
-                },
-                if v.sensor_no_hex {
-                    "; hex numbers match with or without `0x` and leading zeros"
-                } else {
-                    ""
-                }
-            ))
-        });
-    }
+    // (Not from `vocab.sensors`, which S.Port builds from every app ID: too slow for a
+    // help text built at every start.)
+    cmd = cmd.mut_arg("sensor", |a| {
+        a.long_help(format!(
+            "Show only rows whose Sensor or Sensor # column is one of these, or that carry a \
+             number of that name, comma-separated and case-insensitive; Sensor # {}",
+            v.sensor_no_text
+        ))
+    });
     if let Some(e) = &p.export {
         cmd = cmd.mut_arg("export", |a| {
             a.long_help(format!(

@@ -18,7 +18,9 @@ pub enum Words {
 /// Finds the first word that is not an option or an option's value: a subcommand (options
 /// before it move after it), or SOURCE.
 pub fn arrange(argv: Vec<OsString>) -> Words {
-    let takes_value = value_options();
+    let mut cmd = super::command();
+    cmd.build();
+    let takes_value = value_options(&cmd);
     let mut i = 1;
     let first = loop {
         let Some(a) = argv.get(i).map(|a| a.to_string_lossy()) else {
@@ -56,7 +58,7 @@ pub fn arrange(argv: Vec<OsString>) -> Words {
         matches!(a.as_ref(), "-h" | "--help" | "-V" | "--version")
     });
     // After `--`, a word is SOURCE even when it names a subcommand.
-    if (is_subcommand(&word) && argv[at - 1] != "--") || help {
+    if (is_subcommand(&cmd, &word) && argv[at - 1] != "--") || help {
         if at == 1 || help {
             return Words::Clap(argv);
         }
@@ -70,9 +72,7 @@ pub fn arrange(argv: Vec<OsString>) -> Words {
 }
 
 /// The options that take a value, by short and long name (every subcommand's).
-fn value_options() -> Vec<(Option<char>, String)> {
-    let mut cmd = super::command();
-    cmd.build();
+fn value_options(cmd: &clap::Command) -> Vec<(Option<char>, String)> {
     let mut out = Vec::new();
     let mut add = |c: &clap::Command| {
         for a in c.get_arguments() {
@@ -87,7 +87,7 @@ fn value_options() -> Vec<(Option<char>, String)> {
             }
         }
     };
-    add(&cmd);
+    add(cmd);
     for sub in cmd.get_subcommands() {
         add(sub);
     }
@@ -95,8 +95,7 @@ fn value_options() -> Vec<(Option<char>, String)> {
 }
 
 /// A subcommand of busnoop (a protocol's, an alias, or one of the others).
-fn is_subcommand(word: &str) -> bool {
-    let cmd = super::command();
+fn is_subcommand(cmd: &clap::Command, word: &str) -> bool {
     word == "help"
         || cmd
             .get_subcommands()

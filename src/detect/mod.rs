@@ -569,7 +569,8 @@ pub fn choose(source: &Path, bauds: &[u32], dtr_rts: ModemLines) -> Result<Chose
         Err(_) => false,
     };
     if unusable {
-        eprint!("{}", report.text);
+        use std::io::Write as _;
+        let _ = std::io::stderr().write_all(report.text.as_bytes());
     }
     report.result
 }

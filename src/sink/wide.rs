@@ -3,7 +3,8 @@
 //!
 //! A **time step** is a poll cycle: it ends when a row's `ID` comes round again (S.Port: the next
 //! poll of a physical ID; S-Bus: the next telegram of a station; SAB: the next frame of an
-//! address), or, with `--every MS`, a fixed interval of capture time. A line is written for every
+//! address) or at a row with numbers and no ID (an RC channel frame, a line of a radio's log),
+//! or, with `--every MS`, a fixed interval of capture time. A line is written for every
 //! step in which at least one row arrived; its time is the time of the step's last row (with
 //! `--every`, the end of the interval), its cells the last value of every column at that time.
 //! Steps before the first number (polls that nobody answered) write no line.
@@ -201,8 +202,8 @@ impl Wide {
             return Ok(());
         };
         match self.step {
-            Step::PollCycle => {
-                if let Some(id) = row.id {
+            Step::PollCycle => match row.id {
+                Some(id) => {
                     if self.seen.contains(&id) {
                         if let Some(at) = self.pending {
                             self.emit(at, anchor, buf)?;
@@ -211,7 +212,16 @@ impl Wide {
                     }
                     self.seen.push(id);
                 }
-            }
+                // Numbers without an ID (an RC channel frame, a line of a radio's log): a step
+                // of their own, begun here.
+                None if !row.parts.is_empty() => {
+                    if let Some(at) = self.pending {
+                        self.emit(at, anchor, buf)?;
+                    }
+                    self.seen.clear();
+                }
+                None => {}
+            },
             Step::Every(us) => {
                 let b = t / us;
                 if let Some(cur) = self.bucket
