@@ -323,9 +323,14 @@ pub struct OutputArgs {
     pub stats: bool,
 
     /// Form of the --stats summary: `text`, or `json` (one JSON object, the last line on
-    /// stderr; implies --stats).
+    /// stderr, also when the run fails; implies --stats; schema docs/stats.v1.schema.json).
     #[arg(long, value_enum, value_name = "FORM")]
     pub stats_format: Option<StatsFormat>,
+
+    /// Write the statistics as one JSON object into FILE at the end of the run, also when it
+    /// fails (schema docs/stats.v1.schema.json); stderr keeps its usual messages.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
 
     /// `abs` adds a `Time` column with wall-clock times when the source has them.
     #[arg(long, value_enum, default_value_t = TimeMode::Rel)]

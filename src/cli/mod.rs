@@ -51,15 +51,17 @@ pub fn main() -> ExitCode {
         }
     };
     init_tracing(verbose);
-    match run(parsed) {
-        Ok(()) => ExitCode::from(code::OK),
+    let (code, message) = match run(parsed) {
+        Ok(()) => (code::OK, String::new()),
         Err(f) => {
             if !f.is_quiet() {
                 eprintln!("busnoop: {f}");
             }
-            ExitCode::from(f.exit_code())
+            (f.exit_code(), f.to_string())
         }
-    }
+    };
+    // The statistics as JSON: after every other message, whatever the end.
+    ExitCode::from(crate::stats_json::finish(code, &message))
 }
 
 fn init_tracing(verbose: u8) {
@@ -174,6 +176,16 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         &options.sensors(),
     )?;
     prepare(&mut capture, section);
+    if let Some(p) = &capture.output.stats_json {
+        check_stats_file(p, &capture.source)?;
+    }
+    crate::stats_json::expect(
+        crate::stats_json::Destinations {
+            stderr: capture.output.stats_format == Some(StatsFormat::Json),
+            file: capture.output.stats_json.clone(),
+        },
+        protocol.name,
+    );
     let names: Vec<(String, u32)> = sel
         .names
         .pairs()
@@ -187,6 +199,23 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
             names: &names,
         })
     })
+}
+
+/// `--stats-json FILE`: its folder exists, and it is not the input (it is written at the end,
+/// when the input was read).
+fn check_stats_file(path: &Path, source: &Path) -> Result<(), Failure> {
+    crate::sink::check_folder(path)?;
+    let same = std::fs::canonicalize(path)
+        .ok()
+        .is_some_and(|p| std::fs::canonicalize(source).is_ok_and(|s| s == p));
+    if same {
+        return Err(Failure::Usage(format!(
+            "--stats-json {} is the input: writing it would destroy the capture; write \
+             somewhere else",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The project file's defaults under the command line's options; `--stats-format` implies
@@ -681,9 +710,21 @@ fn report(
     hidden: u64,
     result: &Result<(), Failure>,
 ) {
-    if matches!(result, Err(Failure::BrokenPipe))
-        || QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
-    {
+    if QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    // Written at the very end (`main`), after the failure's message if any.
+    if crate::stats_json::wanted() {
+        crate::stats_json::record(
+            &decoder.stats(),
+            protocol,
+            rows,
+            hidden,
+            decoder.valid_frames(),
+            &decoder.problems(),
+        );
+    }
+    if matches!(result, Err(Failure::BrokenPipe)) {
         return;
     }
     if stats == Some(StatsFormat::Text) {
@@ -698,10 +739,10 @@ fn report(
         eprintln!("{}", decoder.stats());
     }
     // When the output failed, the one line that matters is the write error (printed last).
-    let problems = decoder.problems().line();
+    let problems = decoder.problems();
     if !matches!(result, Err(Failure::Output(_)))
         && stats != Some(StatsFormat::Json)
-        && let Some(p) = &problems
+        && let Some(p) = problems.line()
     {
         eprintln!("busnoop: {p}");
     }
@@ -710,17 +751,6 @@ fn report(
             "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
             i.input_note()
         );
-    }
-    if stats == Some(StatsFormat::Json) {
-        let json = crate::stats_json::to_json(
-            &decoder.stats(),
-            protocol,
-            rows,
-            hidden,
-            decoder.valid_frames(),
-            problems.as_deref(),
-        );
-        eprintln!("{json}");
     }
 }
 
