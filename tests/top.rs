@@ -173,8 +173,8 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
         .unwrap();
     let at = wait_for(&screen, at, "sort rate");
     let mut keys = term.master.try_clone_native().unwrap();
-    keys.write_all(b"fal\r").unwrap();
-    let at = wait_for(&screen, at, "filter \"al\"");
+    keys.write_all(b"fsensor=Alt\r").unwrap();
+    let at = wait_for(&screen, at, "filter \"sensor=Alt\"");
     keys.write_all(b"p").unwrap();
     let at = wait_for(&screen, at, "PAUSED");
     keys.write_all(b"q").unwrap();
@@ -353,4 +353,145 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     wait_for(&screen, at, "\x1b[?1049l");
     assert_eq!(term.lflag(), before, "terminal modes restored");
     drop(reader);
+}
+
+/// A terminal that reports no size (0x0: some serial consoles and containers) gets the view at
+/// COLUMNS x LINES (else 80x24). It used to be drawn at 0x0: an empty screen.
+#[test]
+fn a_terminal_without_size_gets_the_view_at_columns_and_lines() {
+    let _g = lock();
+    let term = terminal(0, 0);
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args([
+            "sport",
+            "--top",
+            "--speed",
+            "0",
+            "fixtures/sport-sample.bin",
+        ])
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .env("COLUMNS", "100")
+        .env("LINES", "20")
+        .spawn()
+        .unwrap();
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    let at = wait_for(&screen, at, "S.Port");
+    let at = wait_for(&screen, at, "Volts");
+    wait_for(&screen, at, "quit");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert!(status.success(), "{status:?}");
+}
+
+/// The screen as the terminal shows it after `bytes` (a tiny emulator of what the view
+/// writes: cursor moves `ESC[r;cH`, colours and modes ignored, text at the cursor).
+fn emulate(bytes: &[u8], w: usize, h: usize) -> Vec<String> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut grid = vec![vec![' '; w]; h];
+    let (mut row, mut col) = (0usize, 0usize);
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\x1b' {
+            if chars.peek() != Some(&'[') {
+                chars.next();
+                continue;
+            }
+            chars.next();
+            let mut params = String::new();
+            let mut end = ' ';
+            for c in chars.by_ref() {
+                if c.is_ascii_alphabetic() || c == '~' {
+                    end = c;
+                    break;
+                }
+                params.push(c);
+            }
+            match end {
+                'H' => {
+                    let mut n = params.split(';').map(|p| p.parse::<usize>().unwrap_or(1));
+                    row = n.next().unwrap_or(1).saturating_sub(1);
+                    col = n.next().unwrap_or(1).saturating_sub(1);
+                }
+                'J' if params == "2" => grid = vec![vec![' '; w]; h],
+                _ => {}
+            }
+        } else if c == '\r' {
+            col = 0;
+        } else if c == '\n' {
+            row += 1;
+        } else if row < h && col < w {
+            grid[row][col] = c;
+            col += 1;
+        }
+    }
+    grid.into_iter().map(|l| l.into_iter().collect()).collect()
+}
+
+/// At 80 columns the view shows each FLVSS cell on a line of its own with its own minimum and
+/// maximum (the typed numbers, not the cell count the Data text starts with), and every number
+/// whole: the app IDs 0xF101, 0xF104, 0xF105 (once all cut to `0xF1`), the S-Bus register
+/// 305419896 (once `30541`).
+#[test]
+fn top_at_80_columns_shows_each_cell_and_every_number_whole() {
+    let _g = lock();
+    for (protocol, file, want) in [
+        (
+            "sport",
+            "fixtures/edgetx-MODELE24-2014-07-11-sport.log",
+            &[
+                "Cell1", "Cell3", "4.200", "0xF101", "0xF104", "0xF105", "5.07",
+            ][..],
+        ),
+        (
+            "sbus",
+            "fixtures/sbus-digimat.pcap",
+            &["305419896", "-1245334075"][..],
+        ),
+    ] {
+        let term = terminal(80, 40);
+        let screen = collect(&term.master);
+        let mut child = term.run(&[&protocol, &"--top", &"--speed", &"0", &file]);
+        wait_for(&screen, 0, "END OF INPUT");
+        if protocol == "sbus" {
+            // The registers: filtered like the command line.
+            term.master
+                .try_clone_native()
+                .unwrap()
+                .write_all(b"fsensor=R0\r")
+                .unwrap();
+        }
+        // The screen as it stands once the view is still.
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let shown = loop {
+            let lines = emulate(&screen.lock().unwrap(), 80, 40);
+            let words: Vec<&str> = lines.iter().flat_map(|l| l.split_whitespace()).collect();
+            if want.iter().all(|w| words.contains(w)) {
+                break lines;
+            }
+            if Instant::now() > deadline {
+                let _ = child.kill();
+                panic!(
+                    "{want:?} not all whole on the screen:\n{}",
+                    lines.join("\n")
+                );
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        assert!(shown.iter().all(|l| l.trim_end().chars().count() <= 80));
+        term.master
+            .try_clone_native()
+            .unwrap()
+            .write_all(b"q")
+            .unwrap();
+        let status = wait_exit(&mut child);
+        assert!(status.success(), "{status:?}");
+    }
 }

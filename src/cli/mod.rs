@@ -455,6 +455,9 @@ pub fn run_capture(
             baud: live.then_some(line.baud),
             speed: pacer.as_ref().map(Pacer::speed),
             live,
+            vocab: Some(protocol.vocab),
+            names: selection.names.clone(),
+            sensors: selection.sensors.clone(),
         };
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)

@@ -201,6 +201,19 @@ impl Capture {
 pub struct Screen {
     pub terminal: Terminal<CrosstermBackend<Stdout>>,
     capture: Option<Capture>,
+    /// Drawn at a fixed size ([`fallback_size`]): the terminal reports none.
+    fixed: bool,
+}
+
+/// The size to draw at on a terminal that reports none (0x0: some serial consoles, containers
+/// and `script` sessions): `COLUMNS` and `LINES` when they hold a size, else 80x24.
+pub fn fallback_size(columns: Option<&str>, lines: Option<&str>) -> (u16, u16) {
+    let get = |v: Option<&str>, default: u16| {
+        v.and_then(|s| s.trim().parse::<u16>().ok())
+            .filter(|&n| (1..=1000).contains(&n))
+            .unwrap_or(default)
+    };
+    (get(columns, 80), get(lines, 24))
 }
 
 impl Screen {
@@ -224,7 +237,15 @@ impl Screen {
             Terminal::new(CrosstermBackend::new(io::stdout()))
         })();
         match opened {
-            Ok(terminal) => Ok(Screen { terminal, capture }),
+            Ok(terminal) => {
+                let mut screen = Screen {
+                    terminal,
+                    capture,
+                    fixed: false,
+                };
+                screen.fit()?;
+                Ok(screen)
+            }
             Err(e) => {
                 restore();
                 if let Some(c) = capture {
@@ -233,6 +254,29 @@ impl Screen {
                 Err(e)
             }
         }
+    }
+
+    /// Before a draw: a terminal that reports no size (0x0) is drawn at [`fallback_size`]
+    /// (it was drawn at 0x0: an empty screen); once it reports one, at that.
+    pub fn fit(&mut self) -> io::Result<()> {
+        let (w, h) = ratatui::crossterm::terminal::size().unwrap_or((0, 0));
+        let none = w == 0 || h == 0;
+        if none && !self.fixed {
+            let var = |name: &str| std::env::var(name).ok();
+            let (w, h) = fallback_size(var("COLUMNS").as_deref(), var("LINES").as_deref());
+            let viewport = ratatui::Viewport::Fixed(ratatui::layout::Rect::new(0, 0, w, h));
+            self.terminal = Terminal::with_options(
+                CrosstermBackend::new(io::stdout()),
+                ratatui::TerminalOptions { viewport },
+            )?;
+            self.fixed = true;
+            self.terminal.clear()?;
+        } else if !none && self.fixed {
+            self.terminal = Terminal::new(CrosstermBackend::new(io::stdout()))?;
+            self.fixed = false;
+            self.terminal.clear()?;
+        }
+        Ok(())
     }
 
     /// The last `n` lines written to stderr while the view runs.
@@ -254,5 +298,18 @@ impl Drop for Screen {
         if let Some(c) = self.capture.take() {
             c.finish();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fallback_size;
+
+    #[test]
+    fn a_terminal_without_size_is_drawn_at_columns_and_lines_or_80x24() {
+        assert_eq!(fallback_size(Some("132"), Some("43")), (132, 43));
+        assert_eq!(fallback_size(None, None), (80, 24));
+        assert_eq!(fallback_size(Some("0"), Some("x")), (80, 24));
+        assert_eq!(fallback_size(Some("99999"), Some(" 30 ")), (80, 30));
     }
 }
