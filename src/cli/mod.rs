@@ -107,25 +107,72 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
             (p.command, args)
         }
     };
+    // The protocol's own options: the user's, and the detected variant's where the user gave
+    // none of that name.
+    let given = |name: &str| {
+        a.protocol_args.iter().any(|u| {
+            u.to_str()
+                .is_some_and(|u| u.split('=').next() == Some(name))
+        })
+    };
     let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
-    argv.extend(extra.iter().map(Into::into));
+    let mut skip_value = false;
+    for e in extra {
+        if e.starts_with("--") {
+            skip_value = given(e.split('=').next().unwrap_or(e));
+            if skip_value {
+                continue;
+            }
+        } else if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        argv.push(e.into());
+    }
+    argv.extend(a.protocol_args.iter().cloned());
+    argv.push("--".into());
     argv.push(a.source.clone().into());
-    let Ok((Parsed::Protocol(mut run), _)) = Parsed::from(argv) else {
+    let (Parsed::Protocol(mut run), _) = Parsed::from(argv).map_err(|e| {
+        Failure::Usage(format!(
+            "plot: the options after -- are {command}'s: {}",
+            e.to_string()
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ")
+        ))
+    })?
+    else {
         return Err(Failure::Internal(format!(
             "plot: {command} is not a protocol"
         )));
     };
-    let sensors = (run.protocol.vocab.sensors)();
+    // The table's selection and project file; `--sensor` names the series instead.
+    let sensors: Vec<String> = a
+        .select
+        .sensor
+        .iter()
+        .flat_map(|s| s.split(','))
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(str::to_owned)
+        .collect();
+    run.capture.select = project::SelectArgs {
+        sensor: Vec::new(),
+        ..a.select.clone()
+    };
+    let vocab = (run.protocol.vocab.sensors)();
     let mut wanted = Vec::new();
-    for name in &a.sensor {
+    for name in &sensors {
         wanted.push(name.clone());
-        for s in sensors.iter().filter(|s| s.is(name)) {
+        // A Sensor column name plots its numbers (`Volts` → VFAS, `Cels` → every cell); a
+        // number's name only that number.
+        for s in vocab.iter().filter(|s| s.column.eq_ignore_ascii_case(name)) {
             wanted.push(s.column.clone());
             wanted.extend(s.parts.iter().cloned());
         }
     }
     run.capture.output.plot = Some(crate::plot::PlotSpec {
-        sensors: a.sensor.clone(),
+        sensors,
         wanted,
         path: a.output.clone(),
         title: format!(
@@ -135,6 +182,8 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
                 |n| n.to_string_lossy().into_owned()
             )
         ),
+        from: a.from,
+        to: a.to,
     });
     run_protocol(run)
 }
@@ -547,7 +596,7 @@ pub fn run_capture(
     }
     // `busnoop plot`: drawn once the input is read, also after Ctrl-C (what was read so far),
     // whose exit code then stays.
-    if let Some(plot) = table.as_mut().and_then(Table::take_plot)
+    if let Some(mut plot) = table.as_mut().and_then(Table::take_plot)
         && let Err(f) = plot.draw()
     {
         if result.is_ok() {

@@ -225,6 +225,9 @@ impl Table {
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
         self.anchor = anchor;
+        if let Some(p) = &mut self.plot {
+            p.set_anchor(anchor);
+        }
     }
 
     /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
