@@ -495,3 +495,71 @@ fn top_at_80_columns_shows_each_cell_and_every_number_whole() {
         assert!(status.success(), "{status:?}");
     }
 }
+
+/// The pretty table (the default on a terminal) fits the terminal's width: on 80 columns no
+/// line is longer, every row is there with its numbers (Counter, Millis, ID, Sensor #) whole,
+/// and Data is wrapped, not lost. It ignored the width: the S.Port header was 111 columns, SAB2
+/// rows reached 250, and every row wrapped across the next one's columns. `--no-fit` keeps the
+/// full lines.
+#[test]
+fn the_pretty_table_fits_the_terminal() {
+    let _g = lock();
+    for (protocol, file) in [
+        ("sab2", "fixtures/sab2-session.bin"),
+        ("sport", "fixtures/sport-sample.bin"),
+        ("sbus", "fixtures/sbus-digimat.pcap"),
+    ] {
+        let rows = Command::new(bin())
+            .args([protocol, file, "-f", "tsv"])
+            .output()
+            .unwrap();
+        let tsv = String::from_utf8(rows.stdout).unwrap();
+        for (fit, args) in [(true, &[][..]), (false, &["--no-fit"][..])] {
+            let term = terminal(80, 24);
+            let screen = collect(&term.master);
+            let mut child = Command::new(bin())
+                .args([protocol, file])
+                .args(args)
+                .stdin(term.stdio())
+                .stdout(term.stdio())
+                .stderr(Stdio::null())
+                .env("TERM", "xterm")
+                .env("NO_COLOR", "1")
+                .spawn()
+                .unwrap();
+            assert!(wait_exit(&mut child).success());
+            std::thread::sleep(Duration::from_millis(200));
+            let out = String::from_utf8_lossy(&screen.lock().unwrap()).replace('\r', "");
+            let lines: Vec<&str> = out.lines().collect();
+            let longest = lines.iter().map(|l| l.chars().count()).max().unwrap();
+            if !fit {
+                assert!(longest > 80, "{protocol} --no-fit: {longest}");
+                continue;
+            }
+            assert!(longest <= 80, "{protocol}: a line of {longest}:\n{out}");
+            let words: Vec<&str> = out.split_whitespace().collect();
+            for row in tsv.lines().skip(1) {
+                let c: Vec<&str> = row.split('\t').collect();
+                // The row's first line starts with its Counter and Millis.
+                let start = format!("{} {}", c[0], c[1]);
+                assert!(
+                    lines.iter().any(|l| l
+                        .split_whitespace()
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                        .starts_with(&start)),
+                    "{protocol}: row {} missing:\n{out}",
+                    c[0]
+                );
+                for cell in [c[2], c[5]].into_iter().chain(c[7].split(' ')) {
+                    if !cell.is_empty() {
+                        assert!(
+                            words.contains(&cell),
+                            "{protocol}: {cell} not whole:\n{out}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -336,6 +336,12 @@ pub struct OutputArgs {
     #[arg(long)]
     pub raw: bool,
 
+    /// Pretty table on a terminal: full lines, however wide. By default its rows are fitted
+    /// to the terminal's width (Data and Note wrapped within their columns, names cut with
+    /// `…`, never a number); a file or a pipe always gets full lines.
+    #[arg(long)]
+    pub no_fit: bool,
+
     /// Print a per-device summary on stderr at the end (and on Ctrl-C).
     #[arg(long)]
     pub stats: bool,

@@ -461,6 +461,9 @@ pub fn run_capture(
                 decoder.columns(),
             );
             table.set_pretty_widths(protocol.pretty_widths);
+            if to_terminal && !out.no_fit {
+                table.fit_terminal();
+            }
             if let Some(p) = &out.plot {
                 table.set_plot(p.clone());
             }

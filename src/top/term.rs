@@ -6,6 +6,7 @@ use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Arc, Mutex, Once, OnceLock};
 
+use crate::sink::fallback_size;
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::cursor::{Hide, Show};
@@ -205,17 +206,6 @@ pub struct Screen {
     fixed: bool,
 }
 
-/// The size to draw at on a terminal that reports none (0x0: some serial consoles, containers
-/// and `script` sessions): `COLUMNS` and `LINES` when they hold a size, else 80x24.
-pub fn fallback_size(columns: Option<&str>, lines: Option<&str>) -> (u16, u16) {
-    let get = |v: Option<&str>, default: u16| {
-        v.and_then(|s| s.trim().parse::<u16>().ok())
-            .filter(|&n| (1..=1000).contains(&n))
-            .unwrap_or(default)
-    };
-    (get(columns, 80), get(lines, 24))
-}
-
 impl Screen {
     /// Raw mode, alternate screen, hidden cursor; stderr captured.
     pub fn open() -> io::Result<Screen> {
@@ -303,7 +293,7 @@ impl Drop for Screen {
 
 #[cfg(test)]
 mod tests {
-    use super::fallback_size;
+    use crate::sink::fallback_size;
 
     #[test]
     fn a_terminal_without_size_is_drawn_at_columns_and_lines_or_80x24() {
