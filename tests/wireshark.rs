@@ -247,13 +247,22 @@ fn sport_export_matches(input: &Path, expect_bad: bool) {
     assert!(numbers > 0);
     assert_eq!(bad > 0, expect_bad, "the input's bad CRCs");
     // `sport.value` is a number: a display filter compares it.
-    let Some(mut tshark) = self::tshark() else { return };
+    let Some(mut tshark) = self::tshark() else {
+        return;
+    };
     let filtered = ok(&tshark
         .arg("-X")
         .arg(format!("lua_script:{lua}"))
         .arg("-r")
         .arg(&export)
-        .args(["-Y", "sport.value > 4", "-T", "fields", "-e", "sport.phys_id"])
+        .args([
+            "-Y",
+            "sport.value > 4",
+            "-T",
+            "fields",
+            "-e",
+            "sport.phys_id",
+        ])
         .output()
         .unwrap());
     assert_eq!(filtered.lines().count(), above_4, "sport.value > 4");
