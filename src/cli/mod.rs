@@ -51,15 +51,17 @@ pub fn main() -> ExitCode {
         }
     };
     init_tracing(verbose);
-    match run(parsed) {
-        Ok(()) => ExitCode::from(code::OK),
+    let (code, message) = match run(parsed) {
+        Ok(()) => (code::OK, String::new()),
         Err(f) => {
             if !f.is_quiet() {
                 eprintln!("busnoop: {f}");
             }
-            ExitCode::from(f.exit_code())
+            (f.exit_code(), f.to_string())
         }
-    }
+    };
+    // The statistics as JSON: after every other message, whatever the end.
+    ExitCode::from(crate::stats_json::finish(code, &message))
 }
 
 fn init_tracing(verbose: u8) {
@@ -105,25 +107,72 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
             (p.command, args)
         }
     };
+    // The protocol's own options: the user's, and the detected variant's where the user gave
+    // none of that name.
+    let given = |name: &str| {
+        a.protocol_args.iter().any(|u| {
+            u.to_str()
+                .is_some_and(|u| u.split('=').next() == Some(name))
+        })
+    };
     let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
-    argv.extend(extra.iter().map(Into::into));
+    let mut skip_value = false;
+    for e in extra {
+        if e.starts_with("--") {
+            skip_value = given(e.split('=').next().unwrap_or(e));
+            if skip_value {
+                continue;
+            }
+        } else if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        argv.push(e.into());
+    }
+    argv.extend(a.protocol_args.iter().cloned());
+    argv.push("--".into());
     argv.push(a.source.clone().into());
-    let Ok((Parsed::Protocol(mut run), _)) = Parsed::from(argv) else {
+    let (Parsed::Protocol(mut run), _) = Parsed::from(argv).map_err(|e| {
+        Failure::Usage(format!(
+            "plot: the options after -- are {command}'s: {}",
+            e.to_string()
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ")
+        ))
+    })?
+    else {
         return Err(Failure::Internal(format!(
             "plot: {command} is not a protocol"
         )));
     };
-    let sensors = (run.protocol.vocab.sensors)();
+    // The table's selection and project file; `--sensor` names the series instead.
+    let sensors: Vec<String> = a
+        .select
+        .sensor
+        .iter()
+        .flat_map(|s| s.split(','))
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(str::to_owned)
+        .collect();
+    run.capture.select = project::SelectArgs {
+        sensor: Vec::new(),
+        ..a.select.clone()
+    };
+    let vocab = (run.protocol.vocab.sensors)();
     let mut wanted = Vec::new();
-    for name in &a.sensor {
+    for name in &sensors {
         wanted.push(name.clone());
-        for s in sensors.iter().filter(|s| s.is(name)) {
+        // A Sensor column name plots its numbers (`Volts` → VFAS, `Cels` → every cell); a
+        // number's name only that number.
+        for s in vocab.iter().filter(|s| s.column.eq_ignore_ascii_case(name)) {
             wanted.push(s.column.clone());
             wanted.extend(s.parts.iter().cloned());
         }
     }
     run.capture.output.plot = Some(crate::plot::PlotSpec {
-        sensors: a.sensor.clone(),
+        sensors,
         wanted,
         path: a.output.clone(),
         title: format!(
@@ -133,6 +182,8 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
                 |n| n.to_string_lossy().into_owned()
             )
         ),
+        from: a.from,
+        to: a.to,
     });
     run_protocol(run)
 }
@@ -174,6 +225,16 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         &options.sensors(),
     )?;
     prepare(&mut capture, section);
+    if let Some(p) = &capture.output.stats_json {
+        check_stats_file(p, &capture.source)?;
+    }
+    crate::stats_json::expect(
+        crate::stats_json::Destinations {
+            stderr: capture.output.stats_format == Some(StatsFormat::Json),
+            file: capture.output.stats_json.clone(),
+        },
+        protocol.name,
+    );
     let names: Vec<(String, u32)> = sel
         .names
         .pairs()
@@ -187,6 +248,23 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
             names: &names,
         })
     })
+}
+
+/// `--stats-json FILE`: its folder exists, and it is not the input (it is written at the end,
+/// when the input was read).
+fn check_stats_file(path: &Path, source: &Path) -> Result<(), Failure> {
+    crate::sink::check_folder(path)?;
+    let same = std::fs::canonicalize(path)
+        .ok()
+        .is_some_and(|p| std::fs::canonicalize(source).is_ok_and(|s| s == p));
+    if same {
+        return Err(Failure::Usage(format!(
+            "--stats-json {} is the input: writing it would destroy the capture; write \
+             somewhere else",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The project file's defaults under the command line's options; `--stats-format` implies
@@ -383,6 +461,9 @@ pub fn run_capture(
                 decoder.columns(),
             );
             table.set_pretty_widths(protocol.pretty_widths);
+            if to_terminal && !out.no_fit {
+                table.fit_terminal();
+            }
             if let Some(p) = &out.plot {
                 table.set_plot(p.clone());
             }
@@ -426,6 +507,9 @@ pub fn run_capture(
             baud: live.then_some(line.baud),
             speed: pacer.as_ref().map(Pacer::speed),
             live,
+            vocab: Some(protocol.vocab),
+            names: selection.names.clone(),
+            sensors: selection.sensors.clone(),
         };
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)
@@ -515,7 +599,7 @@ pub fn run_capture(
     }
     // `busnoop plot`: drawn once the input is read, also after Ctrl-C (what was read so far),
     // whose exit code then stays.
-    if let Some(plot) = table.as_mut().and_then(Table::take_plot)
+    if let Some(mut plot) = table.as_mut().and_then(Table::take_plot)
         && let Err(f) = plot.draw()
     {
         if result.is_ok() {
@@ -681,9 +765,21 @@ fn report(
     hidden: u64,
     result: &Result<(), Failure>,
 ) {
-    if matches!(result, Err(Failure::BrokenPipe))
-        || QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
-    {
+    if QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    // Written at the very end (`main`), after the failure's message if any.
+    if crate::stats_json::wanted() {
+        crate::stats_json::record(
+            &decoder.stats(),
+            protocol,
+            rows,
+            hidden,
+            decoder.valid_frames(),
+            &decoder.problems(),
+        );
+    }
+    if matches!(result, Err(Failure::BrokenPipe)) {
         return;
     }
     if stats == Some(StatsFormat::Text) {
@@ -698,10 +794,10 @@ fn report(
         eprintln!("{}", decoder.stats());
     }
     // When the output failed, the one line that matters is the write error (printed last).
-    let problems = decoder.problems().line();
+    let problems = decoder.problems();
     if !matches!(result, Err(Failure::Output(_)))
         && stats != Some(StatsFormat::Json)
-        && let Some(p) = &problems
+        && let Some(p) = problems.line()
     {
         eprintln!("busnoop: {p}");
     }
@@ -710,17 +806,6 @@ fn report(
             "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
             i.input_note()
         );
-    }
-    if stats == Some(StatsFormat::Json) {
-        let json = crate::stats_json::to_json(
-            &decoder.stats(),
-            protocol,
-            rows,
-            hidden,
-            decoder.valid_frames(),
-            problems.as_deref(),
-        );
-        eprintln!("{json}");
     }
 }
 
