@@ -52,6 +52,7 @@ mod exit;
 mod export;
 mod filter;
 pub mod fmt;
+mod merge;
 mod numbers;
 mod pace;
 mod pairing;

@@ -155,6 +155,8 @@ impl Thinned {
 #[derive(Debug, Default)]
 struct Series {
     id: Option<u32>,
+    /// The row's port (several sources), or "".
+    port: String,
     name: String,
     unit: String,
     points: Thinned,
@@ -165,6 +167,8 @@ pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
     errors: Thinned,
+    /// Which extra cell of a row names its port (several sources).
+    port_column: Option<usize>,
 }
 
 impl Plot {
@@ -173,28 +177,42 @@ impl Plot {
             spec,
             series: Vec::new(),
             errors: Thinned::default(),
+            port_column: None,
         }
     }
 
+    /// Rows name their port in extra cell `column` ([`crate::row::PORT_COLUMN`]): each port's
+    /// numbers are series of their own.
+    pub fn port_column(&mut self, column: Option<usize>) {
+        self.port_column = column;
+    }
+
+    /// Takes one row in. Not inlined into the table's `write`, whose long-table path stays as
+    /// lean as without it.
+    #[inline(never)]
     pub fn row(&mut self, row: &Row<'_>) {
         let Some(us) = row.micros else { return };
         let t = us as f64 / 1e6;
         if row.class == Class::Error {
             self.errors.push(t, 0.0);
         }
+        let port = self
+            .port_column
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("");
         for p in row.parts {
             if !p.value.is_finite() {
                 continue;
             }
-            let i = match self
-                .series
-                .iter()
-                .position(|s| s.id == row.id && s.name == p.name && s.unit == p.unit)
-            {
+            let i = match self.series.iter().position(|s| {
+                s.id == row.id && s.name == p.name && s.unit == p.unit && s.port == port
+            }) {
                 Some(i) => i,
                 None => {
                     self.series.push(Series {
                         id: row.id,
+                        port: port.to_owned(),
                         name: p.name.to_owned(),
                         unit: p.unit.to_owned(),
                         points: Thinned::default(),
@@ -206,16 +224,25 @@ impl Plot {
         }
     }
 
-    /// `Name`, or `Name@ID` when another ID has a series of that name and unit.
+    /// `Name`, or `Name@ID` when another ID of its port has a series of that name and unit,
+    /// `Name@PORT` (or `Name@ID@PORT`) when another port has.
     fn label(&self, s: &Series) -> String {
-        let shared = self
-            .series
-            .iter()
-            .any(|o| o.name == s.name && o.unit == s.unit && o.id != s.id);
-        match (shared, s.id) {
-            (true, Some(id)) => format!("{}@{id}", s.name),
-            _ => s.name.clone(),
+        let same = || {
+            self.series
+                .iter()
+                .filter(|o| o.name == s.name && o.unit == s.unit)
+        };
+        let by_id = same().any(|o| o.id != s.id && o.port == s.port);
+        let by_port = same().any(|o| o.port != s.port);
+        let mut label = s.name.clone();
+        if by_id && let Some(id) = s.id {
+            label.push_str(&format!("@{id}"));
         }
+        if by_port {
+            label.push('@');
+            label.push_str(&s.port);
+        }
+        label
     }
 
     /// Draws the plot into the spec's file (`.svg` or `.png`). Nothing to draw is no failed

@@ -31,6 +31,8 @@ pub struct Key {
     pub id: Option<u32>,
     pub sensor_no: String,
     pub sensor: String,
+    /// The row's port (several sources, [`crate::row::PORT_COLUMN`]), or "".
+    pub port: String,
 }
 
 /// One device/sensor.
@@ -133,6 +135,8 @@ pub struct Event {
     pub id: Option<u32>,
     pub device: String,
     pub text: String,
+    /// The row's port, or "".
+    pub port: String,
 }
 
 /// How lines are ordered.
@@ -171,6 +175,8 @@ pub struct Model {
     index: HashMap<Key, usize>,
     /// Index of the `Unit` column among the decoder's extra columns.
     unit_col: Option<usize>,
+    /// Index of the `Port` column among the extra columns (several sources).
+    port_col: Option<usize>,
     /// Rows of keys beyond [`MAX_LINES`].
     pub overflow_rows: u64,
     /// Every row taken in.
@@ -196,6 +202,7 @@ impl Model {
             lines: Vec::new(),
             index: HashMap::new(),
             unit_col: columns.iter().position(|c| *c == "Unit"),
+            port_col: columns.iter().position(|c| *c == crate::row::PORT_COLUMN),
             overflow_rows: 0,
             rows: 0,
             frame_rows: 0,
@@ -249,10 +256,12 @@ impl Model {
         if matches!(row.class, Class::Error | Class::Warning | Class::Info) || timeout {
             self.event(row, now);
         }
+        let port = self.port(row);
         let key = Key {
             id: row.id,
             sensor_no: row.sensor_no.to_owned(),
             sensor: row.sensor.to_owned(),
+            port: port.to_owned(),
         };
         let keyed = !key.sensor_no.is_empty() || !key.sensor.is_empty();
         let i = match self.index.get(&key) {
@@ -263,7 +272,7 @@ impl Model {
                 if let Some(i) = self
                     .lines
                     .iter()
-                    .position(|l| l.key.id == row.id && row.id.is_some())
+                    .position(|l| l.key.id == row.id && row.id.is_some() && l.key.port == port)
                     && (crc || timeout)
                 {
                     let l = &mut self.lines[i];
@@ -328,6 +337,14 @@ impl Model {
         }
     }
 
+    /// The row's port, or "".
+    fn port<'r>(&self, row: &Row<'r>) -> &'r str {
+        self.port_col
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("")
+    }
+
     fn event(&mut self, row: &Row<'_>, now: u64) {
         if self.events.len() == EVENTS {
             self.events.pop_front();
@@ -341,7 +358,12 @@ impl Model {
                 text.push_str(part);
             }
         }
-        if let Some(note) = row.extra.iter().rev().find(|s| !s.is_empty())
+        if let Some((_, note)) = row
+            .extra
+            .iter()
+            .enumerate()
+            .rev()
+            .find(|&(i, s)| !s.is_empty() && Some(i) != self.port_col)
             && row.data.is_empty()
         {
             text.push_str(if text.is_empty() { "" } else { " " });
@@ -354,6 +376,7 @@ impl Model {
             id: row.id,
             device: cut(row.device),
             text: cut(&text),
+            port: self.port(row).to_owned(),
         });
     }
 

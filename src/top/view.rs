@@ -222,6 +222,17 @@ fn lines(frame: &mut Frame<'_>, area: Rect, model: &Model, ui: &mut Ui, now: u64
     frame.render_widget(table, table_area);
 }
 
+/// A device with its port (several sources): the port's file name first, `ttyUSB1: FAS-40S`.
+fn on_port<'a>(port: &str, device: &'a str) -> std::borrow::Cow<'a, str> {
+    if port.is_empty() {
+        return device.into();
+    }
+    let short = std::path::Path::new(port)
+        .file_name()
+        .map_or(port.into(), |n| n.to_string_lossy());
+    format!("{short}: {device}").into()
+}
+
 fn dim() -> Style {
     Style::new().add_modifier(Modifier::DIM)
 }
@@ -248,7 +259,7 @@ fn line_row<'a>(l: &'a Track, selected: Option<&Key>, now: u64) -> TableRow<'a> 
     let cells = vec![
         Cell::from(if l.marked { "*" } else { "" }),
         Cell::from(l.key.id.map_or(String::new(), |i| i.to_string())),
-        Cell::from(l.device.as_str()),
+        Cell::from(on_port(&l.key.port, &l.device)),
         Cell::from(l.key.sensor_no.as_str()),
         Cell::from(l.key.sensor.as_str()),
         value,
@@ -304,7 +315,7 @@ fn errors(frame: &mut Frame<'_>, area: Rect, model: &Model, ui: &Ui, n: usize) {
                 e.micros.map_or(String::new(), |m| format!("{}", m / 1000)),
                 e.kind,
                 id,
-                e.device,
+                on_port(&e.port, &e.device),
                 e.text
             ),
             style,
