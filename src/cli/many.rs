@@ -85,7 +85,8 @@ pub(super) fn run(
     stop: &Stop,
 ) -> Result<(), Failure> {
     check(args)?;
-    let opened = open_all(args, protocol, serial)?;
+    let clock = Instant::now();
+    let opened = open_all(args, protocol, serial, clock)?;
     let live = opened[0].kind == InputKind::Serial;
     if let Some(o) = opened
         .iter()
@@ -226,6 +227,7 @@ pub(super) fn run(
         protocol: protocol.name,
         live,
         anchor: if live { None } else { anchor },
+        clock: live.then_some(clock),
         selection,
     };
     let merged = if out.top {
@@ -357,13 +359,14 @@ fn check(args: &CaptureArgs) -> Result<(), Failure> {
 }
 
 /// Opens every source, in order, before anything is written: a missing or unusable one ends the
-/// run here. A recording of several ports becomes one source per port.
+/// run here. A recording of several ports becomes one source per port. Serial devices count
+/// their capture time from `clock`.
 fn open_all(
     args: &CaptureArgs,
     protocol: &Protocol,
     serial: &SerialConfig,
+    clock: Instant,
 ) -> Result<Vec<Opening>, Failure> {
-    let clock = Instant::now();
     let mut opened: Vec<Opening> = Vec::new();
     for source in args.sources() {
         let input = Input::parse(source);

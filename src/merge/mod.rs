@@ -8,7 +8,10 @@
 //! the filters (so that the Counter is the row's number in the merged table):
 //!
 //! * **Live ports** (serial devices) share one clock (capture time 0 is one instant for all of
-//!   them): rows are written as soon as they come, those that came together in time order.
+//!   them) and are merged by the same rule, except that a row waits at most [`HOLD`] of capture
+//!   time for the other ports: a quiet port never holds the table back longer, and a row a
+//!   decoder hands on later than that (an unanswered poll known only at the next one after a
+//!   long pause) is written when it comes.
 //! * **Files and streams** are merged by the rows' times (a k-way merge): the earliest row waits
 //!   until every other port that has not ended has a row queued (or ends), so that no later row
 //!   can be earlier. Rows of the same time go in the order of the ports. Each port holds at most a
@@ -26,7 +29,7 @@ use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::exit::{Failure, Interrupt};
 use crate::filter::{Select, Selection};
@@ -43,6 +46,11 @@ pub use rows::Rows;
 
 /// How often the merge wakes up without rows (to redraw `--top`, notice its `q`).
 const TICK: Duration = Duration::from_millis(20);
+
+/// How long past its time a live row waits for the rows of the other ports that may be earlier
+/// (decoders hand a frame's row on when the frame is whole, an unanswered S.Port poll at the next
+/// poll, 12 ms later).
+pub const HOLD: Duration = Duration::from_millis(100);
 
 /// A port hands its rows on in batches of at most this many (and at every flush of its driver:
 /// after each input batch, and on idle ticks).
@@ -91,6 +99,8 @@ pub struct How<'a> {
     /// The common capture start when it is known before the run (files); otherwise the first
     /// port's start is the table's.
     pub anchor: Option<Anchor>,
+    /// Live: the instant of capture time 0 of every port.
+    pub clock: Option<Instant>,
     pub selection: &'a Selection,
 }
 
@@ -102,6 +112,7 @@ pub fn merge(ports: &mut [Port], sink: &mut dyn Sink, how: How<'_>) -> Merged {
         protocol,
         live,
         anchor,
+        clock,
         selection,
     } = how;
     if anchor.is_some() {
@@ -122,6 +133,7 @@ pub fn merge(ports: &mut [Port], sink: &mut dyn Sink, how: How<'_>) -> Merged {
         selection,
         names,
         quit: &quit,
+        clock,
         anchored: anchor.is_some(),
         failure: None,
         output: None,
@@ -367,6 +379,8 @@ struct Merger<'a, 's> {
     selection: &'a Selection,
     names: Vec<String>,
     quit: &'a AtomicBool,
+    /// Live: the instant of capture time 0.
+    clock: Option<Instant>,
     anchored: bool,
     /// The first failure of a port (a signal aside).
     failure: Option<Failure>,
@@ -390,15 +404,15 @@ impl Merger<'_, '_> {
                     }
                 }
             }
-            if !self.write_ready(true) {
+            if !self.write_ready() {
                 return;
             }
             self.flush();
         }
     }
 
-    /// Live ports: one channel for all; rows are written as they come, those that came
-    /// together in time order.
+    /// Live ports: one channel for all; rows are written in time order, each waiting at most
+    /// [`HOLD`] for the other ports.
     fn live(&mut self, rx: &Receiver<(usize, Up)>) {
         loop {
             match rx.recv_timeout(TICK) {
@@ -407,12 +421,15 @@ impl Merger<'_, '_> {
                     while let Ok((p, up)) = rx.try_recv() {
                         self.take(p, up);
                     }
-                    self.write_ready(false);
-                    self.flush();
                 }
-                Err(RecvTimeoutError::Timeout) => self.tick(),
-                Err(RecvTimeoutError::Disconnected) => return,
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => {
+                    self.write_ready();
+                    return;
+                }
             }
+            self.write_ready();
+            self.flush();
             // A port's `End` is the last thing it sends: everything before it is written.
             if self.queues.iter().all(|q| q.ended) {
                 return;
@@ -449,23 +466,28 @@ impl Merger<'_, '_> {
         }
     }
 
-    /// Writes rows in time order: `wait`: only while every port that has not ended has a row
-    /// queued (files); otherwise every row queued. False when every port has ended and every row
-    /// is written.
-    fn write_ready(&mut self, wait: bool) -> bool {
+    /// Writes rows in time order while every port that has not ended has a row queued (live:
+    /// or the earliest row's time is [`HOLD`] past). False when every port has ended and every
+    /// row is written.
+    fn write_ready(&mut self) -> bool {
+        let now = self.clock.map(|c| c.elapsed().as_micros() as u64);
         loop {
             let mut first: Option<(u64, usize)> = None;
+            let mut waiting = false;
             for (p, q) in self.queues.iter().enumerate() {
                 match q.head() {
                     Some(at) if first.is_none_or(|(t, _)| at < t) => first = Some((at, p)),
                     Some(_) => {}
-                    None if wait && !q.ended => return true,
-                    None => {}
+                    None => waiting |= !q.ended,
                 }
             }
-            let Some((_, p)) = first else {
+            let Some((at, p)) = first else {
                 return !self.queues.iter().all(|q| q.ended);
             };
+            let held = now.is_some_and(|now| now >= at.saturating_add(HOLD.as_micros() as u64));
+            if waiting && !held {
+                return true;
+            }
             self.write_next(p);
         }
     }
