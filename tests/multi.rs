@@ -566,3 +566,98 @@ fn plot_draws_a_series_per_port() {
     let drawn = std::fs::read_to_string(&svg).unwrap();
     assert!(!drawn.contains(&format!("Alt@{}", a.display())));
 }
+
+/// With --reconnect only the unplugged port waits: the other one goes on, and the unplugged one
+/// comes back on its own row.
+#[test]
+fn with_reconnect_only_the_unplugged_port_waits() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("adapter");
+    let a = bus();
+    std::os::unix::fs::symlink(&a.path, &link).unwrap();
+    let mut other = bus();
+    let (mut child, rx) = spawn(&[
+        "sport".as_ref(),
+        "-f".as_ref(),
+        "tsv".as_ref(),
+        "--reconnect".as_ref(),
+        link.as_os_str(),
+        other.path.as_os_str(),
+    ]);
+    rx.recv_timeout(Duration::from_secs(10)).unwrap();
+    let common::pty::Bus {
+        mut master, slave, ..
+    } = a;
+    master.write_all(&slot(0, 1)).unwrap();
+    master.flush().unwrap();
+    let first = rx.recv_timeout(Duration::from_secs(10)).unwrap();
+    assert!(first.contains(&link.display().to_string()), "{first}");
+    drop(master);
+    drop(slave);
+    let down = rx.recv_timeout(Duration::from_secs(10)).unwrap();
+    assert!(down.contains("\tLinkDown\t"), "{down}");
+    assert!(down.contains(&link.display().to_string()), "{down}");
+    // The other port goes on while the first waits.
+    for i in 0..5 {
+        other.master.write_all(&slot(1, 10 + i)).unwrap();
+        other.master.flush().unwrap();
+        let row = rx.recv_timeout(Duration::from_secs(10)).unwrap();
+        assert!(row.contains(&other.path.display().to_string()), "{row}");
+        assert!(row.contains("\tData\t"), "{row}");
+    }
+    // Plugged in again: the stable name points to a new device node.
+    let mut back = bus();
+    let tmp = dir.path().join("adapter.new");
+    std::os::unix::fs::symlink(&back.path, &tmp).unwrap();
+    std::fs::rename(&tmp, &link).unwrap();
+    let up = rx.recv_timeout(Duration::from_secs(10)).unwrap();
+    assert!(up.contains("\tLinkUp\t"), "{up}");
+    back.master.write_all(&slot(0, 2)).unwrap();
+    back.master.flush().unwrap();
+    let row = rx.recv_timeout(Duration::from_secs(10)).unwrap();
+    assert!(
+        row.contains(&link.display().to_string()) && row.contains("\tData\t"),
+        "{row}"
+    );
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert_eq!(wait_exit(&mut child).code(), Some(130));
+    drop((other.slave, back.slave));
+}
+
+/// A reader that goes away (`| head -1`) ends a run of several sources quietly with 141, a full
+/// disk with the output's exit code 8: the sink's failure stops every port.
+#[test]
+fn a_closed_pipe_and_a_full_disk_end_several_sources() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let big = common::big_sport(dir.path(), 100_000, 0x0100);
+    let copy = dir.path().join("copy.bin");
+    std::fs::copy(&big, &copy).unwrap();
+    let mut child = busnoop()
+        .args(["sport", "-f", "tsv"])
+        .args([&big, &copy])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("Counter\t"));
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(141));
+    assert!(
+        !text(&out.stderr).contains("busnoop: cannot"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = busnoop()
+        .args(["sport", "-f", "tsv", "-o", "/dev/full"])
+        .args([&big, &copy])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(8));
+    assert!(text(&out.stderr).contains("cannot write to /dev/full"));
+}

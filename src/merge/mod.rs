@@ -223,7 +223,8 @@ struct PortSink<'a> {
 impl PortSink<'_> {
     fn send(&mut self) {
         if !self.rows.is_empty() {
-            let rows = std::mem::take(&mut self.rows);
+            let like = self.rows.like();
+            let rows = std::mem::replace(&mut self.rows, like);
             // The merge takes everything until every port has ended.
             let _ = self.tx.send((self.port, Up::Rows(rows)));
         }

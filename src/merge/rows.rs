@@ -3,6 +3,9 @@
 
 use crate::row::{Class, Part, Row};
 
+/// Extra cells and numbers of a row given back without allocating.
+const ON_STACK: usize = 8;
+
 /// Where a cell's text is in [`Rows::text`].
 type Span = (u32, u32);
 
@@ -49,6 +52,17 @@ impl Rows {
 
     pub fn is_empty(&self) -> bool {
         self.rows.is_empty()
+    }
+
+    /// An empty batch with the room this one took (a port's batches are alike).
+    pub fn like(&self) -> Rows {
+        Rows {
+            text: String::with_capacity(self.text.len()),
+            raw: Vec::with_capacity(self.raw.len()),
+            extras: Vec::with_capacity(self.extras.len()),
+            parts: Vec::with_capacity(self.parts.len()),
+            rows: Vec::with_capacity(self.rows.len()),
+        }
     }
 
     fn put(&mut self, s: &str) -> Span {
@@ -111,22 +125,40 @@ impl Rows {
     /// the stamps of two decoders make no promise to each other.
     pub fn with_row<R>(&self, i: usize, port: &str, f: impl FnOnce(&Row<'_>) -> R) -> R {
         let k = &self.rows[i];
-        let mut extra: Vec<&str> = Vec::with_capacity(1 + (k.extra.1 - k.extra.0) as usize);
-        extra.push(port);
-        extra.extend(
-            self.extras[k.extra.0 as usize..k.extra.1 as usize]
-                .iter()
-                .map(|&s| self.cut(s)),
-        );
-        let parts: Vec<Part<'_>> = self.parts[k.parts.0 as usize..k.parts.1 as usize]
-            .iter()
-            .map(|p| Part {
-                name: self.cut(p.name),
-                unit: self.cut(p.unit),
-                text: self.cut(p.text),
-                value: p.value,
-            })
-            .collect();
+        // Rows have a few cells and numbers: on the stack, in a vector only when there are more.
+        let extras = &self.extras[k.extra.0 as usize..k.extra.1 as usize];
+        let mut few = [""; ON_STACK];
+        let many: Vec<&str>;
+        let extra: &[&str] = if extras.len() < ON_STACK {
+            few[0] = port;
+            for (cell, &s) in few[1..].iter_mut().zip(extras) {
+                *cell = self.cut(s);
+            }
+            &few[..=extras.len()]
+        } else {
+            many = std::iter::once(port)
+                .chain(extras.iter().map(|&s| self.cut(s)))
+                .collect();
+            &many
+        };
+        let kept = &self.parts[k.parts.0 as usize..k.parts.1 as usize];
+        let part = |p: &KeptPart| Part {
+            name: self.cut(p.name),
+            unit: self.cut(p.unit),
+            text: self.cut(p.text),
+            value: p.value,
+        };
+        let mut few_parts = [Part::EMPTY; ON_STACK];
+        let many_parts: Vec<Part<'_>>;
+        let parts: &[Part<'_>] = if kept.len() <= ON_STACK {
+            for (slot, p) in few_parts.iter_mut().zip(kept) {
+                *slot = part(p);
+            }
+            &few_parts[..kept.len()]
+        } else {
+            many_parts = kept.iter().map(part).collect();
+            &many_parts
+        };
         let [device, kind, sensor_no, sensor, data] = k.cells.map(|c| self.cut(c));
         f(&Row {
             micros: k.micros,
@@ -137,8 +169,8 @@ impl Rows {
             sensor_no,
             sensor,
             data,
-            extra: &extra,
-            parts: parts.as_slice().into(),
+            extra,
+            parts: parts.into(),
             raw: &self.raw[k.raw.0 as usize..k.raw.1 as usize],
             stamp: 0,
         })
