@@ -57,6 +57,7 @@ pub mod fport;
 pub mod futaba;
 pub mod ghst;
 pub mod ibus;
+mod merge;
 mod numbers;
 mod pace;
 mod pairing;

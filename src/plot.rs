@@ -217,6 +217,8 @@ impl Thinned {
 #[derive(Debug, Default)]
 struct Series {
     id: Option<u32>,
+    /// The row's port (several sources), or "".
+    port: String,
     name: String,
     unit: String,
     points: Thinned,
@@ -266,10 +268,12 @@ const MARKERS_MAX: usize = 400;
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
-    /// Where each series is, by (ID, name, unit).
-    index: HashMap<(Option<u32>, String, String), usize>,
+    /// Where each series is, by (ID, name, unit, port).
+    index: HashMap<(Option<u32>, String, String, String), usize>,
     errors: Thinned,
     anchor: Option<Anchor>,
+    /// Which extra cell of a row names its port (several sources).
+    port_column: Option<usize>,
 }
 
 impl Plot {
@@ -280,7 +284,14 @@ impl Plot {
             index: HashMap::new(),
             errors: Thinned::default(),
             anchor: None,
+            port_column: None,
         }
+    }
+
+    /// Rows name their port in extra cell `column` ([`crate::row::PORT_COLUMN`]): each port's
+    /// numbers are series of their own.
+    pub fn port_column(&mut self, column: Option<usize>) {
+        self.port_column = column;
     }
 
     /// The wall-clock time of the capture's start (the x axis shows times of day).
@@ -298,6 +309,9 @@ impl Plot {
         )
     }
 
+    /// Takes one row in. Not inlined into the table's `write`, whose long-table path stays as
+    /// lean as without it.
+    #[inline(never)]
     pub fn row(&mut self, row: &Row<'_>) {
         let Some(us) = row.micros else { return };
         let t = us as f64 / 1e6;
@@ -308,16 +322,27 @@ impl Plot {
         if row.class == Class::Error {
             self.errors.push(t, 0.0);
         }
+        let port = self
+            .port_column
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("");
         for p in row.parts {
             if !p.value.is_finite() {
                 continue;
             }
-            let key = (row.id, p.name.to_owned(), p.unit.to_owned());
+            let key = (
+                row.id,
+                p.name.to_owned(),
+                p.unit.to_owned(),
+                port.to_owned(),
+            );
             let i = match self.index.get(&key) {
                 Some(&i) => i,
                 None => {
                     self.series.push(Series {
                         id: row.id,
+                        port: port.to_owned(),
                         name: p.name.to_owned(),
                         unit: p.unit.to_owned(),
                         points: Thinned::default(),
@@ -330,16 +355,25 @@ impl Plot {
         }
     }
 
-    /// `Name`, or `Name@ID` when another ID has a series of that name and unit.
+    /// `Name`, or `Name@ID` when another ID of its port has a series of that name and unit,
+    /// `Name@PORT` (or `Name@ID@PORT`) when another port has.
     fn label(&self, s: &Series) -> String {
-        let shared = self
-            .series
-            .iter()
-            .any(|o| o.name == s.name && o.unit == s.unit && o.id != s.id);
-        match (shared, s.id) {
-            (true, Some(id)) => format!("{}@{id}", s.name),
-            _ => s.name.clone(),
+        let same = || {
+            self.series
+                .iter()
+                .filter(|o| o.name == s.name && o.unit == s.unit)
+        };
+        let by_id = same().any(|o| o.id != s.id && o.port == s.port);
+        let by_port = same().any(|o| o.port != s.port);
+        let mut label = s.name.clone();
+        if by_id && let Some(id) = s.id {
+            label.push_str(&format!("@{id}"));
         }
+        if by_port {
+            label.push('@');
+            label.push_str(&s.port);
+        }
+        label
     }
 
     /// The series to draw, with their labels, in order of first appearance; a series without
@@ -534,7 +568,7 @@ impl Plot {
                     color.stroke_width(2),
                 ))?;
                 legend.draw(&Circle::new((20, y), 3, color.filled()))?;
-                let text = fit(name, (LEGEND - 50) as usize, LABEL_FONT);
+                let text = fit(&short_port(name), (LEGEND - 50) as usize, LABEL_FONT);
                 legend.draw(&Text::new(
                     text,
                     (40, y - 8),
@@ -565,15 +599,35 @@ fn text_width(chars: usize, font: u32) -> usize {
     (chars as f64 * font as f64 * 0.62).ceil() as usize
 }
 
-/// `text` cut with `…` to fit `pixels` at font size `font`.
+/// A series name with its port shown by the port's file name (`Alt@/dev/serial/by-id/usb-…`
+/// → `Alt@usb-…`): a legend has little room, and `--sensor` takes the full name.
+fn short_port(name: &str) -> String {
+    match name.rsplit_once("@/") {
+        Some((head, path)) => {
+            let (path, unit) = match path.rsplit_once(" (") {
+                Some((p, u)) => (p, format!(" ({u}")),
+                None => (path, String::new()),
+            };
+            let file = path.rsplit('/').next().unwrap_or(path);
+            format!("{head}@{file}{unit}")
+        }
+        None => name.to_owned(),
+    }
+}
+
+/// `text` cut with `…` in its middle to fit `pixels` at font size `font`: the start (the
+/// number's name) and the end (a port's file name, `Alt@/tmp/…/odd.pcap`) stay.
 fn fit(text: &str, pixels: usize, font: u32) -> String {
     let n = text.chars().count();
     let room = (pixels as f64 / (font as f64 * 0.62)) as usize;
     if n <= room {
         return text.to_owned();
     }
-    let mut s: String = text.chars().take(room.saturating_sub(1)).collect();
+    let keep = room.saturating_sub(1);
+    let head = keep - keep / 2;
+    let mut s: String = text.chars().take(head).collect();
     s.push('…');
+    s.extend(text.chars().skip(n - keep / 2));
     s
 }
 
@@ -662,6 +716,20 @@ fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<Panel<'a>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn legend_names_keep_their_start_and_end() {
+        assert_eq!(
+            short_port("Alt@/dev/serial/by-id/usb-FTDI-if00 (m)"),
+            "Alt@usb-FTDI-if00 (m)"
+        );
+        assert_eq!(short_port("Cell1@8 (V)"), "Cell1@8 (V)");
+        let cut = fit("Cell1@/a/very/long/path/to/rx.pcap", 100, 10);
+        assert!(
+            cut.starts_with("Cell1@") && cut.ends_with("rx.pcap") && cut.contains('…'),
+            "{cut}"
+        );
+    }
     use crate::row::Part;
 
     fn row(us: u64, class: Class, parts: &'static [Part<'static>]) -> Row<'static> {
@@ -839,6 +907,7 @@ mod tests {
         }
         Series {
             id: Some(1),
+            port: String::new(),
             name: name.into(),
             unit: unit.into(),
             points,

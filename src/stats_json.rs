@@ -84,6 +84,75 @@ pub fn record(
 /// Writes the object, after every other message, with the run's exit code and failure
 /// message (empty on success); returns the exit code, which becomes that of a failed write
 /// (8) when the statistics file cannot be written after a run that went well.
+/// What one port of a run with several sources reports (`record_ports`).
+pub struct PortReport<'a> {
+    pub port: &'a str,
+    pub report: Report,
+    pub rows: u64,
+    pub hidden: u64,
+    pub valid_frames: u64,
+    pub problems: Problems,
+}
+
+/// The statistics of a run with several sources: the whole run's counts (rows, valid frames,
+/// problems and totals summed over the ports) with each port's own object under `ports`
+/// (docs/stats.v1.schema.json).
+pub fn record_ports(protocol: &str, ports: &[PortReport<'_>]) {
+    let mut guard = pending();
+    let Some(p) = guard.as_mut() else {
+        return;
+    };
+    let rows: u64 = ports.iter().map(|p| p.rows).sum();
+    let hidden: u64 = ports.iter().map(|p| p.hidden).sum();
+    let valid: u64 = ports.iter().map(|p| p.valid_frames).sum();
+    let mut whole = object(
+        &Report::default(),
+        protocol,
+        rows,
+        hidden,
+        valid,
+        &Problems::new(""),
+    );
+    let mut problems: Vec<(&'static str, u64)> = Vec::new();
+    let mut totals: Vec<(&'static str, u64)> = Vec::new();
+    let mut list = Vec::new();
+    for port in ports {
+        for &(k, n) in port.problems.counts() {
+            add(&mut problems, k, n);
+        }
+        for &(k, n) in &port.report.counts {
+            add(&mut totals, k, n);
+        }
+        let mut o = object(
+            &port.report,
+            protocol,
+            port.rows,
+            port.hidden,
+            port.valid_frames,
+            &port.problems,
+        );
+        o.remove("schema");
+        o.insert("port".into(), Value::String(port.port.to_owned()));
+        list.push(Value::Object(o));
+    }
+    whole.insert("problems".into(), counts(&problems));
+    whole.insert("totals".into(), counts(&totals));
+    let summary: Vec<String> = ports
+        .iter()
+        .filter_map(|p| Some(format!("{}: {}", p.port, p.problems.line()?)))
+        .collect();
+    whole.insert("summary".into(), Value::String(summary.join("; ")));
+    whole.insert("ports".into(), Value::Array(list));
+    p.object = whole;
+}
+
+fn add(list: &mut Vec<(&'static str, u64)>, key: &'static str, n: u64) {
+    match list.iter_mut().find(|(k, _)| *k == key) {
+        Some(c) => c.1 += n,
+        None => list.push((key, n)),
+    }
+}
+
 pub fn finish(code: u8, message: &str) -> u8 {
     let Some(Pending { to, mut object }) = pending().take() else {
         return code;

@@ -149,6 +149,33 @@ fn every_fixture_follows_the_schema() {
     );
 }
 
+/// Rows of several sources carry `port`, a string the schema knows.
+#[test]
+fn rows_of_several_sources_follow_the_schema() {
+    let schema = schema();
+    let out = Command::cargo_bin("busnoop")
+        .unwrap()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .arg(fixture("edgetx-MODELE24-2014-07-11-sport.log"))
+        .args(["-f", "jsonl", "--raw"])
+        .output()
+        .unwrap();
+    let mut ports = std::collections::BTreeSet::new();
+    for line in String::from_utf8(out.stdout).unwrap().lines() {
+        let v: Value = serde_json::from_str(line).unwrap();
+        if let Err(e) = check(&schema, &v, "merged") {
+            panic!("{e}\n{line}");
+        }
+        ports.insert(v["port"].as_str().expect("a port").to_owned());
+    }
+    assert_eq!(ports.len(), 2, "{ports:?}");
+    let mut v: Value = serde_json::from_str(r#"{"counter":1,"millis":0,"id":1,"device":null,"type":null,"sensor_no":null,"sensor":null,"data":null,"value":null,"port":7}"#).unwrap();
+    assert!(check(&schema, &v, "bad").is_err(), "a port is a string");
+    v["port"] = Value::from("/dev/ttyUSB1");
+    check(&schema, &v, "good").unwrap();
+}
+
 /// The checker is not a yes-machine: rows that break the schema are caught.
 #[test]
 fn the_checker_catches_wrong_rows() {

@@ -610,3 +610,39 @@ fn top_shows_the_rc_buses_sensors_and_channels() {
         .unwrap();
     assert!(wait_exit(&mut child).success());
 }
+
+/// Several sources: each line names its port with its device (the port's file name), and two
+/// ports with the same ID and sensor keep a line each.
+#[test]
+fn top_with_two_sources_keeps_a_line_per_port() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let t0 = 1_700_000_000_000_000i64;
+    let mut files = Vec::new();
+    for (name, shift) in [("left.pcap", 0), ("right.pcap", 6_000)] {
+        let mut out = Vec::new();
+        busnoop::pcap::write::header(&mut out, busnoop::pcap::linktype::USER0);
+        for i in 0..20u32 {
+            let mut f = Vec::new();
+            wire::encode_frame(&mut f, wire::header_for(0), 0x10, 0x0100, 6500 + i);
+            busnoop::pcap::write::record(&mut out, t0 + shift + 12_000 * i as i64, &f);
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, out).unwrap();
+        files.push(path);
+    }
+    let term = terminal(120, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"sport", &"--top", &"--speed", &"0", &files[0], &files[1]]);
+    let at = wait_for(&screen, 0, "S.Port");
+    // `left.pcap: Vario` (the screen is drawn with cursor moves over the blanks).
+    wait_for(&screen, at, "left.pcap:");
+    wait_for(&screen, at, "right.pcap:");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert!(status.success(), "{status:?}");
+}

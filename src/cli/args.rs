@@ -242,7 +242,14 @@ impl Parsed {
 #[derive(Args, Debug, Clone)]
 pub struct CaptureArgs {
     /// What to read (each subcommand names the sources it accepts).
+    #[arg(index = 1)]
     pub source: PathBuf,
+
+    /// More sources, decoded at once (each with its own decoder) and merged by time into one
+    /// table with a Port column: two adapters on the two wires of a full-duplex link, or two
+    /// buses (docs/live.md, "Two wires, two adapters").
+    #[arg(index = 2, value_name = "SOURCE")]
+    pub more: Vec<PathBuf>,
 
     #[command(flatten)]
     pub output: OutputArgs,
@@ -252,6 +259,13 @@ pub struct CaptureArgs {
 
     #[command(flatten)]
     pub select: project::SelectArgs,
+}
+
+impl CaptureArgs {
+    /// SOURCE and the more sources after it, as given.
+    pub fn sources(&self) -> impl Iterator<Item = &PathBuf> {
+        std::iter::once(&self.source).chain(&self.more)
+    }
 }
 
 /// Options for live capture.

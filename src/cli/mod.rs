@@ -21,6 +21,7 @@ mod args;
 mod choices;
 mod extcap;
 mod manual;
+mod many;
 mod paths;
 pub mod project;
 
@@ -299,13 +300,13 @@ pub(crate) fn is_dash(p: &Path) -> bool {
 
 /// Opens SOURCE (a device, a file or standard input), picks the reader for its kind, asks
 /// `decoder_for` for the protocol decoder, decodes everything into the table and prints the
-/// summary.
+/// summary. Several sources (or a recording of several ports) go to [`many::run`].
 pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
     default_line: Line,
     selection: &Selection,
-    decoder_for: impl FnOnce(InputKind, &Line) -> Result<Box<dyn Decoder>, Failure>,
+    decoder_for: impl Fn(InputKind, &Line) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
     let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
     if record_to_stdout && args.output.output_file().is_none() {
@@ -322,13 +323,15 @@ pub fn run_capture(
         Some(p) => Some(p.path.as_path()),
         None => args.output.output_file(),
     };
-    check_distinct(
-        &input,
-        table_file,
-        args.live.record.as_deref(),
-        args.live.export.as_deref(),
-        project::File::path(&args.select).as_deref(),
-    )?;
+    for source in args.sources() {
+        check_distinct(
+            &Input::parse(source),
+            table_file,
+            args.live.record.as_deref(),
+            args.live.export.as_deref(),
+            project::File::path(&args.select).as_deref(),
+        )?;
+    }
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
@@ -380,6 +383,9 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
+    if !args.more.is_empty() || many::several_ports(&input) {
+        return many::run(args, protocol, &serial, selection, &decoder_for, &stop);
+    }
     // A capture reader hands on its first input bytes for the wrong-protocol check after the
     // run (which looks at the first ADVICE_BYTES only); a recording keeps its packets.
     let keep_input = if matches!(input, Input::Device(_)) {
@@ -387,7 +393,8 @@ pub fn run_capture(
     } else {
         crate::detect::ADVICE_BYTES as u64
     };
-    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
+    let (kind, reader, progress) =
+        open_source(input, &serial, args.live.reconnect, keep_input, None)?;
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -443,47 +450,12 @@ pub fn run_capture(
         None => None,
     };
     let out = &args.output;
-    // With --top and no -o, the view is the only output.
-    let mut table = match (out.top, out.output_file()) {
-        (true, None) => None,
-        (_, file) => {
-            let output = match file {
-                Some(p) => Output::create(p).map_err(|e| {
-                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
-                })?,
-                None => Output::stdout(),
-            };
-            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
-            let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-            let mut table = Table::new(
-                output,
-                out.table_options(to_terminal, no_color_env),
-                decoder.columns(),
-            );
-            table.set_pretty_widths(protocol.pretty_widths);
-            if to_terminal && !out.no_fit {
-                table.fit_terminal();
-            }
-            if let Some(p) = &out.plot {
-                table.set_plot(p.clone());
-            }
-            if out.wide {
-                // CSV or TSV: check_wide refused the others before anything was opened.
-                let step = match out.every {
-                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
-                    None => crate::sink::wide::Step::PollCycle,
-                };
-                if out.raw || out.time == TimeMode::Abs {
-                    eprintln!(
-                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
-                         Date and Time columns come with any source that has wall-clock time"
-                    );
-                }
-                table.set_wide(step, kind == InputKind::Serial);
-            }
-            Some(table)
-        }
-    };
+    let mut table = open_table(
+        out,
+        decoder.columns(),
+        protocol.pretty_widths,
+        kind == InputKind::Serial,
+    )?;
     let live = kind == InputKind::Serial;
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
     let pacer = if live { None } else { Pacer::new(speed) };
@@ -491,7 +463,7 @@ pub fn run_capture(
     let source_name = args.source.display().to_string();
     let ctx = Context {
         stop: &stop,
-        recorder: recorder.as_mut(),
+        recorder: recorder.as_mut().map(|r| r as &mut dyn crate::record::Keep),
         protocol: protocol.name,
         live,
         source: &source_name,
@@ -610,6 +582,54 @@ pub fn run_capture(
     result
 }
 
+/// The table (`None` with `--top` and no `-o`: the view is the only output): `extra`, the
+/// columns after the base ones (the decoder's, after `Port` with several sources); `widths`, the
+/// pretty widths of the first columns; `live`: the source is a serial device.
+fn open_table(
+    out: &OutputArgs,
+    extra: &[&'static str],
+    widths: &[usize],
+    live: bool,
+) -> Result<Option<Table>, Failure> {
+    // With --top and no -o, the view is the only output.
+    Ok(match (out.top, out.output_file()) {
+        (true, None) => None,
+        (_, file) => {
+            let output = match file {
+                Some(p) => Output::create(p).map_err(|e| {
+                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
+                })?,
+                None => Output::stdout(),
+            };
+            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+            let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+            let mut table = Table::new(output, out.table_options(to_terminal, no_color_env), extra);
+            table.set_pretty_widths(widths);
+            if to_terminal && !out.no_fit {
+                table.fit_terminal();
+            }
+            if let Some(p) = &out.plot {
+                table.set_plot(p.clone());
+            }
+            if out.wide {
+                // CSV or TSV: check_wide refused the others before anything was opened.
+                let step = match out.every {
+                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
+                    None => crate::sink::wide::Step::PollCycle,
+                };
+                if out.raw || out.time == TimeMode::Abs {
+                    eprintln!(
+                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
+                         Date and Time columns come with any source that has wall-clock time"
+                    );
+                }
+                table.set_wide(step, live);
+            }
+            Some(table)
+        }
+    })
+}
+
 /// Notes on options that cannot do what they ask for this input or output: `--time abs` on a
 /// source without times, `--utc` on times without a zone (or without `--time abs`), an `-o`
 /// extension that names no format.
@@ -689,11 +709,14 @@ fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
 
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
 /// also hands on up to this many of its input bytes (for `--record`, the wrong-protocol check).
+/// `clock`: the instant a serial device's capture time counts from (several ports: one clock
+/// for all), else when it is opened.
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
     reconnect: bool,
     keep_input: u64,
+    clock: Option<std::time::Instant>,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
@@ -701,7 +724,10 @@ fn open_source(
                 if let Some(w) = serial::latency_warning(path, std::path::Path::new("/sys")) {
                     eprintln!("busnoop: note: {w}");
                 }
-                let reader = SerialReader::new(path, port, *cfg, reconnect);
+                let mut reader = SerialReader::new(path, port, *cfg, reconnect);
+                if let Some(start) = clock {
+                    reader = reader.starting_at(start);
+                }
                 return Ok((InputKind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.

@@ -69,7 +69,7 @@ impl Described {
 
 /// A protocol on the CRSF frame shape: its start bytes, its device and type names, and how a
 /// valid frame becomes a row.
-pub(crate) trait Dialect: Default {
+pub(crate) trait Dialect: Default + Send {
     /// The protocol's name in messages ("CRSF").
     const NAME: &'static str;
     /// The bytes a frame may start with.

@@ -101,6 +101,8 @@ pub struct Table {
     /// Pretty output on a terminal: the width rows are fitted to ([`fit`]), asked again at
     /// every flush (the terminal may be resized).
     fit: Option<usize>,
+    /// Which extra cell names a row's port (several sources, [`crate::row::PORT_COLUMN`]).
+    port_column: Option<usize>,
 }
 
 /// A row counter as decimal digits, incremented in place (no division per row).
@@ -193,6 +195,7 @@ impl Table {
             error: None,
             spans: Spans::new(),
             fit: None,
+            port_column: extra.iter().position(|c| *c == crate::row::PORT_COLUMN),
         }
     }
 
@@ -278,12 +281,16 @@ impl Table {
     /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
     /// checks); `live`: write lines as they come rather than at the end.
     pub fn set_wide(&mut self, step: wide::Step, live: bool) {
-        self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
+        let mut w = wide::Wide::new(self.opts.format, step, self.opts.utc, live);
+        w.port_column(self.port_column);
+        self.wide = Some(w);
     }
 
     /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
     pub fn set_plot(&mut self, spec: crate::plot::PlotSpec) {
-        self.plot = Some(crate::plot::Plot::new(spec));
+        let mut plot = crate::plot::Plot::new(spec);
+        plot.port_column(self.port_column);
+        self.plot = Some(plot);
     }
 
     /// The plot's numbers, to draw at the end of the run (`busnoop plot`).

@@ -40,6 +40,7 @@ struct Group {
     id: Option<u32>,
     sensor_no: String,
     sensor: String,
+    port: String,
 }
 
 /// What identifies a line.
@@ -50,6 +51,8 @@ pub struct Key {
     pub sensor: String,
     /// The number's name (`Cell1`, `VFAS`, `R0`); empty for the line of a row's Data text.
     pub part: String,
+    /// The row's port (several sources, [`crate::row::PORT_COLUMN`]), or "".
+    pub port: String,
 }
 
 impl Key {
@@ -58,6 +61,7 @@ impl Key {
             id: self.id,
             sensor_no: self.sensor_no.clone(),
             sensor: self.sensor.clone(),
+            port: self.port.clone(),
         }
     }
 }
@@ -258,6 +262,8 @@ pub struct Event {
     pub id: Option<u32>,
     pub device: String,
     pub text: String,
+    /// The row's port, or "".
+    pub port: String,
 }
 
 /// How lines are ordered.
@@ -298,6 +304,8 @@ pub struct Model {
     groups: HashMap<Group, Vec<usize>>,
     /// Index of the `Unit` column among the decoder's extra columns.
     unit_col: Option<usize>,
+    /// Index of the `Port` column among the extra columns (several sources).
+    port_col: Option<usize>,
     /// Rows of keys beyond [`MAX_LINES`].
     pub overflow_rows: u64,
     /// Every row taken in.
@@ -324,6 +332,7 @@ impl Model {
             index: HashMap::new(),
             groups: HashMap::new(),
             unit_col: columns.iter().position(|c| *c == "Unit"),
+            port_col: columns.iter().position(|c| *c == crate::row::PORT_COLUMN),
             overflow_rows: 0,
             rows: 0,
             frame_rows: 0,
@@ -393,10 +402,12 @@ impl Model {
         if matches!(row.class, Class::Error | Class::Warning | Class::Info) || timeout {
             self.event(row, now);
         }
+        let port = self.port(row);
         let group = Group {
             id: row.id,
             sensor_no: row.sensor_no.to_owned(),
             sensor: row.sensor.to_owned(),
+            port: port.to_owned(),
         };
         let keyed = !group.sensor_no.is_empty() || !group.sensor.is_empty();
         if crc || timeout || row.class == Class::Error {
@@ -406,7 +417,7 @@ impl Model {
                 None => self
                     .lines
                     .iter()
-                    .position(|l| l.key.id == row.id && row.id.is_some())
+                    .position(|l| l.key.id == row.id && row.id.is_some() && l.key.port == port)
                     .into_iter()
                     .collect(),
             };
@@ -433,6 +444,7 @@ impl Model {
                     sensor_no: group.sensor_no.clone(),
                     sensor: group.sensor.clone(),
                     part: p.name.to_owned(),
+                    port: group.port.clone(),
                 };
                 let Some(i) = self.line(key, row.device, now) else {
                     continue;
@@ -467,6 +479,7 @@ impl Model {
             sensor_no: group.sensor_no,
             sensor: group.sensor,
             part: String::new(),
+            port: group.port,
         };
         let Some(i) = self.line(key, row.device, now) else {
             return;
@@ -486,6 +499,14 @@ impl Model {
         }
     }
 
+    /// The row's port, or "".
+    fn port<'r>(&self, row: &Row<'r>) -> &'r str {
+        self.port_col
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("")
+    }
+
     fn event(&mut self, row: &Row<'_>, now: u64) {
         if self.events.len() == EVENTS {
             self.events.pop_front();
@@ -499,7 +520,12 @@ impl Model {
                 text.push_str(part);
             }
         }
-        if let Some(note) = row.extra.iter().rev().find(|s| !s.is_empty())
+        if let Some((_, note)) = row
+            .extra
+            .iter()
+            .enumerate()
+            .rev()
+            .find(|&(i, s)| !s.is_empty() && Some(i) != self.port_col)
             && row.data.is_empty()
         {
             text.push_str(if text.is_empty() { "" } else { " " });
@@ -512,6 +538,7 @@ impl Model {
             id: row.id,
             device: cut(row.device),
             text: cut(&text),
+            port: self.port(row).to_owned(),
         });
     }
 

@@ -406,7 +406,7 @@ fn line_cells(l: &Track, now: u64) -> [String; 15] {
     [
         (if l.marked { "*" } else { "" }).to_owned(),
         l.key.id.map_or(String::new(), |i| i.to_string()),
-        l.device.clone(),
+        on_port(&l.key.port, &l.device).into_owned(),
         l.key.sensor_no.clone(),
         l.key.sensor.clone(),
         l.part_label().to_owned(),
@@ -420,6 +420,17 @@ fn line_cells(l: &Track, now: u64) -> [String; 15] {
         count(l.crc_errors),
         count(l.timeouts),
     ]
+}
+
+/// A device with its port (several sources): the port's file name first, `ttyUSB1: FAS-40S`.
+fn on_port<'a>(port: &str, device: &'a str) -> std::borrow::Cow<'a, str> {
+    if port.is_empty() {
+        return device.into();
+    }
+    let short = std::path::Path::new(port)
+        .file_name()
+        .map_or(port.into(), |n| n.to_string_lossy());
+    format!("{short}: {device}").into()
 }
 
 fn line_row<'a>(
@@ -498,7 +509,7 @@ fn errors(frame: &mut Frame<'_>, area: Rect, model: &Model, ui: &Ui, n: usize) {
             e.micros.map_or(String::new(), |m| format!("{}", m / 1000)),
             e.kind,
             id,
-            e.device,
+            on_port(&e.port, &e.device),
             e.text
         );
         text.push(Text::styled(fit_text(&line, area.width as usize), style));
