@@ -60,6 +60,7 @@ pub mod futaba;
 pub mod ghst;
 pub mod ibus;
 pub mod logs;
+mod merge;
 mod numbers;
 mod pace;
 mod pairing;

@@ -58,4 +58,28 @@ mod tests {
             );
         }
     }
+
+    /// With several sources the table's first extra column is `Port`: no decoder (of any input
+    /// it reads, any variant) names one of its own so.
+    #[test]
+    fn no_protocol_has_a_column_named_port() {
+        use crate::protocol::Probe;
+        for p in PROTOCOLS {
+            for &input in p.accepts {
+                let probe = Probe {
+                    input,
+                    line: p.line,
+                };
+                for v in (p.variants)(&probe) {
+                    let columns = v.decoder.columns();
+                    assert!(
+                        !columns.contains(&crate::row::PORT_COLUMN),
+                        "{} ({}): {columns:?}",
+                        p.name,
+                        v.label
+                    );
+                }
+            }
+        }
+    }
 }

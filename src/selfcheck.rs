@@ -538,6 +538,87 @@ fn naive_frames(addrs: &[bool; 256], data: &[u8]) -> Vec<(&'static str, std::ops
     out
 }
 
+/// Futaba SBUS: chunking invariance, every byte in exactly one row, every channel row a `0F`
+/// frame of 25 bytes with an end byte, every slot row three bytes starting with a slot id.
+pub fn futaba(data: &[u8]) {
+    use crate::futaba::{self, wire};
+    let rows = same_rows_however_chunked(&|| futaba::decoder(futaba::Options::default()), data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert_eq!(total, data.len(), "bytes lost or duplicated");
+    for r in &rows {
+        match r.kind.as_str() {
+            futaba::CHANNELS_TYPE => {
+                assert_eq!(r.raw.len(), wire::FRAME_LEN, "{r:?}");
+                assert_eq!(r.raw[0], wire::START, "{r:?}");
+                assert!(wire::end_ok(r.raw[24]), "wrong end byte accepted: {r:?}");
+                assert_eq!(r.parts.len(), wire::CHANNELS + 4, "{r:?}");
+            }
+            futaba::SLOT_TYPE => {
+                assert_eq!(r.raw.len(), wire::SLOT_LEN, "{r:?}");
+                assert_eq!(wire::slot_number(r.raw[0]).map(u32::from), r.id, "{r:?}");
+            }
+            _ => assert_eq!(r.class, Class::Error, "{r:?}"),
+        }
+    }
+}
+
+/// FlySky iBUS: chunking invariance, every byte in exactly one row, and every row that is not
+/// flagged holds whole frames (a poll and its answer, or one frame) whose checksums pass.
+pub fn ibus(data: &[u8]) {
+    use crate::ibus::{self, wire};
+    let rows = same_rows_however_chunked(&|| ibus::decoder(ibus::Options::default()), data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert_eq!(total, data.len(), "bytes lost or duplicated");
+    for r in &rows {
+        if r.class == Class::Error {
+            continue;
+        }
+        let mut rest = &r.raw[..];
+        let mut frames = 0;
+        while !rest.is_empty() {
+            let n = usize::from(rest[0]);
+            assert!(n >= wire::MIN_LEN && n <= rest.len(), "{r:?}");
+            assert!(wire::check_ok(&rest[..n]), "bad checksum accepted: {r:?}");
+            rest = &rest[n..];
+            frames += 1;
+        }
+        assert!((1..=2).contains(&frames), "{r:?}");
+        if r.kind.is_empty() {
+            assert!(r.id.is_some() && wire::is_poll(&r.raw), "poll row: {r:?}");
+        }
+    }
+}
+
+/// Telemetry logs: chunking invariance, every byte in at most one row (blank bytes at the end
+/// and a header without lines are in none), rows of at most one line, garbage rows of at most
+/// `GARBAGE_ROW_MAX` bytes, and every number part a plain decimal of the row's line.
+pub fn logs(data: &[u8]) {
+    let rows = same_rows_however_chunked(&crate::logs::decoder, data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert!(total <= data.len(), "bytes duplicated");
+    let mut at = 0;
+    for r in &rows {
+        // Rows are the input's bytes in order.
+        let found = data[at..]
+            .windows(r.raw.len().max(1))
+            .position(|w| r.raw.is_empty() || w == &r.raw[..]);
+        let found = found.unwrap_or_else(|| panic!("row bytes not in the input: {r:?}"));
+        at += found + r.raw.len();
+        if r.kind == crate::row::kind::GARBAGE {
+            assert_eq!(r.class, Class::Error, "{r:?}");
+            continue;
+        }
+        let line = String::from_utf8_lossy(&r.raw);
+        for (name, _, text) in &r.parts {
+            assert!(
+                text.parse::<f64>().is_ok(),
+                "part {name}={text} not a number: {r:?}"
+            );
+            assert!(line.contains(text.as_str()), "{r:?}");
+        }
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -587,85 +668,5 @@ pub(crate) mod tests {
                 .iter()
                 .any(|(k, _)| *k == "BadCRC")
         );
-    }
-}
-/// Futaba SBUS: chunking invariance, every byte in exactly one row, every channel row a `0F`
-/// frame of 25 bytes with an end byte, every slot row three bytes starting with a slot id.
-pub fn futaba(data: &[u8]) {
-    use crate::futaba::{self, wire};
-    let rows = same_rows_however_chunked(&|| futaba::decoder(futaba::Options::default()), data);
-    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
-    assert_eq!(total, data.len(), "bytes lost or duplicated");
-    for r in &rows {
-        match r.kind.as_str() {
-            futaba::CHANNELS_TYPE => {
-                assert_eq!(r.raw.len(), wire::FRAME_LEN, "{r:?}");
-                assert_eq!(r.raw[0], wire::START, "{r:?}");
-                assert!(wire::end_ok(r.raw[24]), "wrong end byte accepted: {r:?}");
-                assert_eq!(r.parts.len(), wire::CHANNELS + 4, "{r:?}");
-            }
-            futaba::SLOT_TYPE => {
-                assert_eq!(r.raw.len(), wire::SLOT_LEN, "{r:?}");
-                assert_eq!(wire::slot_number(r.raw[0]).map(u32::from), r.id, "{r:?}");
-            }
-            _ => assert_eq!(r.class, Class::Error, "{r:?}"),
-        }
-    }
-}
-
-/// Telemetry logs: chunking invariance, every byte in at most one row (blank bytes at the end
-/// and a header without lines are in none), rows of at most one line, garbage rows of at most
-/// `GARBAGE_ROW_MAX` bytes, and every number part a plain decimal of the row's line.
-pub fn logs(data: &[u8]) {
-    let rows = same_rows_however_chunked(&crate::logs::decoder, data);
-    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
-    assert!(total <= data.len(), "bytes duplicated");
-    let mut at = 0;
-    for r in &rows {
-        // Rows are the input's bytes in order.
-        let found = data[at..]
-            .windows(r.raw.len().max(1))
-            .position(|w| r.raw.is_empty() || w == &r.raw[..]);
-        let found = found.unwrap_or_else(|| panic!("row bytes not in the input: {r:?}"));
-        at += found + r.raw.len();
-        if r.kind == crate::row::kind::GARBAGE {
-            assert_eq!(r.class, Class::Error, "{r:?}");
-            continue;
-        }
-        let line = String::from_utf8_lossy(&r.raw);
-        for (name, _, text) in &r.parts {
-            assert!(
-                text.parse::<f64>().is_ok(),
-                "part {name}={text} not a number: {r:?}"
-            );
-            assert!(line.contains(text.as_str()), "{r:?}");
-        }
-    }
-}
-
-/// FlySky iBUS: chunking invariance, every byte in exactly one row, and every row that is not
-/// flagged holds whole frames (a poll and its answer, or one frame) whose checksums pass.
-pub fn ibus(data: &[u8]) {
-    use crate::ibus::{self, wire};
-    let rows = same_rows_however_chunked(&|| ibus::decoder(ibus::Options::default()), data);
-    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
-    assert_eq!(total, data.len(), "bytes lost or duplicated");
-    for r in &rows {
-        if r.class == Class::Error {
-            continue;
-        }
-        let mut rest = &r.raw[..];
-        let mut frames = 0;
-        while !rest.is_empty() {
-            let n = usize::from(rest[0]);
-            assert!(n >= wire::MIN_LEN && n <= rest.len(), "{r:?}");
-            assert!(wire::check_ok(&rest[..n]), "bad checksum accepted: {r:?}");
-            rest = &rest[n..];
-            frames += 1;
-        }
-        assert!((1..=2).contains(&frames), "{r:?}");
-        if r.kind.is_empty() {
-            assert!(r.id.is_some() && wire::is_poll(&r.raw), "poll row: {r:?}");
-        }
     }
 }

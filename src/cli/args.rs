@@ -49,7 +49,7 @@ pub enum Command {
     Detect(DetectArgs),
     /// Plot a capture's numbers as time series: one panel per unit, broken frames marked, as
     /// SVG or PNG (`busnoop plot flight.log --sensor Alt,VFAS -o flight.svg`).
-    Plot(PlotArgs),
+    Plot(Box<PlotArgs>),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
     /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
@@ -76,17 +76,33 @@ pub struct PlotArgs {
     /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-` (a
     /// pipe, like a FIFO, needs --protocol: it can be read only once).
     pub source: PathBuf,
-    /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
-    /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
-    #[arg(long, value_name = "LIST", value_delimiter = ',')]
-    pub sensor: Vec<String>,
     /// The image to write: FILE.svg or FILE.png.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
     /// The protocol [default: detected as by `busnoop detect`; required for `-` and FIFOs].
     #[arg(long, value_name = "NAME", value_parser = protocol_names())]
     pub protocol: Option<String>,
+    /// Draw from this moment on: seconds since the capture's start (`90`, `1.5`), or a time of
+    /// day (`12:34:56`) for sources with wall-clock time.
+    #[arg(long, value_name = "TIME", value_parser = crate::plot::When::parse)]
+    pub from: Option<crate::plot::When>,
+    /// Draw up to this moment (as --from).
+    #[arg(long, value_name = "TIME", value_parser = crate::plot::When::parse)]
+    pub to: Option<crate::plot::When>,
+    /// The table's row selection (--id, --type, --device, --name …) and the project file
+    /// (--config, --no-config); `--sensor` names the numbers to plot (see its help).
+    #[command(flatten)]
+    pub select: project::SelectArgs,
+    /// The protocol's own options, after `--`: `busnoop plot cap.bin -o x.svg --protocol sbus
+    /// -- --mode data`, `-- --value 0x10=u16*0.01:m`, `-- --baud 38400`.
+    #[arg(last = true, value_name = "PROTOCOL OPTIONS")]
+    pub protocol_args: Vec<std::ffi::OsString>,
 }
+
+/// `busnoop plot --sensor`'s help (the table's `--sensor` selects rows; the plot's, series).
+pub(super) const PLOT_SENSOR_HELP: &str = "The numbers to plot, by their names in the wide \
+     table without unit (`Alt`, `VFAS`, `Cell1`, `Cell1@8`) or a sensor's Sensor column name \
+     (`Volts`, `Cels`), comma-separated [default: every number]";
 
 /// The subcommands of the protocols, for `plot --protocol`.
 fn protocol_names() -> clap::builder::PossibleValuesParser {
@@ -129,7 +145,9 @@ pub fn command() -> clap::Command {
     for (i, name) in fixed.iter().enumerate() {
         cmd = cmd.mut_subcommand(name, |c| c.display_order(PROTOCOLS.len() + i));
     }
-    cmd
+    cmd.mut_subcommand("plot", |c| {
+        c.mut_arg("sensor", |a| a.help(PLOT_SENSOR_HELP))
+    })
 }
 
 /// The subcommand of `p`.
@@ -415,7 +433,14 @@ impl Parsed {
 #[derive(Args, Debug, Clone)]
 pub struct CaptureArgs {
     /// What to read (each subcommand names the sources it accepts).
+    #[arg(index = 1)]
     pub source: PathBuf,
+
+    /// More sources, decoded at once (each with its own decoder) and merged by time into one
+    /// table with a Port column: two adapters on the two wires of a full-duplex link, or two
+    /// buses (docs/live.md, "Two wires, two adapters").
+    #[arg(index = 2, value_name = "SOURCE")]
+    pub more: Vec<PathBuf>,
 
     #[command(flatten)]
     pub output: OutputArgs,
@@ -489,6 +514,13 @@ pub fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
         ));
     }
     Ok(std::time::Duration::from_secs_f64(secs))
+}
+
+impl CaptureArgs {
+    /// SOURCE and the more sources after it, as given.
+    pub fn sources(&self) -> impl Iterator<Item = &PathBuf> {
+        std::iter::once(&self.source).chain(&self.more)
+    }
 }
 
 /// Options for live capture.
@@ -575,14 +607,25 @@ pub struct OutputArgs {
     #[arg(long)]
     pub raw: bool,
 
+    /// Pretty table on a terminal: full lines, however wide. By default its rows are fitted
+    /// to the terminal's width (Data and Note wrapped within their columns, names cut with
+    /// `…`, never a number); a file or a pipe always gets full lines.
+    #[arg(long)]
+    pub no_fit: bool,
+
     /// Print a per-device summary on stderr at the end (and on Ctrl-C).
     #[arg(long)]
     pub stats: bool,
 
     /// Form of the --stats summary: `text`, or `json` (one JSON object, the last line on
-    /// stderr; implies --stats).
+    /// stderr, also when the run fails; implies --stats; schema docs/stats.v1.schema.json).
     #[arg(long, value_enum, value_name = "FORM")]
     pub stats_format: Option<StatsFormat>,
+
+    /// Write the statistics as one JSON object into FILE at the end of the run, also when it
+    /// fails (schema docs/stats.v1.schema.json); stderr keeps its usual messages.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
 
     /// `abs` adds a `Time` column with wall-clock times when the source has them.
     #[arg(long, value_enum, default_value_t = TimeMode::Rel)]

@@ -407,7 +407,7 @@ fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Fa
         if let Some(sig) = stop.signal() {
             break Some(sig);
         }
-        match feed.rx.recv_timeout(Duration::from_millis(50)) {
+        match feed.recv_timeout(Duration::from_millis(50)) {
             Ok(Message::Data(b)) => {
                 bytes += b.bytes.len();
                 batches.push(b);

@@ -347,6 +347,7 @@ impl Mapper {
         let s = &self.stats;
         let mut p = Problems::new("telemetry log");
         p.count(
+            "bad_lines",
             s.bad_lines,
             "line that does not fit the header",
             "lines that do not fit the header",

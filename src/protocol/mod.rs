@@ -246,8 +246,9 @@ impl Protocol {
     }
 }
 
-/// A protocol decoder as the driver sees it.
-pub trait Decoder {
+/// A protocol decoder as the driver sees it. `Send`: with several sources each decoder runs in
+/// the thread of its port (`merge`).
+pub trait Decoder: Send {
     /// Extra column names that follow the eight base columns.
     fn columns(&self) -> &'static [&'static str];
 

@@ -601,7 +601,7 @@ impl Decoder for SportDecoder {
             Column::right("Data", 8),
             Column::right("Other", 6),
             Column::right("BadCRC", 7),
-            Column::right("Trunc", 6),
+            Column::right("Trunc", 6).key("truncated"),
             Column::right("Mean ms", 8),
             Column::right("Max ms", 8),
         ]);
@@ -649,7 +649,7 @@ impl Decoder for SportDecoder {
         }
         let mut cells = vec!["all".to_owned(), String::new()];
         cells.extend(counts(&total));
-        r.row(cells);
+        r.total_row(cells);
         r.totals.push(format!(
             "valid frames {}, garbage {}, non-standard check bits {}, unusual escapes {}, repeated frames {}",
             st.valid_frames,
@@ -658,18 +658,35 @@ impl Decoder for SportDecoder {
             st.unusual_escapes,
             st.repeats
         ));
+        r.counts(&[
+            ("valid_frames", st.valid_frames),
+            ("garbage_bytes", st.garbage_bytes),
+            ("garbage_runs", st.garbage_runs),
+            ("non_standard_check_bits", st.check_bits),
+            ("unusual_escapes", st.unusual_escapes),
+            ("repeated_frames", st.repeats),
+        ]);
         r
     }
 
     fn problems(&self) -> Problems {
         let st = &self.table.stats;
         let mut p = Problems::new("S.Port");
-        p.count(st.crc_errors, "CRC error", "CRC errors")
-            .count(st.truncated, "truncated frame", "truncated frames")
+        p.count("crc_errors", st.crc_errors, "CRC error", "CRC errors")
+            .count(
+                "truncated_frames",
+                st.truncated,
+                "truncated frame",
+                "truncated frames",
+            )
             .garbage(st.garbage_bytes, st.garbage_runs)
-            .count(st.unusual_escapes, "unusual escape", "unusual escapes")
-            // "in 1 valid frames": the count is not made singular (as it always was).
-            .in_valid(st.valid_frames, "valid frames", "valid frames");
+            .count(
+                "unusual_escapes",
+                st.unusual_escapes,
+                "unusual escape",
+                "unusual escapes",
+            )
+            .in_valid(st.valid_frames, "valid frame", "valid frames");
         p
     }
 
@@ -682,6 +699,22 @@ impl Decoder for SportDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The problems line counts in words: "1 valid frame", not "1 valid frames".
+    #[test]
+    fn the_problems_line_says_one_valid_frame() {
+        let mut d = SportDecoder::new();
+        let mut bytes = Vec::new();
+        wire::encode_frame(&mut bytes, wire::header_for(8), 0x10, 0x0300, 1);
+        let mut body = [0x10, 0x00, 0x03, 1, 2, 3, 4, 0];
+        body[7] = wire::crc(&body[..7]) ^ 1;
+        wire::encode_raw(&mut bytes, wire::header_for(8), &body);
+        crate::testing::assert_stamps_hold(&mut d, &[&bytes]);
+        assert_eq!(
+            d.problems().line().unwrap(),
+            "S.Port: 1 CRC error in 1 valid frame"
+        );
+    }
 
     /// Every app ID range of the value tables, frame types with and without a name, bad CRCs,
     /// firmware frames, odd headers, truncated frames and noise, each app ID with several
