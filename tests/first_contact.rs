@@ -471,7 +471,7 @@ fn man_pages() {
     assert_eq!(out.status.code(), Some(0));
     let page = text(&out.stdout);
     assert!(page.contains(".TH busnoop 1"), "{}", &page[..200]);
-    assert!(page.contains("Exit codes"));
+    assert!(page.contains("EXIT STATUS"));
     let dir = tempfile::tempdir().unwrap();
     let out = busnoop()
         .args(["man", "--dir"])

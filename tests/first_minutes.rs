@@ -759,3 +759,85 @@ fn wide_has_a_line_per_channel_frame() {
     let out = ok(&run(&["ibus", &path("ibus-rc.bin"), "--wide", "-f", "csv"]));
     assert_eq!(out.lines().count(), 1 + 20);
 }
+
+/// Finding 9 (the man page): exit codes were under `EXTRA`, `busnoop-help(1)` was named though
+/// `man --dir` does not write it, and the options every protocol shares were nowhere. The page
+/// has SHARED OPTIONS and EXIT STATUS sections, and every page it (or any other page) names is
+/// one `man --dir` writes.
+#[test]
+fn finding_9_the_man_page_has_shared_options_and_exit_codes() {
+    let page = ok(&run(&["man"]));
+    assert!(
+        !page.contains(".SH EXTRA"),
+        "exit codes in a section of their own"
+    );
+    let section = |name: &str| {
+        let at = page
+            .find(&format!(".SH \"{name}\"\n"))
+            .unwrap_or_else(|| panic!("no section {name}"));
+        let rest = &page[at + 5..];
+        rest[..rest.find("\n.SH ").unwrap_or(rest.len())].to_string()
+    };
+    let exit = section("EXIT STATUS");
+    for code in [0, 1, 2, 3, 9, 10, 11, 12, 13, 129, 130, 141, 143] {
+        assert!(
+            exit.contains(&format!(".TP\n{code}\n")),
+            "exit code {code}: {exit}"
+        );
+    }
+    let shared = section("SHARED OPTIONS");
+    for opt in [
+        "\\-\\-format",
+        "\\-\\-output",
+        "\\-\\-stats",
+        "\\-\\-baud",
+        "\\-\\-record",
+        "\\-\\-id",
+        "\\-\\-count",
+        "\\-\\-lenient",
+        "\\-\\-quiet",
+        "\\-\\-reconnect",
+        "\\-\\-wide",
+    ] {
+        assert!(shared.contains(opt), "{opt} in SHARED OPTIONS");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = busnoop()
+        .args(["man", "--dir"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let written: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("busnoop.1")).unwrap(),
+        page,
+        "busnoop.1 is the page of `busnoop man`"
+    );
+    for name in &written {
+        let text = std::fs::read_to_string(dir.path().join(name)).unwrap();
+        let mut rest = text.as_str();
+        while let Some(at) = rest.find("busnoop\\-") {
+            let after = &rest[at + "busnoop\\-".len()..];
+            if let Some(end) = after.find("(1)")
+                && after[..end].chars().all(|c| c.is_ascii_alphanumeric())
+            {
+                let named = format!("busnoop-{}.1", &after[..end]);
+                assert!(
+                    written.contains(&named),
+                    "{name} names {named}: not written"
+                );
+            }
+            rest = after;
+        }
+    }
+    for p in PROTOCOLS
+        .iter()
+        .chain(&["log", "detect", "plot", "ports", "man"])
+    {
+        assert!(written.contains(&format!("busnoop-{p}.1")), "{p}");
+    }
+}
