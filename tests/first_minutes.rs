@@ -34,7 +34,54 @@ const CAPTURES: &[(&str, &[&str])] = &[
     ("futaba-session.bin", &["futaba"]),
     ("ibus-rc.bin", &["ibus"]),
     ("ibus-sensors.bin", &["ibus"]),
+    ("edgetx-MODELE24-2014-07-11.csv", &["log"]),
+    ("sport-snoop-sample.tsv", &["log"]),
 ];
+
+/// The files in `fixtures/` that are no capture: test vectors, generators' expectations, the
+/// README, tshark's text. A bare `busnoop FILE` finds no protocol in them (exit 11).
+const NOT_CAPTURES: &[&str] = &[
+    "README.md",
+    "crsf-fc-to-rx.expect.tsv",
+    "crsf-mixed.expect.tsv",
+    "crsf-rx-to-fc.expect.tsv",
+    "fport-sessions.tsv",
+    "futaba-session.tsv",
+    "ghst-mixed.expect.tsv",
+    "ibus-rc.tsv",
+    "ibus-sensors.tsv",
+    "ibus-vectors.tsv",
+    "sab.tsv",
+    "sbus-digimat-tshark.tsv",
+    "sbus.tsv",
+    "sbus_seeds_ether_tshark.txt",
+    "sport-vectors-crc-invalid.tsv",
+    "sport-vectors.tsv",
+];
+
+/// Every file in `fixtures/` is either a capture (decoded as its protocol by a bare
+/// `busnoop FILE`: [`finding_1_a_bare_file_is_detected_and_decoded`]) or listed as no capture,
+/// which a bare `busnoop FILE` refuses with exit 11: a new fixture must be placed in one list.
+#[test]
+fn a_bare_file_decodes_every_fixture_as_its_protocol() {
+    let dir = fixture("README.md").parent().unwrap().to_path_buf();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        let capture = CAPTURES.iter().any(|(c, _)| *c == name);
+        let other = NOT_CAPTURES.contains(&name.as_str());
+        assert!(
+            capture ^ other,
+            "fixtures/{name}: list it in CAPTURES (with its subcommand) or in NOT_CAPTURES"
+        );
+        if other {
+            let out = run(&[&path(&name)]);
+            let err = text(&out.stderr);
+            assert_eq!(out.status.code(), Some(11), "{name}: {err}");
+            assert!(err.contains("verdict: no known protocol"), "{name}: {err}");
+            assert!(out.stdout.is_empty(), "{name}");
+        }
+    }
+}
 
 /// Finding 1: `busnoop FILE` was "unrecognized subcommand". It detects the protocol, says on
 /// stderr what it chose and why, and decodes exactly as the subcommand would.
@@ -840,4 +887,29 @@ fn finding_9_the_man_page_has_shared_options_and_exit_codes() {
     {
         assert!(written.contains(&format!("busnoop-{p}.1")), "{p}");
     }
+}
+
+/// Finding 5 with several sources: a port that is mostly not frames of the protocol ends the
+/// run with exit code 13 after the rows, as one source does; --lenient accepts it.
+#[test]
+fn finding_5_several_sources_have_the_poor_run_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("b.bin");
+    std::fs::copy(fixture("sport-sample.bin"), &copy).unwrap();
+    let copy = copy.display().to_string();
+    let sample = path("sport-sample.bin");
+    let out = run(&["sbus", &sample, &copy, "-f", "tsv"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(13), "{err}");
+    assert!(err.contains("try: busnoop sport "), "{err}");
+    assert!(ok_or_rows(&out) > 10, "the rows are written");
+    let out = run(&["sbus", &sample, &copy, "-f", "tsv", "--lenient"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let out = run(&["sport", &sample, &copy, "-f", "tsv"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+/// The rows of a run whatever its exit code.
+fn ok_or_rows(out: &Output) -> usize {
+    text(&out.stdout).lines().count()
 }
