@@ -1,11 +1,11 @@
 //! Failures the user can meet, each with a one-line message and its own exit code.
 //!
-//! The table of exit codes is documented in README.md ("Exit codes"); keep the two in step.
+//! The table of exit codes is documented in docs/usage.md ("Exit codes") and busnoop(1); keep the two in step.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// Exit codes (README.md, "Exit codes").
+/// Exit codes (docs/usage.md, "Exit codes").
 pub mod code {
     /// Everything was read; rows may still include bad frames (see the summary line).
     pub const OK: u8 = 0;

@@ -55,7 +55,7 @@ pub enum Command {
     /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
     /// docs/wireshark.md). Wireshark runs it; by hand, `busnoop extcap --extcap-interfaces`.
     Extcap(super::extcap::ExtcapArgs),
-    /// Print the shell completion script for SHELL on standard output (see README, "Install").
+    /// Print the shell completion script for SHELL on standard output (see docs/usage.md, "Shell completions").
     Completions {
         /// The shell to complete in.
         #[arg(value_enum)]
@@ -269,7 +269,7 @@ fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
             "Keep the bytes from the wire: FILE.pcap, FILE.pcapng, FILE.bin".into(),
         ),
         ("types", "Only rows of these types (Data,BadCRC)".into()),
-        ("count", "Stop after N frames".into()),
+        ("count", "Stop after N rows".into()),
     ];
     if v.ids.is_some() {
         out.push((

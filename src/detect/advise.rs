@@ -64,7 +64,7 @@ impl ChunkReader for Tee {
 }
 
 /// Below this share of the examined bytes in valid frames of the protocol, a run of a file or
-/// stream ends with [`crate::exit::code::POOR`] (README, "Exit codes").
+/// stream ends with [`crate::exit::code::POOR`] (docs/usage.md, "Exit codes").
 pub const POOR_SHARE: f64 = 0.5;
 
 /// What to tell a user after a run of `protocol` on a file or stream.
