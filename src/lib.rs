@@ -50,6 +50,7 @@ mod exit;
 mod export;
 mod filter;
 pub mod fmt;
+pub mod modbus;
 mod numbers;
 mod pace;
 mod pairing;
