@@ -62,3 +62,8 @@ fn sbus_ether_corpus() {
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }
+
+#[test]
+fn modbus_corpus() {
+    replay("modbus", busnoop::selfcheck::modbus);
+}

@@ -183,6 +183,38 @@ pub fn frame_len(b: &[u8], dir: Dir) -> Len {
     }
 }
 
+/// Whether the whole frame `b` (CRC included) read as `dir` keeps the specification's limits
+/// on quantities and values (MODBUS Application Protocol V1.1b3 §6): a read of 1-2000 coils or
+/// 1-125 registers, a coil written as 0xFF00 or 0x0000, a byte count that fits the quantity.
+/// A slave answers a request outside them with an exception, so a master does not send one:
+/// bytes that check only by chance (one place in 65,536) mostly fail this too.
+pub fn plausible(b: &[u8], dir: Dir) -> bool {
+    let word = |i: usize| match (b.get(i), b.get(i + 1)) {
+        (Some(&h), Some(&l)) => u16::from_be_bytes([h, l]) as usize,
+        _ => 0,
+    };
+    let (Some(&fc), Some(&count_byte)) = (b.get(1), b.get(6)) else {
+        return true;
+    };
+    match (fc, dir) {
+        (1 | 2, Dir::Request) => (1..=2000).contains(&word(4)),
+        (3 | 4, Dir::Request) => (1..=125).contains(&word(4)),
+        (5, _) => matches!(word(4), 0xFF00 | 0x0000),
+        (15, Dir::Request) => {
+            (1..=1968).contains(&word(4)) && count_byte as usize == word(4).div_ceil(8)
+        }
+        (16, Dir::Request) => (1..=123).contains(&word(4)) && count_byte as usize == 2 * word(4),
+        (15, Dir::Response) => (1..=1968).contains(&word(4)),
+        (16, Dir::Response) => (1..=123).contains(&word(4)),
+        (23, Dir::Request) => {
+            (1..=125).contains(&word(4))
+                && (1..=121).contains(&word(8))
+                && b.get(10).is_some_and(|&n| n as usize == 2 * word(8))
+        }
+        _ => true,
+    }
+}
+
 /// Read Device Identification's response: 8 header bytes (address, 43, 14, read code,
 /// conformity, more follows, next object, number of objects), the objects (id, length, value),
 /// the CRC.
@@ -262,6 +294,25 @@ mod tests {
         assert_eq!(frame_len(&[1], Request), Len::Need);
         assert_eq!(frame_len(&[1, 3], Response), Len::Need);
         assert_eq!(frame_len(&[1, 99], Request), Len::No);
+    }
+
+    #[test]
+    fn plausible_quantities() {
+        use Dir::*;
+        assert!(plausible(&[1, 3, 0, 0, 0, 125, 0, 0], Request));
+        assert!(!plausible(&[1, 3, 0, 0, 0, 126, 0, 0], Request));
+        assert!(!plausible(&[1, 3, 0, 0, 0, 0, 0, 0], Request));
+        assert!(plausible(&[1, 1, 0, 0, 0x07, 0xD0, 0, 0], Request));
+        assert!(!plausible(&[1, 1, 0, 0, 0x07, 0xD1, 0, 0], Request));
+        assert!(plausible(&[1, 5, 0, 3, 0xFF, 0, 0, 0], Response));
+        assert!(!plausible(&[1, 5, 0, 3, 0x12, 0x34, 0, 0], Request));
+        assert!(plausible(&[1, 15, 0, 0, 0, 9, 2, 0, 0, 0, 0], Request));
+        assert!(!plausible(&[1, 15, 0, 0, 0, 9, 1, 0, 0, 0], Request));
+        assert!(plausible(&[1, 16, 0, 0, 0, 1, 2, 0, 0, 0, 0], Request));
+        assert!(!plausible(&[1, 16, 0, 0, 0, 2, 2, 0, 0, 0, 0], Request));
+        let rw = [1, 23, 0, 0, 0, 1, 0, 9, 0, 1, 2, 0, 7, 0, 0];
+        assert!(plausible(&rw, Request));
+        assert!(plausible(&[1, 8, 0, 0, 0, 0, 0, 0], Request));
     }
 
     #[test]

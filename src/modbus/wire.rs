@@ -29,7 +29,7 @@ use std::collections::VecDeque;
 
 use crc::{CRC_16_MODBUS, Crc, Table};
 
-use super::function::{Dir, Len, MAX_FRAME, MIN_FRAME, frame_len};
+use super::function::{Dir, Len, MAX_FRAME, MIN_FRAME, frame_len, plausible};
 use crate::row::GARBAGE_ROW_MAX;
 
 static CRC16: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_MODBUS);
@@ -116,9 +116,11 @@ struct Expect {
 
 /// What the reassembler knows of the exchange in progress (shared with the ASCII framing):
 /// the response it waits for after a request, and the master timeout.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct Expecting {
     expect: Option<Expect>,
+    /// The waiting request's bytes (CRC included).
+    req: Vec<u8>,
     /// Master timeout (µs): an echo after it is the request sent again.
     timeout: u64,
 }
@@ -127,21 +129,26 @@ impl Expecting {
     pub(super) fn new(timeout: u64) -> Self {
         Expecting {
             expect: None,
+            req: Vec::with_capacity(MAX_FRAME),
             timeout,
         }
     }
 
     /// The response waited for, and whether a frame at `time` comes after the timeout.
-    fn at(&self, time: Option<u64>) -> Option<(Expect, bool)> {
-        self.expect.map(|e| {
-            let late =
-                matches!((e.time, time), (Some(r), Some(t)) if t.saturating_sub(r) > self.timeout);
-            (e, late)
+    fn at(&self, time: Option<u64>) -> Option<Waiting<'_>> {
+        self.expect.map(|e| Waiting {
+            e,
+            late: matches!((e.time, time), (Some(r), Some(t)) if t.saturating_sub(r) > self.timeout),
+            req: &self.req,
         })
     }
 
     /// A frame was given out: after a request (not a broadcast), its response is expected.
     pub(super) fn after(&mut self, kind: Kind, frame: &[u8], time: Option<u64>) {
+        self.req.clear();
+        if kind == Kind::Request {
+            self.req.extend_from_slice(frame);
+        }
         self.expect = match kind {
             Kind::Request if frame[0] != 0 => Some(Expect {
                 addr: frame[0],
@@ -169,13 +176,11 @@ impl Expecting {
         let (req, resp) = (frame_len(b, Dir::Request), frame_len(b, Dir::Response));
         let (is_req, is_resp) = (req == Len::Known(rtu_len), resp == Len::Known(rtu_len));
         let fc = *b.get(1)?;
-        let expected = self
+        let awaited = self
             .at(time)
-            .filter(|(e, _)| e.addr == b[0] && (fc == e.fc || fc == e.fc | 0x80));
+            .is_some_and(|w| !w.late && w.e.addr == b[0] && (fc == w.e.fc || fc == w.e.fc | 0x80));
         match (is_req, is_resp) {
-            (true, true) if expected.is_some_and(|(_, late)| !late) => {
-                Some((answer_kind(fc), true))
-            }
+            (true, true) if awaited => Some((answer_kind(fc), true)),
             (true, both) => Some((Kind::Request, both)),
             (false, true) => Some((answer_kind(fc), false)),
             (false, false) => None,
@@ -203,11 +208,14 @@ pub fn response_len(req: &[u8]) -> Option<usize> {
 /// What a place in the stream holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Verdict {
-    /// A frame of `len` bytes.
+    /// A frame of `len` bytes. `weak`: found among bytes that hold no frame and outside the
+    /// specification's limits (a request for 0 registers …): it counts only if no frame within
+    /// limits starts inside it.
     Take {
         len: usize,
         kind: Kind,
         ambiguous: bool,
+        weak: bool,
     },
     /// Bytes a reading needs have not arrived yet.
     Wait,
@@ -223,18 +231,37 @@ fn answer_kind(fc: u8) -> Kind {
     }
 }
 
-/// Whether the reading of `n` bytes checks only because zero bytes follow a shorter request
-/// reading that checks (the stray-byte trap).
-fn implied(b: &[u8], n: usize, req: Len) -> bool {
+/// The response waited for as [`judge`] sees it: whether the frame comes after the master
+/// timeout, and the request's bytes (its CRC included).
+#[derive(Clone, Copy, Debug)]
+struct Waiting<'a> {
+    e: Expect,
+    late: bool,
+    req: &'a [u8],
+}
+
+/// Whether the `n`-byte response reading of `b` is the waiting request sent again: its first
+/// `m` bytes are that request (CRC included) and zero bytes fill the rest (a request followed
+/// by a turnaround byte checks as an answer one byte longer).
+fn is_retry(b: &[u8], n: usize, req: Len, waiting: &[u8]) -> bool {
     match req {
-        Len::Known(m) if m < n => crc_ok(&b[..m]) && b[m..n].iter().all(|&x| x == 0),
+        Len::Known(m) if m < n => b[..m] == *waiting && b[m..n].iter().all(|&x| x == 0),
         _ => false,
     }
 }
 
-/// Judges the place where `b` starts. `expect`: the response the pairing waits for, and
-/// whether the time since its request is past the timeout. `fin`: no more bytes will come.
-fn judge(b: &[u8], fin: bool, expect: Option<(Expect, bool)>) -> Verdict {
+/// Judges the place where `b` starts. `waiting`: the response the exchange in progress waits
+/// for. `fin`: no more bytes will come. `clean`: the place follows a frame (or starts the
+/// input); within bytes that hold no frame, a reading must also be
+/// [`plausible`](super::function::plausible) to count, so that bytes that check by chance
+/// there (one place in 65,536) rarely take a good frame's first bytes.
+///
+/// A frame followed by zero bytes checks as a longer frame too, and a frame whose CRC ends in
+/// `00` has a prefix one byte shorter that checks. So when the shorter reading checks and zero
+/// bytes follow it up to the longer one's length, both readings check, and neither CRC can
+/// tell them apart: the response is taken when one is awaited from this slave, the request
+/// otherwise (a turnaround `00` after a request, a request whose CRC ends in `00`).
+fn judge(b: &[u8], fin: bool, clean: bool, waiting: Option<Waiting<'_>>) -> Verdict {
     match b {
         [] => {
             return if fin {
@@ -256,9 +283,16 @@ fn judge(b: &[u8], fin: bool, expect: Option<(Expect, bool)>) -> Verdict {
     let (addr, fc) = (b[0], b[1]);
     let req = frame_len(b, Dir::Request);
     let resp = frame_len(b, Dir::Response);
-    let expected = expect.filter(|(e, _)| e.addr == addr && (fc == e.fc || fc == e.fc | 0x80));
-    if let Some((e, late)) = expected {
-        let want = if fc & 0x80 != 0 { Some(5) } else { e.len };
+    let expected = waiting.filter(|w| w.e.addr == addr && (fc == w.e.fc || fc == w.e.fc | 0x80));
+    let answer_awaited = expected.is_some_and(|w| !w.late);
+    // A reading of `n` bytes found among bytes that hold no frame, outside the limits.
+    let weak = |n: usize| {
+        !clean
+            && !(req == Len::Known(n) && plausible(&b[..n], Dir::Request))
+            && !(resp == Len::Known(n) && plausible(&b[..n], Dir::Response))
+    };
+    if let Some(w) = expected {
+        let want = if fc & 0x80 != 0 { Some(5) } else { w.e.len };
         if let (Some(n), Len::Known(m)) = (want, resp)
             && n == m
         {
@@ -266,9 +300,9 @@ fn judge(b: &[u8], fin: bool, expect: Option<(Expect, bool)>) -> Verdict {
                 if !fin {
                     return Verdict::Wait;
                 }
-            } else if crc_ok(&b[..n]) && !implied(b, n, req) {
+            } else if crc_ok(&b[..n]) && !is_retry(b, n, req, w.req) {
                 let both = req == Len::Known(n);
-                let kind = if both && late {
+                let kind = if both && w.late {
                     Kind::Request
                 } else {
                     answer_kind(fc)
@@ -277,17 +311,19 @@ fn judge(b: &[u8], fin: bool, expect: Option<(Expect, bool)>) -> Verdict {
                     len: n,
                     kind,
                     ambiguous: both,
+                    weak: weak(n),
                 };
             }
         }
     }
-    let mut lens = [req, resp].map(|l| match l {
+    let known = |l: Len| match l {
         Len::Known(n) => n,
         _ => usize::MAX,
-    });
-    lens.sort_unstable();
-    for (i, &n) in lens.iter().enumerate() {
-        if n == usize::MAX || (i == 1 && n == lens[0]) {
+    };
+    let (r, a) = (known(req), known(resp));
+    let (short, long) = (r.min(a), r.max(a));
+    for (i, n) in [short, long].into_iter().enumerate() {
+        if n == usize::MAX || (i == 1 && long == short) {
             continue;
         }
         if n > b.len() {
@@ -296,19 +332,45 @@ fn judge(b: &[u8], fin: bool, expect: Option<(Expect, bool)>) -> Verdict {
             }
             return Verdict::Wait;
         }
-        if crc_ok(&b[..n]) {
-            let (is_req, is_resp) = (req == Len::Known(n), resp == Len::Known(n));
-            let kind = match (is_req, is_resp) {
-                (true, true) if expected.is_some_and(|(_, late)| !late) => answer_kind(fc),
-                (true, _) => Kind::Request,
-                _ => answer_kind(fc),
-            };
-            return Verdict::Take {
-                len: n,
-                kind,
-                ambiguous: is_req && is_resp,
-            };
+        if !crc_ok(&b[..n]) {
+            continue;
         }
+        if i == 0 && long != usize::MAX && long != short {
+            let end = long.min(b.len());
+            if b[n..end].iter().all(|&x| x == 0) {
+                if long > b.len() {
+                    if !fin {
+                        return Verdict::Wait;
+                    }
+                } else {
+                    // Both check: see above.
+                    let retry = expected.is_some_and(|w| is_retry(b, a, req, w.req));
+                    let (len, kind) = if answer_awaited && !retry {
+                        (a, answer_kind(fc))
+                    } else {
+                        (r, Kind::Request)
+                    };
+                    return Verdict::Take {
+                        len,
+                        kind,
+                        ambiguous: true,
+                        weak: weak(len),
+                    };
+                }
+            }
+        }
+        let (is_req, is_resp) = (r == n, a == n);
+        let kind = match (is_req, is_resp) {
+            (true, true) if answer_awaited => answer_kind(fc),
+            (true, _) => Kind::Request,
+            _ => answer_kind(fc),
+        };
+        return Verdict::Take {
+            len: n,
+            kind,
+            ambiguous: is_req && is_resp,
+            weak: weak(n),
+        };
     }
     if !fin && (req == Len::Need || resp == Len::Need) {
         return Verdict::Wait;
@@ -353,21 +415,32 @@ pub fn classify(
     let n = j.len();
     ok.clear();
     ok.resize(n + 1, None);
-    // ok[i]: a run of bad frames from i reaches n; (frame length, strays after it).
+    // ok[i]: a run of bad frames from i reaches n: (frame length, strays after it, strays in
+    // the rest of the run); the fewest strays win, then the fewest.
+    let mut strays = vec![0usize; n + 1];
     ok[n] = Some((0, 0));
     for i in (0..n).rev() {
-        let ls = lengths(&j[i..]);
-        'place: for s in 0..=STRAY_MAX {
-            for l in ls.into_iter().flatten().flatten() {
+        let mut best: Option<(usize, u16, u8)> = None;
+        for l in lengths(&j[i..]).into_iter().flatten().flatten() {
+            for s in 0..=STRAY_MAX {
                 let next = i + l + s;
                 if next <= n && ok[next].is_some() {
-                    ok[i] = Some((l as u16, s as u8));
-                    break 'place;
+                    let cost = s + strays[next];
+                    if best.is_none_or(|b| cost < b.0) {
+                        best = Some((cost, l as u16, s as u8));
+                    }
                 }
             }
         }
+        if let Some((cost, l, s)) = best {
+            ok[i] = Some((l, s));
+            strays[i] = cost;
+        }
     }
-    let run = (0..n).find(|&i| ok[i].is_some());
+    // The run that leaves the fewest bytes outside frames (garbage before it and strays in it).
+    let run = (0..n)
+        .filter(|&i| ok[i].is_some())
+        .min_by_key(|&i| (i + strays[i], i));
     let head = run.unwrap_or(n);
     cut_or_garbage(&j[..head], at_end && run.is_none(), out);
     let mut i = head;
@@ -502,7 +575,27 @@ impl Framer {
             let time = self.time_at(offset);
             let expect = self.expect.at(time);
             let b = &self.buf[self.head + at..];
-            match judge(b, fin, expect) {
+            let mut verdict = judge(b, fin, at == 0, expect);
+            if let Verdict::Take {
+                len, weak: true, ..
+            } = verdict
+            {
+                // A frame within limits that starts inside it wins (or is still to be seen).
+                for r in 1..len {
+                    match judge(&b[r..], fin, false, expect) {
+                        Verdict::Take { weak: false, .. } => {
+                            verdict = Verdict::NotStart;
+                            break;
+                        }
+                        Verdict::Wait => {
+                            verdict = Verdict::Wait;
+                            break;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            match verdict {
                 Verdict::Wait => return,
                 Verdict::NotStart => {
                     self.scan += 1;
@@ -519,6 +612,7 @@ impl Framer {
                     len,
                     kind,
                     ambiguous,
+                    ..
                 } => {
                     if at > 0 {
                         self.junk(at, false, emit);
