@@ -120,6 +120,9 @@ impl AsciiFramer {
 
     /// Gives out `text` as broken bytes.
     fn give(&mut self, what: Broken, emit: &mut impl FnMut(&Event<'_>)) {
+        if what == Broken::BadCrc {
+            self.expect.broken(&self.decoded);
+        }
         if !self.text.is_empty() {
             emit(&Event::Junk(Junk {
                 bytes: &self.text,

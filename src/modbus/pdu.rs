@@ -593,3 +593,25 @@ fn object_name(id: u8) -> &'static str {
         _ => "",
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parts_reuse_their_allocation() {
+        let map = RegisterMap::default();
+        let mut n = Nums::default();
+        for i in 0..40 {
+            n.uint("x", i);
+        }
+        assert_eq!(n.with_parts(&map, |p| p.len()), 40);
+        assert!(n.cache.capacity() >= 40, "the parts' buffer is kept");
+        let cap = n.cache.capacity();
+        n.clear();
+        n.uint("start", 7);
+        let text = n.with_parts(&map, |p| format!("{}={}", p[0].name, p[0].text));
+        assert_eq!(text, "start=7");
+        assert_eq!(n.cache.capacity(), cap);
+    }
+}

@@ -522,7 +522,7 @@ mod props {
                 .unwrap_or(48),
         );
         if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
-            c.rng_seed = proptest::test_runner::RngSeed::Fixed(0x0D_B05_0028);
+            c.rng_seed = proptest::test_runner::RngSeed::Fixed(0x0DB0_5028);
         }
         c
     }
@@ -587,4 +587,160 @@ mod props {
             }
         }
     }
+}
+
+#[test]
+fn the_register_map_names_values_with_units() {
+    let map = RegisterMap::parse(
+        r#"
+[modbus.slaves]
+Boiler = 1
+[modbus.registers]
+"Boiler/100" = { name = "Flow temperature", type = "i16", scale = 0.1, unit = "°C" }
+"1/101" = { name = "Power", type = "f32", order = "CDAB", unit = "kW" }
+"*/200" = "Mode"
+"#,
+    )
+    .unwrap();
+    let opts = Options {
+        map,
+        ..Options::default()
+    };
+    // 100..104: -1.5 °C, 123.456 kW (low register first), an unnamed register, one half of a
+    // value that does not fit
+    let req = f(&[1, 3, 0, 100, 0, 4]);
+    let resp = f(&[1, 3, 8, 0xFF, 0xF1, 0xE9, 0x79, 0x42, 0xF6, 0x00, 0x07]);
+    let rows = decode(&opts, &[([req, resp].concat(), None)]);
+    let r = &rows[1];
+    assert_eq!(r.device, "Boiler");
+    assert_eq!(
+        r.parts,
+        [
+            ("Flow temperature".into(), "°C".into(), "-1.5".into()),
+            ("Power".into(), "kW".into(), "123.456".into()),
+            ("R103".into(), "".into(), "7".into()),
+        ]
+    );
+    assert_eq!(r.data, "Flow temperature=-1.5 °C Power=123.456 kW R103=7");
+    assert_eq!(r.extra[0], "°C", "the Unit column: the first value's");
+    // a read that ends in the middle of the f32: its first register stays raw
+    let req = f(&[1, 3, 0, 100, 0, 2]);
+    let resp = f(&[1, 3, 4, 0, 10, 0xE9, 0x79]);
+    let rows = decode(&opts, &[([req, resp].concat(), None)]);
+    assert_eq!(rows[1].data, "Flow temperature=1.0 °C R101=59769");
+    // every slave's register 200, in a write too; another slave has no name
+    let w = f(&[9, 6, 0, 200, 0, 3]);
+    let rows = decode(&opts, &[([w.clone(), w].concat(), None)]);
+    assert_eq!(rows[0].data, "start=200 count=1 Mode=3");
+    assert_eq!(rows[1].data, "Mode=3");
+    assert_eq!(rows[1].device, "");
+    // input registers: the same names (no table given)
+    let req = f(&[1, 4, 0, 100, 0, 1]);
+    let resp = f(&[1, 4, 2, 0, 5]);
+    let rows = decode(&opts, &[([req, resp].concat(), None)]);
+    assert_eq!(rows[1].data, "Flow temperature=0.5 °C");
+}
+
+#[test]
+fn timeouts_late_answers_and_statistics() {
+    let opts = Options {
+        timeout_ms: 200,
+        ..Options::default()
+    };
+    let req = f(&[3, 4, 0, 0, 0, 1]);
+    let resp = f(&[3, 4, 2, 0, 9]);
+    let exc = f(&[3, 0x84, 2]);
+    let segs = vec![
+        (req.clone(), Some(0)),
+        (resp.clone(), Some(12_000)),
+        (req.clone(), Some(100_000)),
+        // no answer: the deadline passes before the next request
+        (req.clone(), Some(500_000)),
+        (resp.clone(), Some(900_000)), // late
+        (req.clone(), Some(1_000_000)),
+        (exc, Some(1_020_000)),
+        (req.clone(), Some(2_000_000)),
+    ];
+    let mut d = ModbusDecoder::new(opts.clone());
+    let mut out = Collected::default();
+    for (b, t) in &segs {
+        crate::protocol::Decoder::push(&mut d, b, *t, &mut out).unwrap();
+    }
+    crate::protocol::Decoder::idle(&mut d, 2_100_000, &mut out).unwrap();
+    crate::protocol::Decoder::idle(&mut d, 2_300_000, &mut out).unwrap();
+    crate::protocol::Decoder::finish(&mut d, &mut out).unwrap();
+    let kinds: Vec<&str> = out.rows.iter().map(|r| r.kind.as_str()).collect();
+    assert_eq!(
+        kinds,
+        [
+            "Request",
+            "Response",
+            "Request",
+            "Timeout",
+            "Request",
+            "Timeout",
+            "Response",
+            "Request",
+            "Exception",
+            "Request",
+            "Timeout"
+        ]
+    );
+    let r = &out.rows;
+    assert_eq!(r[1].extra[1], "12.0", "response time");
+    assert_eq!(r[3].micros, Some(300_000), "at the deadline");
+    assert_eq!(r[3].extra[2], "no answer within 200 ms");
+    assert_eq!(r[3].data, "start=0 count=1");
+    assert!(r[4].extra[2].starts_with("retry 1, 400.0 ms"), "{:?}", r[4]);
+    assert_eq!(r[6].extra[2], "late: after the 200 ms timeout");
+    assert_eq!(r[6].extra[1], "400.0");
+    assert_eq!(r[10].micros, Some(2_200_000), "reported on an idle line");
+    let st = d.function_stats(3, 4).unwrap();
+    assert_eq!(
+        (
+            st.requests,
+            st.responses,
+            st.exception_total(),
+            st.retries,
+            st.timeouts,
+            st.late
+        ),
+        (5, 2, 1, 1, 3, 1)
+    );
+    assert_eq!(st.times.count, 3);
+    let report = crate::protocol::Decoder::stats(&d).to_string();
+    assert!(
+        report.starts_with("Modbus RTU, 19200 8E1, master timeout 200 ms"),
+        "{report}"
+    );
+    assert!(report.contains("0x04 Read Input Registers"), "{report}");
+    assert!(
+        report.contains("exceptions: 2 Illegal Data Address ×1"),
+        "{report}"
+    );
+    let problems = crate::protocol::Decoder::problems(&d).line().unwrap();
+    assert_eq!(
+        problems,
+        "Modbus: 3 timeouts, 1 retry, 1 exception in 8 valid frames"
+    );
+}
+
+#[test]
+fn bad_answers_spoil_the_timeout_and_count_for_their_pair() {
+    let req = f(&[5, 3, 0, 0, 0, 1]);
+    let mut bad = f(&[5, 3, 2, 0, 1]);
+    bad[4] ^= 1;
+    let resp = f(&[5, 3, 2, 0, 1]);
+    let rows = decode(
+        &Options::default(),
+        &[([req.clone(), resp, req.clone(), bad, req].concat(), None)],
+    );
+    let kinds: Vec<&str> = rows.iter().map(|r| r.kind.as_str()).collect();
+    assert_eq!(
+        kinds,
+        ["Request", "Response", "Request", "BadCRC", "Request"]
+    );
+    assert_eq!((rows[3].id, rows[3].sensor_no.as_str()), (Some(5), "0x03"));
+    assert!(rows[3].parts.is_empty());
+    assert_eq!(rows[3].class, Class::Error);
 }

@@ -164,6 +164,25 @@ impl Expecting {
         self.expect = None;
     }
 
+    /// Whether `junk` holds the awaited answer's slave and function: a broken answer went by.
+    fn answer_in(&self, junk: &[u8]) -> bool {
+        self.expect.is_some_and(|e| {
+            junk.windows(2)
+                .any(|w| w[0] == e.addr && (w[1] == e.fc || w[1] == e.fc | 0x80))
+        })
+    }
+
+    /// Broken bytes went by: if they begin as the awaited answer (its slave and function), they
+    /// were that answer, broken, and nothing is awaited any more (as the pairing has it).
+    pub(super) fn broken(&mut self, bytes: &[u8]) {
+        if let (Some(e), [a, f, ..]) = (self.expect, bytes)
+            && *a == e.addr
+            && (*f == e.fc || *f == e.fc | 0x80)
+        {
+            self.expect = None;
+        }
+    }
+
     /// What a whole frame `b` (its check included, `rtu_len` bytes as an RTU frame) at `time`
     /// is, by its readings and the exchange in progress: `None` when no reading has its
     /// length. The bool: both readings had it.
@@ -287,9 +306,9 @@ fn judge(b: &[u8], fin: bool, clean: bool, waiting: Option<Waiting<'_>>) -> Verd
     let answer_awaited = expected.is_some_and(|w| !w.late);
     // A reading of `n` bytes found among bytes that hold no frame, outside the limits.
     let weak = |n: usize| {
-        !clean
-            && !(req == Len::Known(n) && plausible(&b[..n], Dir::Request))
-            && !(resp == Len::Known(n) && plausible(&b[..n], Dir::Response))
+        let within = (req == Len::Known(n) && plausible(&b[..n], Dir::Request))
+            || (resp == Len::Known(n) && plausible(&b[..n], Dir::Response));
+        !clean && !within
     };
     if let Some(w) = expected {
         let want = if fc & 0x80 != 0 { Some(5) } else { w.e.len };
@@ -573,7 +592,13 @@ impl Framer {
             }
             let offset = self.base + (self.head + at) as u64;
             let time = self.time_at(offset);
-            let expect = self.expect.at(time);
+            // Bytes holding no frame that hold the awaited answer's header: it came, broken.
+            let junk = &self.buf[self.head..self.head + at];
+            let expect = if self.expect.answer_in(junk) {
+                None
+            } else {
+                self.expect.at(time)
+            };
             let b = &self.buf[self.head + at..];
             let mut verdict = judge(b, fin, at == 0, expect);
             if let Verdict::Take {
@@ -666,6 +691,9 @@ impl Framer {
                     offset,
                     time,
                 }));
+                if what != Broken::Garbage {
+                    self.expect.broken(bytes);
+                }
                 at += m;
             }
         }
