@@ -8,6 +8,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sport::PROTOCOL,
     &crate::sbus::PROTOCOL,
     &crate::sab::PROTOCOL,
+    &crate::modbus::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.

@@ -23,6 +23,9 @@ pub struct AsciiFramer {
     offset: u64,
     decoded: Vec<u8>,
     expect: Expecting,
+    /// A silence this long (µs) ends the text held; the time of the latest bytes.
+    settle: u64,
+    last: Option<u64>,
 }
 
 /// The value of a hex digit.
@@ -64,23 +67,64 @@ impl AsciiFramer {
             offset: 0,
             decoded: Vec::with_capacity(256),
             expect: Expecting::new(timeout),
+            settle: super::wire::SETTLE_MIN,
+            last: None,
         }
     }
 
-    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
-        for &b in data {
-            self.byte(b, time, emit);
-            self.offset += 1;
-        }
+    /// A framer whose held text ends after a silence of `settle` µs (see
+    /// [`super::wire::Framer::settling_after`]).
+    pub fn settling_after(mut self, settle: u64) -> Self {
+        self.settle = settle.max(super::wire::SETTLE_MIN);
+        self
     }
 
-    pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+    /// The text held after a settling silence: a cut frame or garbage.
+    fn settle(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         let what = if self.in_frame {
             Broken::Truncated
         } else {
             Broken::Garbage
         };
         self.give(what, emit);
+        self.in_frame = false;
+    }
+
+    /// Time passed on a live line without bytes.
+    pub fn idle(&mut self, now: u64, emit: &mut impl FnMut(&Event<'_>)) {
+        if self
+            .last
+            .is_some_and(|last| now > last.saturating_add(self.settle))
+        {
+            self.settle(emit);
+        }
+    }
+
+    pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if data.is_empty() {
+            return;
+        }
+        if let (Some(t), Some(last)) = (time, self.last)
+            && t > last.saturating_add(self.settle)
+        {
+            self.settle(emit);
+        }
+        if time.is_some() {
+            self.last = time;
+        }
+        for &b in data {
+            self.byte(b, time, emit);
+            self.offset += 1;
+        }
+    }
+
+    /// The arrival time of the first byte held (a frame in progress, or garbage).
+    pub fn held_since(&self) -> Option<u64> {
+        (!self.text.is_empty()).then_some(self.start.1).flatten()
+    }
+
+    pub fn finish(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        self.settle(emit);
         self.expect.forget();
     }
 

@@ -11,8 +11,8 @@ use super::{COLUMNS, Framing, Options};
 use crate::fmt::{hex_0x, push_fixed, push_hex};
 use crate::numbers::push_uint;
 use crate::pairing::Open;
-use crate::protocol::{Decoder, Parity};
-use crate::row::{self, Class, Latch, Parts, Row, RowOut, RowResult};
+use crate::protocol::{Decoder, untimed_micros};
+use crate::row::{self, Class, Latch, Parts, Row, RowOut, RowResult, Unframed};
 use crate::stats::{Problems, Report};
 
 enum Framers {
@@ -41,9 +41,13 @@ struct Core {
 impl ModbusDecoder {
     pub fn new(opts: Options) -> Self {
         let timeout = opts.timeout_ms.saturating_mul(1000);
+        // 40 characters of silence (at least 100 ms) settle the bytes held.
+        let settle = untimed_micros(40, opts.line.bits_per_char(), opts.line.baud);
         let framer = match opts.framing {
-            Framing::Rtu => Framers::Rtu(Box::new(Framer::new(timeout))),
-            Framing::Ascii => Framers::Ascii(Box::new(AsciiFramer::new(timeout))),
+            Framing::Rtu => Framers::Rtu(Box::new(Framer::new(timeout).settling_after(settle))),
+            Framing::Ascii => {
+                Framers::Ascii(Box::new(AsciiFramer::new(timeout).settling_after(settle)))
+            }
         };
         ModbusDecoder {
             framer,
@@ -70,21 +74,32 @@ impl ModbusDecoder {
         self.core.table.get(slave, function)
     }
 
+    /// Feeds bytes (`Some`), a silence until a time (`Err`), or the end (`None`).
     fn feed(&mut self, data: Option<(&[u8], Option<u64>)>, out: &mut dyn RowOut) -> RowResult {
-        let core = &mut self.core;
-        let mut latch = Latch::new(out);
-        let mut emit = |ev: &Event<'_>| {
-            if !latch.stopped() {
-                let _ = core.event(ev, &mut latch);
+        self.feed_event(data.ok_or(None), out)
+    }
+
+    fn feed_event(
+        &mut self,
+        what: Result<(&[u8], Option<u64>), Option<u64>>,
+        out: &mut dyn RowOut,
+    ) -> RowResult {
+        let (core, framer) = (&mut self.core, &mut self.framer);
+        Latch::with(out, |latch| {
+            let mut emit = |ev: &Event<'_>| {
+                if !latch.stopped() {
+                    let _ = core.event(ev, latch);
+                }
+            };
+            match (framer, what) {
+                (Framers::Rtu(f), Ok((d, t))) => f.push(d, t, &mut emit),
+                (Framers::Rtu(f), Err(Some(now))) => f.idle(now, &mut emit),
+                (Framers::Rtu(f), Err(None)) => f.finish(&mut emit),
+                (Framers::Ascii(f), Ok((d, t))) => f.push(d, t, &mut emit),
+                (Framers::Ascii(f), Err(Some(now))) => f.idle(now, &mut emit),
+                (Framers::Ascii(f), Err(None)) => f.finish(&mut emit),
             }
-        };
-        match (&mut self.framer, data) {
-            (Framers::Rtu(f), Some((d, t))) => f.push(d, t, &mut emit),
-            (Framers::Rtu(f), None) => f.finish(&mut emit),
-            (Framers::Ascii(f), Some((d, t))) => f.push(d, t, &mut emit),
-            (Framers::Ascii(f), None) => f.finish(&mut emit),
-        }
-        latch.result()
+        })
     }
 }
 
@@ -105,7 +120,7 @@ fn header(b: &[u8]) -> Option<(u8, u8)> {
 
 impl Core {
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
-        time.unwrap_or_else(|| offset_micros(offset, self.bits, self.opts.line.baud.max(1)))
+        time.unwrap_or_else(|| untimed_micros(offset, self.bits, self.opts.line.baud))
     }
 
     fn event(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) -> RowResult {
@@ -293,21 +308,28 @@ impl Core {
         let data = c.data.as_str();
         let dev = device(opts, Some(slave));
         let fc = fc & 0x7F;
+        let frame = Unframed {
+            bytes: f.pdu,
+            bad_check: None,
+        };
         c.nums.with_parts(&opts.map, |parts| {
-            out.row(&Row {
-                stamp: 0,
-                micros: Some(t),
-                id: Some(slave as u32),
-                device: dev,
-                kind,
-                class,
-                sensor_no: hex_0x(fc),
-                sensor: function::name(fc),
-                data,
-                extra: &extra,
-                parts: Parts::List(parts),
-                raw: f.bytes,
-            })
+            out.row_unframed(
+                &Row {
+                    stamp: 0,
+                    micros: Some(t),
+                    id: Some(slave as u32),
+                    device: dev,
+                    kind,
+                    class,
+                    sensor_no: hex_0x(fc),
+                    sensor: function::name(fc),
+                    data,
+                    extra: &extra,
+                    parts: Parts::List(parts),
+                    raw: f.bytes,
+                },
+                &frame,
+            )
         })
     }
 
@@ -399,22 +421,6 @@ impl Core {
     }
 }
 
-/// The time of byte `offset` on a line of `baud` with `bits` per character (sources without
-/// times), in µs.
-fn offset_micros(offset: u64, bits: u32, baud: u32) -> u64 {
-    (offset as u128 * bits as u128 * 1_000_000 / baud as u128).min(u64::MAX as u128) as u64
-}
-
-/// `19200 8E1`.
-fn line_text(l: &crate::protocol::Line) -> String {
-    let p = match l.parity {
-        Parity::None => 'N',
-        Parity::Even => 'E',
-        Parity::Odd => 'O',
-    };
-    format!("{} {}{}{}", l.baud, l.data_bits, p, l.stop_bits)
-}
-
 impl Decoder for ModbusDecoder {
     fn columns(&self) -> &'static [&'static str] {
         COLUMNS
@@ -425,7 +431,15 @@ impl Decoder for ModbusDecoder {
     }
 
     fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
-        self.core.expire(now, out)
+        self.feed_event(Err(Some(now)), out)?;
+        // Bytes held since before `now` (a long answer still arriving) become rows no earlier
+        // than their first byte: a request's deadline is judged at that time, as a replay of
+        // the same bytes judges it.
+        let held = match &self.framer {
+            Framers::Rtu(f) => f.held_since(),
+            Framers::Ascii(f) => f.held_since(),
+        };
+        self.core.expire(held.map_or(now, |h| h.min(now)), out)
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
@@ -445,8 +459,9 @@ impl Decoder for ModbusDecoder {
             Framing::Ascii => "ASCII",
         };
         let head = format!(
-            "Modbus {framing}, {}, master timeout {} ms",
-            line_text(&c.opts.line),
+            "Modbus {framing}, {} {}, master timeout {} ms",
+            c.opts.line.baud,
+            c.opts.line.format(),
             c.pairing.timeout / 1000
         );
         stats::report(head, &c.table, &c.totals, |s| {
@@ -461,18 +476,5 @@ impl Decoder for ModbusDecoder {
     fn no_frames_hint(&self) -> &'static str {
         "check the baud rate and parity (Modbus defaults to 19200 8E1; 9600 8N1 is common) and \
          that the adapter listens to A/B of the RS-485 pair"
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::offset_micros;
-
-    #[test]
-    fn millis_from_bits_per_character() {
-        // 8E1 at 19200: 11 bits a byte, 572.9 µs
-        assert_eq!(offset_micros(1, 11, 19_200), 572);
-        assert_eq!(offset_micros(19_200, 11, 19_200), 11_000_000);
-        assert_eq!(offset_micros(u64::MAX, 11, 1), u64::MAX);
     }
 }

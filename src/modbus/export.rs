@@ -14,6 +14,8 @@
 //!   dissector claims (the export adds busnoop's verdict as a packet comment).
 
 use crate::pcap::write::udp4_packet;
+use crate::protocol::Wrap;
+use crate::row::{Row, Unframed};
 
 /// The Modbus/TCP and Modbus/UDP port.
 pub const PORT: u16 = 502;
@@ -86,6 +88,25 @@ impl ModbusWrap {
             Role::Request => udp4_packet(out, master, slave, p),
             _ => udp4_packet(out, slave, master, p),
         }
+    }
+}
+
+impl Wrap for ModbusWrap {
+    /// A row of the table: `Request`, `Response` and `Exception` rows are frames (their address
+    /// and PDU as the decoder hands them on, or the RTU bytes without their CRC), everything
+    /// else the bytes as they were.
+    fn packet(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>, out: &mut Vec<u8>) {
+        let role = match row.kind {
+            "Request" => Role::Request,
+            "Response" | "Exception" => Role::Answer,
+            _ => Role::Broken,
+        };
+        let frame = match (role, unframed) {
+            (Role::Broken, _) => row.raw,
+            (_, Some(u)) => u.bytes,
+            (_, None) => &row.raw[..row.raw.len().saturating_sub(2)],
+        };
+        ModbusWrap::packet(self, role, frame, out);
     }
 }
 

@@ -230,17 +230,51 @@ pub struct RegisterMap {
 /// The slave key of registers that apply to every slave.
 const EVERY: u8 = 255;
 
+/// A mistake in the map: the table (`slaves` or `registers`), the entry, what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MapError {
+    pub table: &'static str,
+    pub entry: Option<String>,
+    pub what: String,
+}
+
+impl MapError {
+    fn new(table: &'static str, entry: Option<&str>, what: impl Into<String>) -> Self {
+        MapError {
+            table,
+            entry: entry.map(str::to_owned),
+            what: what.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for MapError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[modbus.{}] ", self.table)?;
+        if let Some(e) = &self.entry {
+            write!(f, "{e:?}: ")?;
+        }
+        f.write_str(&self.what)
+    }
+}
+
 impl RegisterMap {
     /// A map of these slaves and registers; names must be unique per slave (they become the
     /// keys of a row's numbers) and an address may be named once per slave and table.
-    pub fn new(slaves: Vec<(String, u8)>, registers: Vec<Register>) -> Result<Self, String> {
+    pub fn new(slaves: Vec<(String, u8)>, registers: Vec<Register>) -> Result<Self, MapError> {
         let mut map = RegisterMap {
             slaves,
             registers: Vec::new(),
             index: BTreeMap::new(),
         };
         for r in registers {
-            map.add(r)?;
+            let key = format!(
+                "{}/{}",
+                r.slave.map_or("*".to_owned(), |s| s.to_string()),
+                r.address
+            );
+            map.add(r)
+                .map_err(|e| MapError::new("registers", Some(&key), e))?;
         }
         Ok(map)
     }
@@ -326,32 +360,35 @@ impl RegisterMap {
     /// Reads the map from the `[modbus]` table of a project file: its `slaves` (name =
     /// address) and `registers` ("SLAVE/ADDRESS" = a table or a name). Other keys of the
     /// table are not the map's and are left alone.
-    pub fn from_toml(section: &toml::Value) -> Result<Self, String> {
-        let table = section
-            .as_table()
-            .ok_or("[modbus] must be a table".to_owned())?;
+    pub fn from_toml(section: &toml::Table) -> Result<Self, MapError> {
         let mut slaves = Vec::new();
-        if let Some(s) = table.get("slaves") {
-            let s = s
-                .as_table()
-                .ok_or("[modbus.slaves] must be a table of NAME = ADDRESS".to_owned())?;
+        if let Some(s) = section.get("slaves") {
+            let s = s.as_table().ok_or(MapError::new(
+                "slaves",
+                None,
+                "expected a table of NAME = ADDRESS",
+            ))?;
             for (name, v) in s {
-                let addr = v
-                    .as_integer()
-                    .filter(|a| (1..=247).contains(a))
-                    .ok_or(format!(
-                        "[modbus.slaves] {name:?}: the address must be a number from 1 to 247"
-                    ))?;
+                let addr =
+                    v.as_integer()
+                        .filter(|a| (1..=247).contains(a))
+                        .ok_or(MapError::new(
+                            "slaves",
+                            Some(name),
+                            "the address must be a number from 1 to 247",
+                        ))?;
                 slaves.push((name.clone(), addr as u8));
             }
         }
         let mut registers = Vec::new();
-        if let Some(r) = table.get("registers") {
-            let r = r.as_table().ok_or(
-                "[modbus.registers] must be a table of \"SLAVE/ADDRESS\" = { name = … }".to_owned(),
-            )?;
+        if let Some(r) = section.get("registers") {
+            let r = r.as_table().ok_or(MapError::new(
+                "registers",
+                None,
+                "expected a table of \"SLAVE/ADDRESS\" = { name = … }",
+            ))?;
             for (key, v) in r {
-                let at = |e: String| format!("[modbus.registers] {key:?}: {e}");
+                let at = |e: String| MapError::new("registers", Some(key), e);
                 let (slave, address) = parse_key(key, &slaves).map_err(at)?;
                 registers.push(parse_entry(slave, address, v).map_err(at)?);
             }
@@ -363,7 +400,8 @@ impl RegisterMap {
     pub fn parse(text: &str) -> Result<Self, String> {
         let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| e.to_string())?;
         match doc.get("modbus") {
-            Some(m) => Self::from_toml(m),
+            Some(toml::Value::Table(m)) => Self::from_toml(m).map_err(|e| e.to_string()),
+            Some(_) => Err("[modbus] must be a table".into()),
             None => Ok(RegisterMap::default()),
         }
     }

@@ -105,7 +105,7 @@ pub fn report(head: String, table: &Table, t: &Totals, name: impl Fn(u8) -> Stri
     let columns = [
         Column::right("ID", 3),
         Column::left("Device", 14).gap(2),
-        Column::left("Function", 30).gap(2),
+        Column::left("Function", 35).gap(2),
         Column::right("Requests", 8),
         Column::right("Response", 8),
         Column::right("Except", 6),

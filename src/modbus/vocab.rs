@@ -1,12 +1,13 @@
 //! What a Modbus table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab, hex_digits};
 use crate::row::kind;
 
 /// Slave addresses 0-247 (0: broadcast); the Sensor column names the function, Sensor # is its
-/// code in hex (`0x03`, the function an exception answers included).
+/// code in hex (`0x03`, the function an exception answers included). Registers and coils are
+/// numbers named by their wire address (`R100`, `C7`), which `--sensor` takes too.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=247,
+    ids: Some(0..=247),
     id_name: "slave address",
     id_hint,
     types: &[
@@ -24,7 +25,8 @@ pub const VOCAB: Vocab = Vocab {
     polls: false,
     keepalives: false,
     sensors,
-    sensor_no_text: "shows function codes in hex (0x03; 03 and 3 work too)",
+    sensor_no_text: "shows function codes in hex (0x03; 03 and 3 work too); registers and coils \
+                     are named by their wire address (R100, C7)",
     sensor_no,
     sensor_no_hex: true,
     devices: None,
@@ -36,21 +38,44 @@ fn id_hint(id: u32) -> Option<String> {
         .then(|| "addresses 248-255 are reserved; slaves are 1-247 (0 is broadcast)".to_owned())
 }
 
-/// Every function name of the Sensor column.
-fn sensors() -> Vec<String> {
+/// Every function with the names of the numbers its rows carry (registers and coils aside).
+fn sensors() -> Vec<Sensor> {
     super::function::PUBLIC
         .iter()
-        .map(|&fc| super::function::name(fc).to_owned())
+        .map(|&fc| Sensor {
+            column: super::function::name(fc).to_owned(),
+            parts: match fc {
+                1..=4 | 15 | 16 => vec!["start".into(), "count".into()],
+                5 | 6 | 24 => vec!["start".into(), "count".into()],
+                7 => vec!["status".into()],
+                8 => vec!["sub".into(), "data".into()],
+                11 | 12 => vec!["status".into(), "events".into(), "messages".into()],
+                22 => vec!["start".into(), "and".into(), "or".into()],
+                23 => ["start", "count", "write_start", "write_count"]
+                    .map(String::from)
+                    .to_vec(),
+                43 => vec!["read_code".into(), "object".into()],
+                _ => Vec::new(),
+            },
+        })
+        .chain(std::iter::once(Sensor {
+            column: "Exception".into(),
+            parts: vec!["code".into()],
+        }))
         .collect()
 }
 
-/// A function code in hex, with or without `0x` (`03`, `0x2B`).
+/// A function code in hex (`03`, `0x2B`), or a register or coil by wire address (`R100`, `C7`,
+/// `R+0` of an unpaired response).
 fn sensor_no(s: &str) -> bool {
-    let h = s
-        .strip_prefix("0x")
-        .or_else(|| s.strip_prefix("0X"))
-        .unwrap_or(s);
-    !h.is_empty() && h.len() <= 2 && h.bytes().all(|b| b.is_ascii_hexdigit())
+    if hex_digits(s, 2) {
+        return true;
+    }
+    let Some(rest) = s.strip_prefix(['R', 'r', 'C', 'c']) else {
+        return false;
+    };
+    let rest = rest.strip_prefix('+').unwrap_or(rest);
+    !rest.is_empty() && rest.len() <= 5 && rest.bytes().all(|b| b.is_ascii_digit())
 }
 
 #[cfg(test)]
@@ -59,8 +84,14 @@ mod tests {
 
     #[test]
     fn names_and_codes() {
-        assert!(sensors().iter().any(|s| s == "Read Holding Registers"));
+        assert!(
+            sensors()
+                .iter()
+                .any(|s| s.column == "Read Holding Registers")
+        );
         assert!(sensor_no("0x03") && sensor_no("2B") && !sensor_no("0x100"));
+        assert!(sensor_no("R100") && sensor_no("c7") && sensor_no("R+0"));
+        assert!(!sensor_no("R") && !sensor_no("Rx1") && !sensor_no("Flow"));
         assert!(id_hint(250).is_some() && id_hint(3).is_none());
     }
 }

@@ -21,9 +21,12 @@
 //!
 //! Decisions depend only on the bytes and their times, never on how they were split into
 //! chunks: a place is judged when every byte its readings need has arrived (or the input
-//! ended). Times are a hint only: a frame with the same bytes as the request before it (the
-//! echo of a write) is its response, unless it came after the master timeout (then it is the
-//! request sent again).
+//! ended). Times are a hint only, and only long ones count: a frame with the same bytes as the
+//! request before it (the echo of a write) is its response, unless it came after the master
+//! timeout (then it is the request sent again); and a silence of [`SETTLE_MIN`] (or 40
+//! characters, at slow rates) settles whatever is held, as the end of the input would (no frame
+//! pauses that long; a live line needs no more bytes to show a cut frame or a stray byte at its
+//! end). Without times, nothing settles before the end.
 
 use std::collections::VecDeque;
 
@@ -501,6 +504,10 @@ fn cut_or_garbage(j: &[u8], at_end: bool, out: &mut Vec<(usize, usize, Broken)>)
     out.push((0, n, Broken::Garbage));
 }
 
+/// The shortest silence that settles the bytes held (µs): no frame pauses this long, USB
+/// latency timers included.
+pub const SETTLE_MIN: u64 = 100_000;
+
 /// Bytes fed in one step at most, so that a huge chunk never makes the buffer huge.
 const STEP: usize = 4096;
 
@@ -517,6 +524,10 @@ pub struct Framer {
     /// (stream offset, time) where each chunk began.
     marks: VecDeque<(u64, Option<u64>)>,
     expect: Expecting,
+    /// A silence this long (µs) settles the bytes held.
+    settle: u64,
+    /// The time of the latest bytes.
+    last: Option<u64>,
     ok: Vec<Option<(u16, u8)>>,
     pieces: Vec<(usize, usize, Broken)>,
 }
@@ -531,6 +542,8 @@ impl Framer {
             scan: 0,
             marks: VecDeque::new(),
             expect: Expecting::new(timeout),
+            settle: SETTLE_MIN,
+            last: None,
             ok: Vec::new(),
             pieces: Vec::new(),
         }
@@ -541,8 +554,35 @@ impl Framer {
         self.buf.len() - self.head
     }
 
+    /// The arrival time of the first byte held, when bytes are held (a frame in progress, or
+    /// bytes still to be sorted out): nothing they become is earlier.
+    pub fn held_since(&self) -> Option<u64> {
+        (self.held() > 0)
+            .then(|| self.time_at(self.base + self.head as u64))
+            .flatten()
+    }
+
     /// Feeds bytes that arrived at `time`; every frame they complete is given to `emit`.
+    /// A reassembler whose held bytes settle after a silence of `settle` µs (at least
+    /// [`SETTLE_MIN`]).
+    pub fn settling_after(mut self, settle: u64) -> Self {
+        self.settle = settle.max(SETTLE_MIN);
+        self
+    }
+
     pub fn push(&mut self, data: &[u8], time: Option<u64>, emit: &mut impl FnMut(&Event<'_>)) {
+        if data.is_empty() {
+            return;
+        }
+        if let (Some(t), Some(last)) = (time, self.last)
+            && t > last.saturating_add(self.settle)
+        {
+            self.run(true, emit);
+            self.compact();
+        }
+        if time.is_some() {
+            self.last = time;
+        }
         for piece in data.chunks(STEP) {
             let at = self.base + self.buf.len() as u64;
             match self.marks.back() {
@@ -551,6 +591,19 @@ impl Framer {
             }
             self.buf.extend_from_slice(piece);
             self.run(false, emit);
+            self.compact();
+        }
+    }
+
+    /// Time passed on a live line without bytes: after a silence that settles them, the bytes
+    /// held come out (as they would when the next bytes came).
+    pub fn idle(&mut self, now: u64, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.held() > 0
+            && self
+                .last
+                .is_some_and(|last| now > last.saturating_add(self.settle))
+        {
+            self.run(true, emit);
             self.compact();
         }
     }

@@ -302,3 +302,39 @@ fn every_public_function_both_ways() {
         assert!(covered.contains(&fc), "{fc}");
     }
 }
+
+/// A silence of 100 ms settles what is held: a stray byte at the end of a burst and a cut frame
+/// come out when the next bytes come after the silence (or on an idle live line), never joined
+/// with them.
+#[test]
+fn a_long_silence_settles_the_bytes_held() {
+    let req = f(&[0x01, 0x03, 0x00, 0x00, 0x00, 0x01]);
+    let resp = f(&[0x01, 0x03, 0x02, 0x00, 0x07]);
+    let ev = events_timed(
+        &[
+            (&req, Some(0)),
+            (&[0xFF], Some(0)),
+            (&resp[..4], Some(200_000)),
+            (&req, Some(400_000)),
+        ],
+        1_000_000,
+    );
+    assert_eq!(kinds(&ev), ["Request", "Garbage", "Truncated", "Request"]);
+    // the same bytes without times: the cut answer and the next request
+    let ev = events(&[&req, &[0xFF], &resp[..4], &req]);
+    assert_eq!(kinds(&ev), ["Request", "Garbage", "Truncated", "Request"]);
+    // live: idle settles the stray byte once the line has been quiet for long enough
+    let mut fr = Framer::new(1_000_000);
+    let got = std::cell::RefCell::new(Vec::new());
+    let mut take = |e: &Event<'_>| {
+        if let Event::Junk(j) = e {
+            got.borrow_mut().push(j.bytes.to_vec())
+        }
+    };
+    fr.push(&req, Some(0), &mut take);
+    fr.push(&[0xFF], Some(10_000), &mut take);
+    fr.idle(50_000, &mut take);
+    assert!(got.borrow().is_empty());
+    fr.idle(111_000, &mut take);
+    assert_eq!(*got.borrow(), [vec![0xFF]]);
+}
