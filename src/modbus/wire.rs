@@ -524,6 +524,10 @@ pub struct Framer {
     /// (stream offset, time) where each chunk began.
     marks: VecDeque<(u64, Option<u64>)>,
     expect: Expecting,
+    /// The junk at `head` holds the awaited answer's header ([`Expecting::answer_in`]), as far
+    /// as its first `seen_upto` bytes were looked at.
+    answer_seen: bool,
+    seen_upto: usize,
     /// A silence this long (µs) settles the bytes held.
     settle: u64,
     /// The time of the latest bytes.
@@ -542,6 +546,8 @@ impl Framer {
             scan: 0,
             marks: VecDeque::new(),
             expect: Expecting::new(timeout),
+            answer_seen: false,
+            seen_upto: 0,
             settle: SETTLE_MIN,
             last: None,
             ok: Vec::new(),
@@ -646,8 +652,13 @@ impl Framer {
             let offset = self.base + (self.head + at) as u64;
             let time = self.time_at(offset);
             // Bytes holding no frame that hold the awaited answer's header: it came, broken.
-            let junk = &self.buf[self.head..self.head + at];
-            let expect = if self.expect.answer_in(junk) {
+            // (Looked for in the bytes added since the last look.)
+            if !self.answer_seen && at >= 2 {
+                let from = self.head + self.seen_upto.saturating_sub(1);
+                self.answer_seen = self.expect.answer_in(&self.buf[from..self.head + at]);
+            }
+            self.seen_upto = at;
+            let expect = if self.answer_seen {
                 None
             } else {
                 self.expect.at(time)
@@ -684,6 +695,7 @@ impl Framer {
                         self.give_pieces(emit);
                         self.head += n;
                         self.scan -= n;
+                        (self.answer_seen, self.seen_upto) = (false, 0);
                     }
                 }
                 Verdict::Take {
@@ -695,6 +707,7 @@ impl Framer {
                     if at > 0 {
                         self.junk(at, false, emit);
                     }
+                    (self.answer_seen, self.seen_upto) = (false, 0);
                     let start = self.head;
                     let bytes = &self.buf[start..start + len];
                     emit(&Event::Frame(Frame {
@@ -720,6 +733,7 @@ impl Framer {
         self.give_pieces(emit);
         self.head += n;
         self.scan = 0;
+        (self.answer_seen, self.seen_upto) = (false, 0);
     }
 
     /// Gives out `pieces` (relative to `head`), garbage in rows of at most
