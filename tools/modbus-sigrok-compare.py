@@ -3,7 +3,7 @@
 
 Run outside the test suite (sigrok-test's outputs are GPL and stay out of the repository):
 
-    busnoop modbus fixtures/modbus-wizmodbus-bus.bin --baud 9600 --parity none -f jsonl > /tmp/b.jsonl
+    busnoop modbus fixtures/modbus-wizmodbus-bus.bin --line 9600-8N1 -f jsonl > /tmp/b.jsonl
     tools/modbus-sigrok-compare.py ../shared/field/modbus/wizmodbus_bus.sigrok-test.output /tmp/b.jsonl
 
 The sigrok output has lines `start-end modbus: <class>: "<text>"`; a frame's annotations run from
