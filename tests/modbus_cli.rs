@@ -452,6 +452,10 @@ fn filters_by_slave_type_and_function() {
     assert_eq!(rows.len(), 2);
     let rows = jsonl(&path, &["--sensor", "R108"]);
     assert_eq!(types(&rows), ["Response"]);
+    let rows = jsonl(&path, &["--sensor", "code"]);
+    assert_eq!(types(&rows), ["Exception"]);
+    let rows = jsonl(&path, &["--sensor", "read coils"]);
+    assert_eq!(types(&rows), ["Request", "Response"]);
     let rows = jsonl(&path, &["--errors"]);
     assert!(
         rows.iter()

@@ -38,26 +38,15 @@ fn id_hint(id: u32) -> Option<String> {
         .then(|| "addresses 248-255 are reserved; slaves are 1-247 (0 is broadcast)".to_owned())
 }
 
-/// Every function with the names of the numbers its rows carry (registers and coils aside).
+/// Every function by name. The numbers of their rows are named by register or coil (`R100`, by
+/// `sensor_no`) or by the map (the options' sensors), or shared by many functions (`start`,
+/// `count`), which would make a sensor's second name select other functions' rows; only an
+/// exception's `code` is its own.
 fn sensors() -> Vec<Sensor> {
     super::function::PUBLIC
         .iter()
-        .map(|&fc| Sensor {
-            column: super::function::name(fc).to_owned(),
-            parts: match fc {
-                1..=4 | 15 | 16 => vec!["start".into(), "count".into()],
-                5 | 6 | 24 => vec!["start".into(), "count".into()],
-                7 => vec!["status".into()],
-                8 => vec!["sub".into(), "data".into()],
-                11 | 12 => vec!["status".into(), "events".into(), "messages".into()],
-                22 => vec!["start".into(), "and".into(), "or".into()],
-                23 => ["start", "count", "write_start", "write_count"]
-                    .map(String::from)
-                    .to_vec(),
-                43 => vec!["read_code".into(), "object".into()],
-                _ => Vec::new(),
-            },
-        })
+        .map(|&fc| Sensor::named(super::function::name(fc)))
+        // Exception rows carry `code` (their Sensor column names the function answered).
         .chain(std::iter::once(Sensor {
             column: "Exception".into(),
             parts: vec!["code".into()],
