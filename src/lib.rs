@@ -58,6 +58,7 @@ pub mod futaba;
 pub mod ghst;
 pub mod ibus;
 mod merge;
+pub mod modbus;
 mod numbers;
 mod pace;
 mod pairing;

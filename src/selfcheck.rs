@@ -640,3 +640,65 @@ pub(crate) mod tests {
         );
     }
 }
+
+/// Modbus, RTU and ASCII framing: chunking invariance (untimed, and timed with the data's own
+/// split points as read times), every byte in exactly one row, every frame shown as a request,
+/// response or exception passes its check, and every `BadCRC` row fails it.
+pub fn modbus(data: &[u8]) {
+    use crate::modbus::{self, Framing, Options, ascii, wire};
+    for framing in [Framing::Rtu, Framing::Ascii] {
+        let o = Options {
+            framing,
+            ..Options::default()
+        };
+        let rows = same_rows_however_chunked(&|| modbus::decoder(o.clone()), data);
+        let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+        assert_eq!(total, data.len(), "Modbus bytes lost or duplicated");
+        let ok = |raw: &[u8]| match framing {
+            Framing::Rtu => wire::crc_ok(raw),
+            Framing::Ascii => {
+                let body = raw.strip_suffix(b"\n").unwrap_or(raw);
+                let body = body.strip_suffix(b"\r").unwrap_or(body);
+                let hex = body.get(1..).unwrap_or_default();
+                if hex.len() % 2 != 0 {
+                    return false;
+                }
+                let bytes: Option<Vec<u8>> = hex
+                    .chunks(2)
+                    .map(|p| u8::from_str_radix(std::str::from_utf8(p).ok()?, 16).ok())
+                    .collect();
+                bytes.is_some_and(|b| b.len() >= 3 && ascii::lrc(&b) == 0)
+            }
+        };
+        for r in &rows {
+            match r.kind.as_str() {
+                "Request" | "Response" | "Exception" | "Unknown" => {
+                    assert!(ok(&r.raw), "frame with a bad check accepted: {r:?}")
+                }
+                "BadCRC" => assert!(!ok(&r.raw), "good frame shown as BadCRC: {r:?}"),
+                _ => {}
+            }
+        }
+        // timed: each data-driven piece read at its own time
+        let timed = |d: &[u8]| {
+            let mut dec = modbus::decoder(o.clone());
+            let mut out = Collected::default();
+            let mut at = 0;
+            let mut t = 0u64;
+            for n in chunk_lengths(d) {
+                if at >= d.len() {
+                    break;
+                }
+                let n = n.min(d.len() - at);
+                t += d[at] as u64 * 10_000;
+                dec.push(&d[at..at + n], Some(t), &mut out).unwrap();
+                at += n;
+            }
+            dec.finish(&mut out).unwrap();
+            out.rows
+        };
+        let rows = timed(data);
+        let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+        assert_eq!(total, data.len(), "Modbus bytes lost or duplicated (timed)");
+    }
+}

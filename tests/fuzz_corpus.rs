@@ -87,3 +87,8 @@ fn ibus_corpus() {
 fn fport_corpus() {
     replay("fport", busnoop::fport::selfcheck::check);
 }
+
+#[test]
+fn modbus_corpus() {
+    replay("modbus", busnoop::selfcheck::modbus);
+}

@@ -646,3 +646,47 @@ fn top_with_two_sources_keeps_a_line_per_port() {
     let status = wait_exit(&mut child);
     assert!(status.success(), "{status:?}");
 }
+
+/// Modbus in the live view: one line per slave and function, showing the answer's registers by
+/// the register map's names and units.
+#[test]
+fn top_shows_modbus_registers_by_their_map_names() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("busnoop.toml");
+    std::fs::write(
+        &cfg,
+        "[modbus.slaves]\nBoiler = 1\n[modbus.registers]\n\
+         \"1/100\" = { name = \"Flow temperature\", type = \"i16\", scale = 0.1, unit = \"°C\" }\n",
+    )
+    .unwrap();
+    let mut b = bus();
+    let term = terminal(120, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"modbus", &"--top", &"--config", &cfg, &b.path]);
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    let f = |bytes: &[u8]| {
+        let mut v = bytes.to_vec();
+        busnoop::modbus::wire::push_crc(&mut v);
+        v
+    };
+    for i in 0..10u16 {
+        let t = (600 + i).to_be_bytes();
+        b.master.write_all(&f(&[1, 3, 0, 100, 0, 1])).unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+        b.master.write_all(&f(&[1, 3, 2, t[0], t[1]])).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let at = wait_for(&screen, at, "Boiler");
+    // (the view draws word by word and only what changed, and cuts the value to its column;
+    // the unit has its own)
+    let at = wait_for(&screen, at, "Flow temperatur");
+    wait_for(&screen, at, "°C");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    assert!(wait_exit(&mut child).success());
+    drop(b);
+}
