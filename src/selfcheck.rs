@@ -589,58 +589,6 @@ pub fn ibus(data: &[u8]) {
     }
 }
 
-#[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-
-    /// From the proptest seed of `sbus::tests::garbage_never_panics` (its biased input): in
-    /// break and parity mode one request of station 0xB5 (181), command 0xAC, 79 data bytes
-    /// and the CRC `B5 C5`, which is CRC-16/XMODEM over the 83 bytes before it. B5 and C5
-    /// travel raw in those modes; read as data mode the same bytes are a dozen broken frames.
-    pub(crate) const STATION_B5_REQUEST: [u8; 85] = [
-        0xB5, 0xAC, 0x11, 0x00, 0xC5, 0xB5, 0xC5, 0x06, 0x06, 0xB5, 0x00, 0xC5, 0xAD, 0x06, 0x00,
-        0xC5, 0xC5, 0xC5, 0x34, 0x00, 0x00, 0x00, 0x22, 0xA0, 0xC5, 0x22, 0x34, 0x52, 0xCB, 0xB5,
-        0x06, 0x0B, 0x64, 0x5F, 0x00, 0x1D, 0xB5, 0xB5, 0xB5, 0xEF, 0xB5, 0x00, 0x06, 0x5F, 0xB5,
-        0x00, 0xB5, 0x00, 0x00, 0x1C, 0xC5, 0xC5, 0x47, 0x64, 0xB5, 0x06, 0x06, 0x95, 0x00, 0x00,
-        0xC5, 0x52, 0x06, 0xA1, 0x00, 0x06, 0x47, 0xB5, 0xB5, 0x06, 0xB5, 0x06, 0x16, 0x06, 0xE8,
-        0x00, 0xB5, 0xC5, 0x16, 0xCB, 0xB5, 0x23, 0xB9, 0xB5, 0xC5,
-    ];
-
-    #[test]
-    fn a_break_mode_telegram_of_station_b5_is_checked_as_break_mode() {
-        let raw = &STATION_B5_REQUEST;
-        assert_eq!(crate::sbus::telegram::crc16(&raw[..83]), 0xB5C5);
-        // Break/parity reading: CRC over every byte before it.
-        assert!(sbus_serial_crc_ok(raw, Resolved::Break));
-        assert!(sbus_serial_crc_ok(raw, Resolved::Parity));
-        // The data-mode reading takes the final C5 for a dangling DLE and `B9 B5` for the CRC:
-        // these bytes are no data-mode telegram (nor does the data-mode framer make one of them).
-        assert!(!sbus_serial_crc_ok(raw, Resolved::Data));
-        // The whole invariant check, every mode: it used to read the break-mode row as data
-        // mode because it starts with B5, and panic "bad CRC accepted".
-        sbus_serial(raw);
-    }
-
-    /// The EdgeTX resync stream and noise around frames satisfy the CRSF checks.
-    #[test]
-    fn crsf_and_ghst_checks_hold_on_frames_and_noise() {
-        let mut data = crate::testing::noise(600, 5);
-        for i in 0..20u8 {
-            crate::crsf::wire::encode(&mut data, 0xC8, 0x14, &[i; 10]);
-            crate::crsf::wire::encode(&mut data, 0x82, 0x10, &[i; 10]);
-            data.extend(crate::testing::noise(usize::from(i), u64::from(i) + 1));
-        }
-        data.extend([0xC8, 0x0A, 0x08]);
-        crsf(&data);
-        ghst(&data);
-        assert!(
-            naive_frames(&crate::crsf::wire::CRSF_ADDRESSES, &data)
-                .iter()
-                .any(|(k, _)| *k == "BadCRC")
-        );
-    }
-}
-
 /// Modbus, RTU and ASCII framing: chunking invariance (untimed, and timed with the data's own
 /// split points as read times), every byte in exactly one row, every frame shown as a request,
 /// response or exception passes its check, and every `BadCRC` row fails it.
@@ -700,5 +648,57 @@ pub fn modbus(data: &[u8]) {
         let rows = timed(data);
         let total: usize = rows.iter().map(|r| r.raw.len()).sum();
         assert_eq!(total, data.len(), "Modbus bytes lost or duplicated (timed)");
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// From the proptest seed of `sbus::tests::garbage_never_panics` (its biased input): in
+    /// break and parity mode one request of station 0xB5 (181), command 0xAC, 79 data bytes
+    /// and the CRC `B5 C5`, which is CRC-16/XMODEM over the 83 bytes before it. B5 and C5
+    /// travel raw in those modes; read as data mode the same bytes are a dozen broken frames.
+    pub(crate) const STATION_B5_REQUEST: [u8; 85] = [
+        0xB5, 0xAC, 0x11, 0x00, 0xC5, 0xB5, 0xC5, 0x06, 0x06, 0xB5, 0x00, 0xC5, 0xAD, 0x06, 0x00,
+        0xC5, 0xC5, 0xC5, 0x34, 0x00, 0x00, 0x00, 0x22, 0xA0, 0xC5, 0x22, 0x34, 0x52, 0xCB, 0xB5,
+        0x06, 0x0B, 0x64, 0x5F, 0x00, 0x1D, 0xB5, 0xB5, 0xB5, 0xEF, 0xB5, 0x00, 0x06, 0x5F, 0xB5,
+        0x00, 0xB5, 0x00, 0x00, 0x1C, 0xC5, 0xC5, 0x47, 0x64, 0xB5, 0x06, 0x06, 0x95, 0x00, 0x00,
+        0xC5, 0x52, 0x06, 0xA1, 0x00, 0x06, 0x47, 0xB5, 0xB5, 0x06, 0xB5, 0x06, 0x16, 0x06, 0xE8,
+        0x00, 0xB5, 0xC5, 0x16, 0xCB, 0xB5, 0x23, 0xB9, 0xB5, 0xC5,
+    ];
+
+    #[test]
+    fn a_break_mode_telegram_of_station_b5_is_checked_as_break_mode() {
+        let raw = &STATION_B5_REQUEST;
+        assert_eq!(crate::sbus::telegram::crc16(&raw[..83]), 0xB5C5);
+        // Break/parity reading: CRC over every byte before it.
+        assert!(sbus_serial_crc_ok(raw, Resolved::Break));
+        assert!(sbus_serial_crc_ok(raw, Resolved::Parity));
+        // The data-mode reading takes the final C5 for a dangling DLE and `B9 B5` for the CRC:
+        // these bytes are no data-mode telegram (nor does the data-mode framer make one of them).
+        assert!(!sbus_serial_crc_ok(raw, Resolved::Data));
+        // The whole invariant check, every mode: it used to read the break-mode row as data
+        // mode because it starts with B5, and panic "bad CRC accepted".
+        sbus_serial(raw);
+    }
+
+    /// The EdgeTX resync stream and noise around frames satisfy the CRSF checks.
+    #[test]
+    fn crsf_and_ghst_checks_hold_on_frames_and_noise() {
+        let mut data = crate::testing::noise(600, 5);
+        for i in 0..20u8 {
+            crate::crsf::wire::encode(&mut data, 0xC8, 0x14, &[i; 10]);
+            crate::crsf::wire::encode(&mut data, 0x82, 0x10, &[i; 10]);
+            data.extend(crate::testing::noise(usize::from(i), u64::from(i) + 1));
+        }
+        data.extend([0xC8, 0x0A, 0x08]);
+        crsf(&data);
+        ghst(&data);
+        assert!(
+            naive_frames(&crate::crsf::wire::CRSF_ADDRESSES, &data)
+                .iter()
+                .any(|(k, _)| *k == "BadCRC")
+        );
     }
 }
