@@ -9,6 +9,9 @@
 
 pub mod capture;
 pub mod edgetx;
+// Wired into the command line with the registration kit (phase 2 of issue 31).
+#[allow(dead_code)]
+pub mod logic;
 pub mod recording;
 pub mod serial;
 
