@@ -62,3 +62,8 @@ fn sbus_ether_corpus() {
 fn sab_corpus() {
     replay("sab", busnoop::selfcheck::sab);
 }
+
+#[test]
+fn logic_trace_corpus() {
+    replay("logic_trace", busnoop::selfcheck::logic_trace);
+}

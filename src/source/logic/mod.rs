@@ -64,7 +64,11 @@ pub fn recognise(prefix: &[u8], complete: bool) -> Option<Option<Container>> {
 /// VCD and the Saleae CSV exports, by their first word or header line.
 fn text_trace(prefix: &[u8], complete: bool) -> Option<Option<Container>> {
     let need_more = if complete { Some(None) } else { None };
-    let text = prefix.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(prefix);
+    const BOM: &[u8] = b"\xEF\xBB\xBF";
+    if prefix.len() < BOM.len() && BOM.starts_with(prefix) {
+        return need_more;
+    }
+    let text = prefix.strip_prefix(BOM).unwrap_or(prefix);
     let Some(start) = text.iter().position(|b| !b.is_ascii_whitespace()) else {
         return need_more;
     };
@@ -615,7 +619,7 @@ impl UartChars {
                 value: 0,
                 framing: true,
                 parity: false,
-                brk: Some(base.micros(end) - base.micros(tick)),
+                brk: Some(base.micros(end).saturating_sub(base.micros(tick))),
             },
         }));
     }
@@ -740,25 +744,21 @@ pub fn parse_seconds(text: &[u8]) -> Option<i128> {
         return None;
     }
     let mut value: i128 = 0;
-    let mut scale: i32 = 12 + exp;
     for &b in int.iter().chain(frac) {
-        if !b.is_ascii_digit() {
-            return None;
-        }
-        if value > 10_i128.pow(30) {
+        if !b.is_ascii_digit() || value > 10_i128.pow(30) {
             return None;
         }
         value = value * 10 + i128::from(b - b'0');
     }
-    scale -= i32::try_from(frac.len()).ok()?;
+    // Powers of ten to multiply by to get picoseconds.
+    let scale = 12 + i64::from(exp) - i64::try_from(frac.len()).ok()?;
     if scale >= 0 {
         if scale > 24 {
             return (value == 0).then_some(0);
         }
         value = value.checked_mul(10_i128.pow(scale as u32))?;
     } else {
-        let down = (-scale).min(38) as u32;
-        value /= 10_i128.pow(down);
+        value /= 10_i128.pow((-scale).min(38) as u32);
     }
     Some(if neg { -value } else { value })
 }

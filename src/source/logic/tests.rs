@@ -24,13 +24,36 @@ fn opened(data: &[u8]) -> Opened {
 }
 
 fn run(data: &[u8], opts: &Options) -> Out {
-    let (tx, rx) = std::sync::mpsc::sync_channel(1 << 20);
+    let (tx, rx) = std::sync::mpsc::sync_channel(1024);
     let mut out = Out::default();
+    let take = |out: &mut Out| {
+        for m in rx.try_iter() {
+            match m {
+                Message::Data(b) => {
+                    for (bytes, t) in b.segments() {
+                        for &x in bytes {
+                            out.chars.push((x, t.unwrap()));
+                        }
+                    }
+                }
+                Message::Note { micros, data, .. } => {
+                    out.notes.push((micros.unwrap(), data, out.chars.len()))
+                }
+                Message::Warning(w) => out.warnings.push(w),
+                other => panic!("{other:?}"),
+            }
+        }
+    };
     match reader(opened(data), opts) {
         Err(f) => out.failure = Some(f.to_string()),
         Ok(mut r) => loop {
-            match r.next_batch(&tx) {
-                Ok(Some(c)) => tx.send(c.into()).unwrap(),
+            let next = r.next_batch(&tx);
+            take(&mut out);
+            match next {
+                Ok(Some(c)) => {
+                    tx.send(c.into()).unwrap();
+                    take(&mut out);
+                }
                 Ok(None) => break,
                 Err(f) => {
                     out.failure = Some(f.to_string());
@@ -39,23 +62,7 @@ fn run(data: &[u8], opts: &Options) -> Out {
             }
         },
     }
-    drop(tx);
-    for m in rx.iter() {
-        match m {
-            Message::Data(b) => {
-                for (bytes, t) in b.segments() {
-                    for &x in bytes {
-                        out.chars.push((x, t.unwrap()));
-                    }
-                }
-            }
-            Message::Note { micros, data, .. } => {
-                out.notes.push((micros.unwrap(), data, out.chars.len()))
-            }
-            Message::Warning(w) => out.warnings.push(w),
-            other => panic!("{other:?}"),
-        }
-    }
+    take(&mut out);
     out
 }
 
@@ -363,4 +370,424 @@ fn a_break_is_a_row_and_a_zero() {
             n
         )]
     );
+}
+
+/// Two lines (RX, TX) and an idle one (EN), as sigrok, VCD and Saleae CSV.
+/// Traces by container name.
+type Files = Vec<(&'static str, Vec<u8>)>;
+
+fn two_lines() -> (Files, Vec<u8>, Vec<u8>) {
+    let line = Line::n81(9600);
+    let signal = Signal {
+        line,
+        baud: 9600.0,
+        inverted: false,
+    };
+    let rx = write::back_to_back(&line, 9600.0, b"request", 1_000_000, 1.0);
+    let tx = write::back_to_back(&line, 9600.0, b"answer", 20_000_000, 0.5);
+    let end = 40_000_000;
+    let rx_l = write::levels(&signal, &rx, 1_000_000, end, &Noise::default());
+    let tx_l = write::levels(&signal, &tx, 1_000_000, end, &Noise::default());
+    let idle = write::levels(&signal, &[], 1_000_000, end, &Noise::default());
+    let ch = [("RX", &rx_l), ("EN", &idle), ("TX", &tx_l)];
+    let files = vec![
+        ("sr", write::sr(&ch, 1_000_000, 5000, true)),
+        ("vcd", write::vcd(&ch, 1_000_000, 1_000_000)),
+        ("csv", write::saleae_csv(&ch, 1_000_000)),
+    ];
+    (files, b"request".to_vec(), b"answer".to_vec())
+}
+
+#[test]
+fn channels_are_chosen_by_name_or_number_and_never_guessed_between_two() {
+    let (files, rx, tx) = two_lines();
+    let line = Line::n81(9600);
+    for (what, data) in &files {
+        let pick = |c: &str| {
+            run(
+                data,
+                &Options {
+                    channel: Some(c.into()),
+                    ..Options::new(line)
+                },
+            )
+        };
+        assert_eq!(bytes(&pick("RX")), rx, "{what}");
+        assert_eq!(bytes(&pick("TX")), tx, "{what}");
+        assert_eq!(bytes(&pick("2")), tx, "{what}");
+        assert_eq!(bytes(&pick("0")), rx, "{what}");
+        let none = pick("EN");
+        assert_eq!(bytes(&none), b"", "{what}");
+        assert!(none.warnings[0].contains("never changes level"), "{what}");
+        let missing = pick("CLK");
+        assert_eq!(
+            missing.failure.as_deref(),
+            Some("trace: no channel \"CLK\"; its channels: 0 RX, 1 EN, 2 TX"),
+            "{what}"
+        );
+        let out = run(data, &Options::new(line));
+        assert_eq!(
+            out.failure.as_deref(),
+            Some(
+                "trace: the trace has 3 channels and several change level (*): choose one \
+                 with --channel NAME|N: 0 RX*, 1 EN, 2 TX*"
+            ),
+            "{what}"
+        );
+    }
+}
+
+#[test]
+fn the_only_channel_that_moves_is_read_and_said() {
+    let line = Line::n81(9600);
+    let signal = Signal {
+        line,
+        baud: 9600.0,
+        inverted: false,
+    };
+    let sent = traffic(&line, 9600.0);
+    let lv = write::levels(&signal, &sent, 1_000_000, end_ns(&sent), &Noise::default());
+    let idle = write::levels(&signal, &[], 1_000_000, end_ns(&sent), &Noise::default());
+    let want: Vec<(u8, u64)> = sent
+        .iter()
+        .map(|c| c.1)
+        .zip(lv.start_micros(1_000_000))
+        .collect();
+    let ch = [("D0", &idle), ("D1", &idle), ("UART", &lv), ("D3", &idle)];
+    for data in [
+        write::sr(&ch, 1_000_000, 777, false),
+        write::vcd(&ch, 1_000_000, 1_000_000),
+        write::saleae_csv(&ch, 1_000_000),
+    ] {
+        let out = run(&data, &Options::new(line));
+        assert_eq!(out.chars, want);
+        assert_eq!(
+            out.warnings,
+            [
+                "trace: reading channel 2 (UART), the only one of 4 that changes level; \
+              --channel to choose another"
+            ]
+        );
+    }
+}
+
+#[test]
+fn saleae_async_serial_exports_are_characters_with_their_errors() {
+    let chars = [
+        (1_028_028, 0x04, false, false),
+        (1_028_124, 0xF0, true, false),
+        (1_028_219, 0x0B, false, true),
+        (1_028_315, 0xFF, false, false),
+    ];
+    let out = run(
+        &write::saleae_serial(&chars),
+        &Options::new(Line::n81(115_200)),
+    );
+    assert_eq!(out.failure, None);
+    assert_eq!(
+        out.chars,
+        [
+            (0x04, 1_028_028),
+            (0xF0, 1_028_124),
+            (0x0B, 1_028_219),
+            (0xFF, 1_028_315)
+        ]
+    );
+    assert_eq!(
+        out.notes,
+        [
+            (1_028_124, "framing error (character 0xF0)".to_string(), 1),
+            (1_028_219, "parity error (character 0x0B)".to_string(), 2)
+        ]
+    );
+    // Logic 2's data table, two analyzers, a start row, a negative time first.
+    let table = "name,type,start_time,duration,data,error\n\
+                 \"RX\",\"data\",-0.5,8.68e-05,0x7E,\n\
+                 \"TX\",\"data\",-0.4,8.68e-05,0x01,\n\
+                 \"RX\",\"start\",-0.3,0,,\n\
+                 \"RX\",\"data\",0.0001,8.68e-05,0xA1,framing\n\
+                 \"RX\",\"data\",0.0002,8.68e-05,'x',\n";
+    let out = run(table.as_bytes(), &Options::new(Line::n81(115_200)));
+    assert_eq!(out.chars, [(0x7E, 0), (0xA1, 500_100), (b'x', 500_200)]);
+    assert_eq!(out.notes.len(), 1);
+    assert!(
+        out.warnings[0].contains("1 row of other analyzers skipped"),
+        "{:?}",
+        out.warnings
+    );
+    let tx = run(
+        table.as_bytes(),
+        &Options {
+            channel: Some("TX".into()),
+            ..Options::new(Line::n81(115_200))
+        },
+    );
+    assert_eq!(tx.chars, [(0x01, 0)]);
+    let none = run(
+        table.as_bytes(),
+        &Options {
+            channel: Some("SPI".into()),
+            ..Options::new(Line::n81(115_200))
+        },
+    );
+    assert_eq!(
+        none.failure.as_deref(),
+        Some("trace: no rows of the analyzer \"SPI\"; the table has RX, TX")
+    );
+}
+
+#[test]
+fn traces_are_recognised_by_content() {
+    let sr = write::sr(&[("RX", &Levels::default())], 1000, 10, false);
+    let vcd = write::vcd(&[("RX", &Levels::default())], 1000, 1);
+    let csv = write::saleae_csv(&[("RX", &Levels::default())], 1000);
+    let serial = write::saleae_serial(&[(1, 2, false, false)]);
+    let table = b"name,type,start_time,duration,data\n";
+    for (data, want) in [
+        (&sr[..], Container::Sigrok),
+        (&vcd[..], Container::Vcd),
+        (&csv[..], Container::SaleaeDigital),
+        (&serial[..], Container::SaleaeSerial),
+        (&table[..], Container::SaleaeSerial),
+        (b"\xEF\xBB\xBF\n  $timescale 1 ns $end", Container::Vcd),
+        (
+            b"Time[s], Channel 0, Channel 1\n0,1,1\n",
+            Container::SaleaeDigital,
+        ),
+    ] {
+        assert_eq!(
+            recognise(data, false),
+            Some(Some(want)),
+            "{:?}",
+            &data[..20]
+        );
+        // Decided from the first bytes that tell, never changed by more.
+        for n in 1..data.len().min(64) {
+            let early = recognise(&data[..n], false);
+            assert!(
+                early.is_none() || early == Some(Some(want)),
+                "{n}: {early:?}"
+            );
+        }
+    }
+    for other in [
+        &b"\x7E\x98\x10"[..],
+        b"2014-07-11,22:41:01.340: 7E 00",
+        b"$GPGGA,123519",
+        b"Time,Value\n",
+        b"PKZIP",
+        b"",
+    ] {
+        assert_eq!(recognise(other, true), Some(None), "{other:?}");
+    }
+    assert_eq!(recognise(b"PK\x03", false), None);
+    assert_eq!(recognise(b"Time [", false), None);
+    assert_eq!(recognise(b"$time", false), None);
+}
+
+#[test]
+fn broken_and_cut_traces_are_clean_failures() {
+    let (files, ..) = two_lines();
+    let opts = Options {
+        channel: Some("RX".into()),
+        ..Options::new(Line::n81(9600))
+    };
+    for (what, data) in &files {
+        // Where a sigrok session's central directory starts (not needed for its samples).
+        let directory = memchr::memmem::find(data, b"PK\x01\x02").unwrap_or(data.len());
+        for n in (0..data.len()).step_by(data.len() / 97 + 1) {
+            // Never a panic; a sigrok session cut before its end says so.
+            let out = run(&data[..n], &opts);
+            if *what == "sr" && n > 0 && n <= directory {
+                assert!(
+                    out.failure.is_some(),
+                    "{what} cut at {n}: {:?}",
+                    out.chars.len()
+                );
+            }
+        }
+        let mut flipped = data.clone();
+        // Damage after the first bytes, which tell the container.
+        for i in (flipped.len() / 4..flipped.len()).step_by(13) {
+            flipped[i] ^= 0x5A;
+        }
+        let _ = run(&flipped, &opts);
+    }
+    let out = run(b"PK\x03\x04garbage", &opts);
+    assert!(
+        out.failure
+            .as_deref()
+            .unwrap()
+            .starts_with("trace: not a usable sigrok session: "),
+        "{out:?}"
+    );
+    let mut z = zip::ZipWriter::new(io::Cursor::new(Vec::new()));
+    z.start_file("readme.txt", zip::write::SimpleFileOptions::default())
+        .unwrap();
+    io::Write::write_all(&mut z, b"hello").unwrap();
+    let plain_zip = z.finish().unwrap().into_inner();
+    assert_eq!(
+        run(&plain_zip, &opts).failure.as_deref(),
+        Some("trace: not a usable sigrok session: a zip archive without sigrok metadata")
+    );
+    let out = run(b"$timescale 1 ns $end\n$var wire 1 ! RX $end\n", &opts);
+    assert_eq!(
+        out.failure.as_deref(),
+        Some("trace: not a usable VCD file: the file ends before $enddefinitions")
+    );
+    let out = run(b"Time [s],RX\n0.0,1\n0.1,0\n0.05,1\n", &opts);
+    assert_eq!(
+        out.failure.as_deref(),
+        Some("trace: line 4: the time goes back")
+    );
+}
+
+#[test]
+fn seconds_are_read_exactly() {
+    assert_eq!(parse_seconds(b"0.000104000"), Some(104_000_000));
+    assert_eq!(parse_seconds(b"1.028028"), Some(1_028_028_000_000));
+    assert_eq!(parse_seconds(b"-0.5"), Some(-500_000_000_000));
+    assert_eq!(parse_seconds(b"8.68e-05"), Some(86_800_000));
+    assert_eq!(parse_seconds(b"2E3"), Some(2_000_000_000_000_000));
+    assert_eq!(parse_seconds(b"0.0000000000019"), Some(1));
+    assert_eq!(parse_seconds(b" 12 "), Some(12_000_000_000_000));
+    for bad in [
+        &b""[..],
+        b".",
+        b"1.2.3",
+        b"x",
+        b"1e",
+        b"1e99999999999",
+        b"--1",
+    ] {
+        assert_eq!(parse_seconds(bad), None, "{bad:?}");
+    }
+    assert_eq!(parse_seconds(b"1e2147483647"), None);
+    assert_eq!(parse_seconds(b"1e-2147483648"), Some(0));
+}
+
+proptest::proptest! {
+    /// The UART gives the same characters however its edges are split between reads.
+    #[test]
+    fn the_uart_does_not_depend_on_the_split(
+        steps in proptest::collection::vec((1u64..40, proptest::bool::ANY), 1..300),
+        cuts in proptest::collection::vec(0u64..4000, 0..20),
+        parity in 0u8..3,
+        inverted in proptest::bool::ANY,
+    ) {
+        let line = Line {
+            parity: [Parity::None, Parity::Even, Parity::Odd][usize::from(parity)],
+            ..Line::n81(100_000)
+        };
+        let mut t = 0;
+        let mut high = true;
+        let mut edges = vec![(0, true)];
+        for (dt, flip) in steps {
+            t += dt;
+            if flip {
+                high = !high;
+                edges.push((t, high));
+            }
+        }
+        let end = t + 500;
+        let decode = |cuts: &[u64]| {
+            let mut u = uart::Uart::new(&line, 100_000, TimeBase::rate(1_000_000), !inverted);
+            let mut out = Vec::new();
+            let mut cuts = cuts.to_vec();
+            cuts.sort_unstable();
+            let mut c = cuts.iter().peekable();
+            for &(t, h) in &edges {
+                while let Some(&&at) = c.peek() {
+                    if at > t {
+                        break;
+                    }
+                    u.advance(at, &mut |e| out.push(e));
+                    c.next();
+                }
+                u.edge(t, h, &mut |e| out.push(e));
+            }
+            u.finish(end, &mut |e| out.push(e));
+            out
+        };
+        proptest::prop_assert_eq!(decode(&[]), decode(&cuts));
+    }
+}
+
+/// The fuzz seeds of `fuzz/seeds/logic_trace/`: one small trace of each container, each with its
+/// bytes. `BUSNOOP_REGENERATE=1 cargo test --lib fuzz_seeds` rewrites them.
+fn seeds() -> Vec<(&'static str, Vec<u8>, Vec<u8>)> {
+    let sport = [0x7E, 0x98, 0x10, 0x05, 0xF1, 0x5A, 0x00, 0x00, 0x00, 0x0B];
+    let modbus = [0x01, 0x03, 0x00, 0x00, 0x00, 0x02, 0xC4, 0x0B];
+    let inv = Signal {
+        line: Line::n81(57_600),
+        baud: 57_600.0,
+        inverted: true,
+    };
+    let norm = Signal {
+        line: Line::n81(57_600),
+        baud: 57_600.0,
+        inverted: false,
+    };
+    let at = |line: &Line, bytes: &[u8]| {
+        write::back_to_back(line, f64::from(line.baud), bytes, 50_000, 0.0)
+    };
+    let s = at(&inv.line, &sport);
+    let m = at(&norm.line, &modbus);
+    let end = 3_000_000;
+    let sp = write::levels(&inv, &s, 500_000, end, &Noise::default());
+    let mb = write::levels(&norm, &m, 500_000, end, &Noise::default());
+    let idle = write::levels(&norm, &[], 500_000, end, &Noise::default());
+    let serial: Vec<(u64, u8, bool, bool)> = m
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.0 / 1000, c.1, i == 3, i == 5))
+        .collect();
+    vec![
+        (
+            "sport-inverted.sr",
+            write::sr(&[("RX", &sp)], 500_000, 2000, false),
+            sport.to_vec(),
+        ),
+        (
+            "modbus-two-channels.sr",
+            write::sr(&[("EN", &idle), ("RX", &mb)], 500_000, 1 << 20, true),
+            modbus.to_vec(),
+        ),
+        (
+            "sport-inverted.vcd",
+            write::vcd(&[("D0", &sp)], 500_000, 2_000_000),
+            sport.to_vec(),
+        ),
+        (
+            "modbus-saleae.csv",
+            write::saleae_csv(&[("Channel 0", &mb)], 500_000),
+            modbus.to_vec(),
+        ),
+        (
+            "modbus-saleae-serial.csv",
+            write::saleae_serial(&serial),
+            modbus.to_vec(),
+        ),
+    ]
+}
+
+#[test]
+fn fuzz_seeds_are_current_and_decode() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds/logic_trace");
+    let regenerate = std::env::var_os("BUSNOOP_REGENERATE").is_some();
+    for (name, data, want) in seeds() {
+        let out = run(&data, &Options::new(Line::n81(57_600)));
+        assert_eq!(bytes(&out), want, "{name}: {:?}", out.failure);
+        let path = dir.join(name);
+        if regenerate {
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(&path, &data).unwrap();
+        }
+        let stored = std::fs::read(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (BUSNOOP_REGENERATE=1 writes it)", path.display()));
+        assert!(
+            stored == data,
+            "{name} differs: BUSNOOP_REGENERATE=1 rewrites it"
+        );
+    }
 }

@@ -282,7 +282,7 @@ pub fn measure(edges: &[u64], base: TimeBase) -> Option<Measured> {
     let mut bit = None;
     for (i, &w) in widths.iter().enumerate() {
         // Widths within 30 % above this one (the list is sorted).
-        let hi = w + w * 3 / 10;
+        let hi = w.saturating_add(w / 10 * 3);
         let n = widths[i..].partition_point(|&x| x <= hi);
         if n >= need {
             // The cluster's median.
