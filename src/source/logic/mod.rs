@@ -231,6 +231,9 @@ pub trait Chars: Send {
 /// A batch is handed on at the latest when it holds this many characters.
 const BATCH_CHARS: usize = 16 * 1024;
 
+/// Reads of the trace that yield no character before an empty batch is handed on.
+const QUIET_READS: usize = 16;
+
 /// Streams a trace's characters as batches and their line errors as rows.
 pub struct TraceReader {
     chars: Box<dyn Chars>,
@@ -310,11 +313,15 @@ impl TraceReader {
     /// Fills `batch` until it is worth sending, a line error's row must go out between its
     /// characters, or the trace ends.
     fn fill(&mut self, tx: &SyncSender<Message>, batch: &mut Batch) -> Result<(), Failure> {
+        let mut reads = 0;
         loop {
             let Some(c) = self.queue.front().copied() else {
-                if !batch.bytes.is_empty() || self.ended {
+                // A long quiet stretch comes back empty now and then, so that progress and a
+                // stop are seen.
+                if !batch.bytes.is_empty() || self.ended || reads == QUIET_READS {
                     return Ok(());
                 }
+                reads += 1;
                 self.ended = !self.chars.read(&mut self.queue, tx)?;
                 continue;
             };
@@ -349,7 +356,10 @@ impl ChunkReader for TraceReader {
         }
         let mut batch = Batch::default();
         match self.fill(tx, &mut batch) {
-            Ok(()) if !batch.bytes.is_empty() => Ok(Some(Chunk::Bytes(batch))),
+            // Characters, or none yet from a quiet stretch of the trace.
+            Ok(()) if !batch.bytes.is_empty() || !self.ended || !self.queue.is_empty() => {
+                Ok(Some(Chunk::Bytes(batch)))
+            }
             Ok(()) => {
                 self.summary(tx);
                 Ok(None)

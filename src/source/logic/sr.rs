@@ -17,7 +17,7 @@ use crate::exit::Failure;
 use crate::source::Opened;
 
 /// Decompressed bytes handed on at a time.
-const BLOCK: usize = 256 * 1024;
+const BLOCK: usize = 64 * 1024;
 /// The metadata entry is at most this long.
 const MAX_METADATA: usize = 64 * 1024;
 

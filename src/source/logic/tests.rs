@@ -86,6 +86,20 @@ fn flowmeter_session_gives_the_bytes_beside_it() {
     let out = run(&fixture("flowmeter_graph_tool.sr"), &opts);
     assert_eq!(out.failure, None);
     assert_eq!(bytes(&out), fixture("flowmeter-graph-tool.bin"));
+    assert_eq!(out.warnings, Vec::<String>::new());
+    // Without --channel: the only one of its 8 probes that moves.
+    let auto = run(
+        &fixture("flowmeter_graph_tool.sr"),
+        &Options::new(Line::n81(9600)),
+    );
+    assert_eq!(auto.chars, out.chars);
+    assert_eq!(
+        auto.warnings,
+        [
+            "trace: reading channel 2 (RXTX), the only one of 8 that changes level; --channel to \
+          choose another"
+        ]
+    );
 }
 
 #[test]
