@@ -14,40 +14,10 @@
 
 use std::ops::RangeInclusive;
 
+pub use crate::protocol::vocab::{POLL, Sensor, Vocab};
+use crate::protocol::vocab::{did_you_mean, short_list};
 use crate::row::{Class, Row, RowOut, RowResult, Unframed};
 use crate::sink::Sink;
-
-/// What a protocol's table can show, for checking filters and names before the run.
-#[derive(Debug)]
-pub struct Vocab {
-    /// Valid values of the ID column.
-    pub ids: RangeInclusive<u32>,
-    /// What the ID is, in messages ("physical ID", "station", "address").
-    pub id_name: &'static str,
-    /// A hint for an ID outside the range (S.Port: "0xA1 is the header byte of ID 1").
-    pub id_hint: fn(u32) -> Option<String>,
-    /// Every value of the Type column (the shared kinds of [`crate::row::kind`] included).
-    pub types: &'static [&'static str],
-    /// The protocol polls: a poll nobody answered is a row with an ID and an empty Type
-    /// (`--hide-polls`, `--type Poll`).
-    pub polls: bool,
-    /// The protocol has keep-alive rows (`Class::Quiet`, `--hide-null`).
-    pub keepalives: bool,
-    /// The names the Sensor column can show without options (S.Port app IDs, S-Bus commands).
-    pub sensors: fn() -> Vec<String>,
-    /// What the Sensor # column looks like, for the hint.
-    pub sensor_no_text: &'static str,
-    /// Whether a value could appear in the Sensor # column.
-    pub sensor_no: fn(&str) -> bool,
-    /// The Sensor # column holds hex numbers: `--sensor 0210` and `210` match `0x0210`.
-    pub sensor_no_hex: bool,
-    /// The Device column without names: the name at an ID, or `None` when the protocol's
-    /// devices are not known in advance (Ether-S-Bus shows PLC addresses).
-    pub devices: Option<fn(u32) -> &'static str>,
-}
-
-/// The name a poll row answers to in `--type`.
-pub const POLL: &str = "Poll";
 
 /// Options as the user wrote them (each `Vec` holds the values of a repeatable option; a value
 /// may itself be a comma-separated list).
@@ -134,11 +104,12 @@ pub struct Filter {
     active: bool,
 }
 
-/// A `--sensor` value: the text, and its value when it reads as a hex number (`0210`, `0x34`),
-/// so that `0210` and `210` match the Sensor # `0x0210`.
+/// A `--sensor` value: the names it selects (the text, and both names of the sensor it names),
+/// and its value when it reads as a hex number (`0210`, `0x34`), so that `0210` and `210` match
+/// the Sensor # `0x0210`.
 #[derive(Clone, Debug)]
 struct Pattern {
-    text: Box<str>,
+    names: Vec<Box<str>>,
     number: Option<u32>,
 }
 
@@ -175,50 +146,36 @@ impl Filter {
                 "--hide-null: {protocol} has no keep-alive rows; to hide a type use --not-type"
             ));
         }
-        let mut known: Option<Vec<String>> = None;
+        let mut known: Option<Vec<Sensor>> = None;
         for v in split(&spec.sensor) {
             let number = if vocab.sensor_no_hex {
                 parse_hex(v)
             } else {
                 None
             };
-            let ok = (vocab.sensor_no)(v) || sensors.iter().any(|s| s.eq_ignore_ascii_case(v)) || {
-                let k = known.get_or_insert_with(|| (vocab.sensors)());
-                k.iter().any(|s| s.eq_ignore_ascii_case(v))
-            };
-            if !ok {
-                let mut k = known.take().unwrap_or_else(|| (vocab.sensors)());
-                k.extend(sensors.iter().cloned());
-                k.sort_unstable_by_key(|s| s.to_ascii_lowercase());
-                k.dedup_by(|a, b| a.eq_ignore_ascii_case(b));
-                let names = if k.is_empty() {
-                    "no names without options".to_string()
-                } else {
-                    k.join(", ")
-                };
-                return Err(format!(
-                    "--sensor {v:?}: no {protocol} row can show it; the Sensor column shows \
-                     {names}; the Sensor # column {}",
-                    vocab.sensor_no_text
-                ));
+            let mut names: Vec<Box<str>> = vec![v.into()];
+            let from_options = sensors.iter().any(|s| s.eq_ignore_ascii_case(v));
+            let known = known.get_or_insert_with(|| (vocab.sensors)());
+            let mut found = false;
+            for e in known.iter().filter(|s| s.is(v)) {
+                // Either name selects the rows of both.
+                names.push(e.column.as_str().into());
+                names.extend(e.parts.iter().map(|p| p.as_str().into()));
+                found = true;
             }
-            f.sensors.push(Pattern {
-                text: v.into(),
-                number,
-            });
+            if !found && !from_options && !(vocab.sensor_no)(v) {
+                return Err(unknown_sensor(v, known, sensors, vocab, protocol));
+            }
+            f.sensors.push(Pattern { names, number });
         }
         for v in split(&spec.device) {
             let named = names.pairs().any(|(n, _)| n.eq_ignore_ascii_case(v));
-            if let Some(device) = vocab.devices
+            if let (Some(device), Some(ids)) = (vocab.devices, &vocab.ids)
                 && !named
             {
                 let shown = |id: u32| names.get(id).unwrap_or_else(|| device(id));
-                if !vocab
-                    .ids
-                    .clone()
-                    .any(|id| shown(id).eq_ignore_ascii_case(v))
-                {
-                    let mut all: Vec<&str> = vocab.ids.clone().map(shown).collect();
+                if !ids.clone().any(|id| shown(id).eq_ignore_ascii_case(v)) {
+                    let mut all: Vec<&str> = ids.clone().map(shown).collect();
                     all.retain(|s| !s.is_empty());
                     all.sort_unstable();
                     all.dedup();
@@ -318,9 +275,8 @@ impl Filter {
 
 impl Pattern {
     fn matches(&self, row: &Row<'_>) -> bool {
-        if self.text.eq_ignore_ascii_case(row.sensor)
-            || self.text.eq_ignore_ascii_case(row.sensor_no)
-        {
+        let named = |s: &str| self.names.iter().any(|n| n.eq_ignore_ascii_case(s));
+        if named(row.sensor) || named(row.sensor_no) || row.parts.iter().any(|p| named(p.name)) {
             return true;
         }
         match self.number {
@@ -438,21 +394,66 @@ fn parse_hex(s: &str) -> Option<u32> {
     u32::from_str_radix(h, 16).ok()
 }
 
-fn range_text(vocab: &Vocab) -> String {
-    let (a, b) = (*vocab.ids.start(), *vocab.ids.end());
+fn range_text(ids: &RangeInclusive<u32>) -> String {
+    let (a, b) = (*ids.start(), *ids.end());
     format!("{a}-{b} (0x{a:02X}-0x{b:02X})")
 }
 
+/// The valid IDs, or the refusal of `option` for a protocol whose rows have none.
+fn ids_of<'v>(vocab: &'v Vocab, option: &str) -> Result<&'v RangeInclusive<u32>, Error> {
+    vocab.ids.as_ref().ok_or_else(|| {
+        format!(
+            "{option}: these rows have no ID column to match (select rows with --type or \
+             --sensor)"
+        )
+    })
+}
+
 fn check_id(id: u32, text: &str, option: &str, vocab: &Vocab) -> Result<(), Error> {
-    if vocab.ids.contains(&id) {
+    let ids = ids_of(vocab, option)?;
+    if ids.contains(&id) {
         return Ok(());
     }
     let hint = (vocab.id_hint)(id).map_or(String::new(), |h| format!("; {h}"));
     Err(format!(
         "{option} {text}: outside the {} range {}{hint}",
         vocab.id_name,
-        range_text(vocab)
+        range_text(ids)
     ))
+}
+
+/// The refusal of `--sensor v`: the closest name when one is near, and a short line of the
+/// names each column can show.
+fn unknown_sensor(
+    v: &str,
+    known: &[Sensor],
+    from_options: &[String],
+    vocab: &Vocab,
+    protocol: &str,
+) -> Error {
+    let columns: Vec<&str> = known
+        .iter()
+        .map(|s| s.column.as_str())
+        .chain(from_options.iter().map(String::as_str))
+        .collect();
+    let parts: Vec<&str> = known
+        .iter()
+        .flat_map(|s| s.parts.iter().map(String::as_str))
+        .collect();
+    let mut msg = format!("--sensor {v:?}: no {protocol} row shows it");
+    if let Some(near) = did_you_mean(v, columns.iter().chain(parts.iter()).copied()) {
+        msg.push_str(&format!("; did you mean {near}?"));
+    }
+    if columns.is_empty() {
+        msg.push_str("; the Sensor column has no names without options");
+    } else {
+        msg.push_str(&format!("; Sensor column: {}", short_list(&columns)));
+    }
+    if !parts.is_empty() {
+        msg.push_str(&format!("; numbers: {}", short_list(&parts)));
+    }
+    msg.push_str(&format!("; the Sensor # column {}", vocab.sensor_no_text));
+    msg
 }
 
 /// `2,8`, `0x1B`, `0-9`, `0x10-0x1F`.
@@ -463,11 +464,12 @@ fn id_list(
 ) -> Result<Vec<RangeInclusive<u32>>, Error> {
     let mut out = Vec::new();
     for v in split(values) {
+        let range = ids_of(vocab, option)?;
         let bad = || {
             format!(
                 "{option} {v:?}: expected IDs like 2, 0x1B or 0-9 ({}s {})",
                 vocab.id_name,
-                range_text(vocab)
+                range_text(range)
             )
         };
         let (a, b) = match v.split_once('-') {
@@ -529,8 +531,19 @@ mod tests {
         None
     }
 
-    fn sensors() -> Vec<String> {
-        vec!["Alt".into(), "Cels".into(), "RxBt".into()]
+    fn sensors() -> Vec<Sensor> {
+        vec![
+            Sensor::named("Alt"),
+            Sensor {
+                column: "Cels".into(),
+                parts: (1..=6).map(|i| format!("Cell{i}")).collect(),
+            },
+            Sensor::named("RxBt"),
+            Sensor {
+                column: "Volts".into(),
+                parts: vec!["VFAS".into()],
+            },
+        ]
     }
 
     fn hex_no(s: &str) -> bool {
@@ -542,7 +555,7 @@ mod tests {
     }
 
     const VOCAB: Vocab = Vocab {
-        ids: 0..=31,
+        ids: Some(0..=31),
         id_name: "physical ID",
         id_hint: no_hint,
         types: &["Data", "Null", "BadCRC", "Garbage"],
@@ -700,7 +713,15 @@ mod tests {
         let f = filter(&spec(|s| s.sensor = vec!["Alt".into()])).unwrap();
         assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
         let e = filter(&spec(|s| s.sensor = vec!["VFAZ".into()])).unwrap_err();
-        assert!(e.contains("shows Alt, Cels, RxBt"), "{e}");
+        assert!(e.contains("did you mean VFAS?"), "{e}");
+        assert!(e.contains("Sensor column: Alt, Cels, RxBt, Volts;"), "{e}");
+        // Either name of a sensor selects its rows: the table's and the radio's.
+        for v in ["Cels", "cell3", "CELL1"] {
+            let f = filter(&spec(|s| s.sensor = vec![v.into()])).unwrap();
+            assert!(f.keep(&row(Some(1), "Data", Class::Plain)), "{v}");
+        }
+        let f = filter(&spec(|s| s.sensor = vec!["VFAS".into()])).unwrap();
+        assert!(!f.keep(&row(Some(1), "Data", Class::Plain)));
         let f = Filter::new(
             &spec(|s| s.sensor = vec!["speed".into()]),
             &VOCAB,

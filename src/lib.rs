@@ -11,6 +11,8 @@
 //! The binary is [`main`]. As a library, busnoop offers what another program (or a fuzzer,
 //! a benchmark, a test) needs to decode a bus without the command line:
 //!
+//! * the table of protocols, [`protocols::PROTOCOLS`], each a [`protocol::Protocol`]
+//!   descriptor (the one place a protocol is registered);
 //! * the decoder contract: [`protocol::Decoder`] (push bytes or packets with their times,
 //!   `idle`, `finish`; output identical however the input is split), the [`row`] it emits
 //!   ([`row::Row`], [`row::RowOut`], the collectors [`row::Collected`] and [`row::Discard`])
@@ -56,7 +58,7 @@ mod pairing;
 pub mod pcap;
 mod plot;
 pub mod protocol;
-mod protocols;
+pub mod protocols;
 mod record;
 pub mod row;
 mod run;

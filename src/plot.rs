@@ -20,8 +20,12 @@ const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 /// What to plot and where.
 #[derive(Clone, Debug, Default)]
 pub struct PlotSpec {
-    /// Names of the numbers to plot (`Alt`, `Cell1`, `Cell1@8`); empty: every number.
+    /// Names of the numbers to plot as the user gave them (`Alt`, `Cell1`, `Cell1@8`, or a
+    /// Sensor column name such as `Volts`); empty: every number.
     pub sensors: Vec<String>,
+    /// The series names they select: each name, and for a sensor of the protocol's vocabulary
+    /// the names of all its numbers (`Volts` → `VFAS`). Compared without case.
+    pub wanted: Vec<String>,
     pub path: PathBuf,
     pub title: String,
 }
@@ -225,7 +229,11 @@ impl Plot {
             .map(|s| (self.label(s), s))
             .filter(|(l, s)| {
                 self.spec.sensors.is_empty()
-                    || self.spec.sensors.iter().any(|w| w == l || *w == s.name)
+                    || self
+                        .spec
+                        .wanted
+                        .iter()
+                        .any(|w| w.eq_ignore_ascii_case(l) || w.eq_ignore_ascii_case(&s.name))
             })
             .collect();
         if chosen.is_empty() {
@@ -234,9 +242,13 @@ impl Plot {
             return Err(if seen.is_empty() {
                 Failure::NothingDecoded("no row of this capture carries a number to plot".into())
             } else {
+                let near = self.spec.sensors.iter().find_map(|w| {
+                    crate::protocol::vocab::did_you_mean(w, seen.iter().map(String::as_str))
+                });
                 Failure::Usage(format!(
-                    "no number named {} in this capture; it has: {}",
+                    "no number named {} in this capture{}; it has: {}",
                     self.spec.sensors.join(","),
+                    near.map_or(String::new(), |n| format!(" (did you mean {n}?)")),
                     seen.join(",")
                 ))
             });
@@ -406,9 +418,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.svg");
         let mut p = Plot::new(PlotSpec {
-            sensors: vec![],
             path: path.clone(),
             title: "t".into(),
+            ..PlotSpec::default()
         });
         let n = 300_000u64;
         for i in 0..n {
@@ -483,6 +495,7 @@ mod tests {
         let path = dir.path().join("p.svg");
         let mut p = Plot::new(PlotSpec {
             sensors: vec!["Alt".into()],
+            wanted: vec!["Alt".into()],
             path: path.clone(),
             title: "t".into(),
         });

@@ -10,10 +10,16 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::sab::PROTOCOL,
 ];
 
+/// The protocols' subcommands for a message: `sport|sbus|sab2`.
+pub fn commands() -> String {
+    let names: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();
+    names.join("|")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::Kind;
+    use crate::protocol::InputKind;
 
     #[test]
     fn every_protocol_reads_raw_bytes_and_live_lines_and_has_its_own_command() {
@@ -22,7 +28,11 @@ mod tests {
         commands.dedup();
         assert_eq!(commands.len(), PROTOCOLS.len());
         for p in PROTOCOLS {
-            assert!(p.reads(Kind::Raw) && p.reads(Kind::Serial), "{}", p.name);
+            assert!(
+                p.reads(InputKind::Raw) && p.reads(InputKind::Serial),
+                "{}",
+                p.name
+            );
         }
     }
 }

@@ -391,6 +391,15 @@ impl<'a> Latch<'a> {
         Latch { out, error: None }
     }
 
+    /// Runs `f` with a latch on `out` and returns the first write error: the body of a
+    /// decoder's `push` or `finish` around a reassembler whose frame callback cannot return one
+    /// (`Latch::with(out, |out| re.push(data, time, &mut |e| map.event(e, out)))`).
+    pub fn with(out: &'a mut dyn RowOut, f: impl FnOnce(&mut Latch<'a>)) -> RowResult {
+        let mut latch = Latch::new(out);
+        f(&mut latch);
+        latch.result()
+    }
+
     /// A write failed: later rows are dropped.
     pub fn stopped(&self) -> bool {
         self.error.is_some()

@@ -5,7 +5,7 @@
 use std::io::{self, Read};
 use std::sync::mpsc::sync_channel;
 
-use crate::protocol::Kind;
+use crate::protocol::InputKind;
 use crate::protocol::{Decoder, PcapBytes};
 use crate::row::Class;
 use crate::row::{Collected, OwnedRow};
@@ -102,7 +102,7 @@ impl Read for Trickle {
 /// per-byte times and the other messages, which must not depend on the read sizes.
 fn read_all(
     make: fn(Opened) -> Box<dyn ChunkReader>,
-    kind: Kind,
+    kind: InputKind,
     data: &[u8],
 ) -> (Vec<(u8, Option<u64>)>, Vec<String>) {
     let collect = |reader: Box<dyn Read + Send>| {
@@ -160,7 +160,7 @@ fn flatten(b: &Batch, out: &mut Vec<(u8, Option<u64>)>) {
 pub fn edgetx_log(data: &[u8]) {
     let (bytes, _) = read_all(
         |o| Box::new(crate::source::edgetx::EdgeTxReader::new(o)),
-        Kind::EdgeTxLog,
+        InputKind::EdgeTxLog,
         data,
     );
     let raw: Vec<u8> = bytes.iter().map(|b| b.0).collect();
@@ -171,7 +171,7 @@ pub fn edgetx_log(data: &[u8]) {
 pub fn recording(data: &[u8]) {
     let (bytes, _) = read_all(
         |o| Box::new(crate::source::recording::RecordingReader::new(o)),
-        Kind::Recording,
+        InputKind::Recording,
         data,
     );
     let mut d = crate::sport::SportDecoder::new();

@@ -55,9 +55,9 @@ impl Column {
     }
 }
 
-/// A line of a [`Report`] table.
+/// A row of a [`Report`] table.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Line {
+pub enum ReportRow {
     /// Cells in column order; there may be fewer than columns (a totals row), and trailing
     /// empty cells are left out with their gaps.
     Cells(Vec<String>),
@@ -71,7 +71,7 @@ pub struct Report {
     /// Lines before the table (the mode, the framing chosen).
     pub head: Vec<String>,
     pub columns: Vec<Column>,
-    pub rows: Vec<Line>,
+    pub rows: Vec<ReportRow>,
     /// Lines after the table (counters of the whole input).
     pub totals: Vec<String>,
 }
@@ -87,12 +87,12 @@ impl Report {
 
     /// Adds a table row.
     pub fn row(&mut self, cells: Vec<String>) {
-        self.rows.push(Line::Cells(cells));
+        self.rows.push(ReportRow::Cells(cells));
     }
 
     /// Adds a detail line under the last row.
     pub fn detail(&mut self, text: String) {
-        self.rows.push(Line::Detail(text));
+        self.rows.push(ReportRow::Detail(text));
     }
 
     fn cells(&self, f: &mut fmt::Formatter<'_>, cells: &[impl AsRef<str>]) -> fmt::Result {
@@ -129,8 +129,8 @@ impl fmt::Display for Report {
         for line in &self.rows {
             writeln!(f)?;
             match line {
-                Line::Cells(cells) => self.cells(f, cells)?,
-                Line::Detail(text) => write!(f, "{:indent$}{text}", "")?,
+                ReportRow::Cells(cells) => self.cells(f, cells)?,
+                ReportRow::Detail(text) => write!(f, "{:indent$}{text}", "")?,
             }
         }
         for t in &self.totals {

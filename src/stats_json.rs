@@ -13,7 +13,7 @@
 
 use serde_json::{Map, Value, json};
 
-use crate::stats::{Line, Report};
+use crate::stats::{Report, ReportRow};
 
 /// A cell as a JSON value.
 fn cell(text: &str) -> Value {
@@ -46,14 +46,14 @@ pub fn to_json(
     let mut table: Vec<Value> = Vec::new();
     for line in &report.rows {
         match line {
-            Line::Cells(cells) => {
+            ReportRow::Cells(cells) => {
                 let mut obj = Map::new();
                 for (c, col) in cells.iter().zip(&report.columns) {
                     obj.insert(col.name.to_owned(), cell(c));
                 }
                 table.push(Value::Object(obj));
             }
-            Line::Detail(text) => {
+            ReportRow::Detail(text) => {
                 if let Some(Value::Object(last)) = table.last_mut() {
                     let details = last
                         .entry("details")

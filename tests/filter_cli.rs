@@ -275,7 +275,7 @@ fn usage_errors_name_the_valid_values() {
         ),
         (
             vec!["sport", sport, "--sensor", "VFAZ"],
-            "the Sensor column shows",
+            "did you mean VFAS?",
         ),
         (vec!["sport", sport, "--type", "Dta"], "types: Data, Null"),
         (
@@ -307,6 +307,7 @@ fn usage_errors_name_the_valid_values() {
         assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
         assert!(r.stderr.contains(want), "{args:?}: {}", r.stderr);
         assert_eq!(r.stderr.lines().count(), 1, "one line: {}", r.stderr);
+        assert!(r.stderr.len() < 400, "short: {}", r.stderr);
         assert!(r.stdout.is_empty(), "{args:?}");
     }
 }

@@ -276,13 +276,13 @@ fn detect_listens_to_a_serial_port() {
     }
     assert_eq!(status.code(), Some(0), "{stderr}\n{lines:#?}");
     assert!(
-        stderr.contains("listening to") && stderr.contains("at each of 3 baud rates"),
+        stderr.contains("listening to") && stderr.contains("at each of 3 line settings"),
         "{stderr}"
     );
     assert_eq!(lines[0], format!("{}: a serial line", bus.path.display()));
     assert_eq!(lines.len(), 1 + 3 + 2, "{lines:#?}");
     assert!(
-        lines[1].trim_start().starts_with("9600 baud: "),
+        lines[1].trim_start().starts_with("9600 baud 8N1: "),
         "{lines:#?}"
     );
     assert!(

@@ -413,8 +413,10 @@ fn recording_to_a_full_disk() {
     );
 }
 
-/// The cases every protocol shares, for each of them.
-const PROTOCOLS: [&str; 3] = ["sport", "sbus", "sab2"];
+/// The cases every protocol shares, for each protocol of the table.
+fn protocols() -> impl Iterator<Item = &'static str> {
+    busnoop::protocols::PROTOCOLS.iter().map(|p| p.command)
+}
 
 #[test]
 fn every_protocol_empty_random_missing_directory_full_disk() {
@@ -423,7 +425,7 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
     std::fs::write(&empty, b"").unwrap();
     let noisy = dir.path().join("noise.bin");
     std::fs::write(&noisy, noise(50_000, 0x9E37_79B9_7F4A_7C15)).unwrap();
-    for p in PROTOCOLS {
+    for p in protocols() {
         // Empty: the header only, "empty input", exit 10.
         let out = busnoop().arg(p).arg(&empty).output().unwrap();
         no_panic(&out);
@@ -498,7 +500,7 @@ fn every_protocol_closed_stdout_is_quiet() {
     let dir = tempfile::tempdir().unwrap();
     let noisy = dir.path().join("noise.bin");
     std::fs::write(&noisy, noise(400_000, 0x2545_F491_4F6C_DD1D)).unwrap();
-    for p in PROTOCOLS {
+    for p in protocols() {
         let mut child = busnoop()
             .arg(p)
             .arg(&noisy)
@@ -581,7 +583,7 @@ fn wrong_protocol_for_every_decoder() {
         ("sbus", fixture("sbus-digimat.pcap"), "busnoop sbus"),
     ];
     for (own, file, command) in &samples {
-        for p in PROTOCOLS.iter().filter(|p| *p != own) {
+        for p in protocols().filter(|p| p != own) {
             let out = busnoop().arg(p).arg(file).output().unwrap();
             no_panic(&out);
             let code = out.status.code();

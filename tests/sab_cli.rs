@@ -484,11 +484,11 @@ fn declared_values_in_the_project_file() {
         ),
         (
             "[sport.values]\n0x10 = \"u8\"\n",
-            "value declarations are for SAB",
+            "[sport] has no key `values`: value declarations are for [sab2]",
         ),
         (
             "[sab2.values]\n0x10 = 5\n",
-            "busnoop.toml:2: invalid type: integer `5`, expected a text",
+            "busnoop.toml:2: [sab2.values] 0x10 = 5: expected a text",
         ),
     ] {
         std::fs::write(&config, text).unwrap();

@@ -90,15 +90,15 @@ fn values_match_the_radio_csv() {
         }
     }
     let want: BTreeSet<String> = [
-        format!("cell0={}", csv_values("Cell 1").pop_first().unwrap()),
-        format!("cell1={}", csv_values("Cell 2").pop_first().unwrap()),
-        format!("cell2={}", csv_values("Cell 3").pop_first().unwrap()),
+        format!("cell1={}", csv_values("Cell 1").pop_first().unwrap()),
+        format!("cell2={}", csv_values("Cell 2").pop_first().unwrap()),
+        format!("cell3={}", csv_values("Cell 3").pop_first().unwrap()),
     ]
     .into();
     assert_eq!(cells, want);
     assert_eq!(
         want,
-        ["cell0=4.12", "cell1=4.14", "cell2=4.20"]
+        ["cell1=4.12", "cell2=4.14", "cell3=4.20"]
             .map(String::from)
             .into()
     );

@@ -22,8 +22,15 @@ fn label(canonical: &str) -> &str {
 /// categories where the two describe the same thing.
 /// The vectors give cells as EdgeTX keeps them (`raw / 5` hundredths); busnoop shows the wire's
 /// 2 mV steps (`4.122`). Turns busnoop's `name=4.122` back into the radio's `name=4.12`.
+/// The vectors name a cell by its 0-based wire index (`cell0`, `idx0`); busnoop's Data numbers
+/// cells from 1 as the radio does (`cell1`).
 fn radio_cell(part: &str) -> String {
     let (name, v) = part.split_once('=').unwrap();
+    let digits = name.trim_start_matches(|c: char| c.is_ascii_alphabetic());
+    let name = match digits.parse::<u32>() {
+        Ok(n) => format!("{}{}", &name[..name.len() - digits.len()], n - 1),
+        Err(_) => name.to_owned(),
+    };
     let mv: u32 = v.replace('.', "").parse().unwrap();
     let hundredths = mv / 2 / 5;
     format!("{name}={}.{:02}", hundredths / 100, hundredths % 100)
@@ -40,7 +47,7 @@ fn canonical(row: &OwnedRow, app_id: u16, value: u32) -> String {
         "Reply" => format!("resp-0x32 appid=0x{app_id:04X} value=0x{value:08X}"),
         _ => match row.sensor.as_str() {
             "Cels" => {
-                // "count=3 cell0=4.12 cell1=4.14" + unit V → "Cels count=3 cell0=4.12V cell1=4.14V"
+                // "count=3 cell1=4.12 cell2=4.14" + unit V → "Cels count=3 cell0=4.12V cell1=4.14V"
                 let parts: Vec<String> = row
                     .data
                     .split(' ')

@@ -90,9 +90,9 @@ fn edgetx_capture_values_have_full_precision() {
     // The first FLVSS frame of physical ID 1: cells 0x80D and 0x818 in 2 mV units.
     let cels = data
         .iter()
-        .find(|r| r[2] == "1" && r[6] == "Cels" && r[7].contains("cell0"))
+        .find(|r| r[2] == "1" && r[6] == "Cels" && r[7].contains("cell1"))
         .unwrap();
-    assert_eq!(cels[7], "count=3 cell0=4.122 cell1=4.144");
+    assert_eq!(cels[7], "count=3 cell1=4.122 cell2=4.144");
     assert_eq!((cels[8], cels[9]), ("4.122", "V"));
     let rssi = data.iter().find(|r| r[6] == "RSSI").unwrap();
     assert_eq!(rssi[9], "dB");

@@ -3,9 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 
 use super::{is_dash, project};
+use crate::protocol::{InputKind, Options, Protocol};
+use crate::protocols::PROTOCOLS;
 use crate::sink::{Format, TableOptions};
 use crate::source::serial;
 
@@ -30,22 +32,10 @@ pub struct Cli {
     pub verbose: u8,
 }
 
+/// The subcommands that are not a protocol (each protocol's subcommand is built from its
+/// descriptor, see [`command`]).
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC (57600 baud).
-    #[command(mut_arg("source", |a| a.help(SPORT_SOURCE)))]
-    Sport(SportArgs),
-    /// Saia S-Bus (PCD controllers): serial data/secure/break/parity modes (9600 baud), and
-    /// Ether-S-Bus (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe.
-    #[command(
-        mut_arg("source", |a| a.help(SBUS_SOURCE)),
-        mut_arg("record", |a| a.help(SBUS_RECORD))
-    )]
-    Sbus(SbusArgs),
-    /// modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected,
-    /// requests paired with responses.
-    #[command(visible_alias = "sab", mut_arg("source", |a| a.help(SAB_SOURCE)))]
-    Sab2(SabArgs),
     /// Which protocol is on this wire? Tries every protocol (S-Bus modes, SAB framings) on a
     /// file's first megabytes, or on a serial port at the usual baud rates, and prints the
     /// verdict, the evidence and the command to run.
@@ -73,10 +63,6 @@ pub enum Command {
     },
 }
 
-/// The subcommands that are not a protocol.
-#[cfg(test)]
-pub const OTHER_COMMANDS: &[&str] = &["detect", "plot", "ports", "extcap", "completions", "man"];
-
 /// `busnoop plot`.
 #[derive(Args, Debug, Clone)]
 pub struct PlotArgs {
@@ -91,183 +77,147 @@ pub struct PlotArgs {
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
     /// The protocol [default: detected as by `busnoop detect`; required for `-` and FIFOs].
-    #[arg(long, value_name = "NAME", value_parser = ["sport", "sbus", "sab2"])]
+    #[arg(long, value_name = "NAME", value_parser = protocol_names())]
     pub protocol: Option<String>,
 }
 
-/// `SOURCE` in `busnoop sport --help`: only what S.Port reads.
-const SPORT_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop .pcap or \
-     .pcapng recording) or `-` for standard input. File kinds are recognised by content.";
-/// `SOURCE` in `busnoop sbus --help`.
-const SBUS_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng capture of \
-     Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w -` pipe). File kinds \
-     are recognised by content; `--baud` also sets the byte times of raw files.";
-/// `--record` in every protocol's help (a macro, so that sbus's can extend it with `concat!`).
-macro_rules! record_help {
-    () => {
-        "Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng with arrival times \
-         (busnoop replays both with the original Millis; Wireshark opens them; pcapng also names \
-         the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: the raw bytes; \
-         `-`: the raw bytes on standard output (with -o FILE only). Other names are refused"
-    };
-}
-/// `--record` in `busnoop sbus --help`: a network capture is recorded as its packets.
-const SBUS_RECORD: &str = concat!(
-    record_help!(),
-    ". A pcap/pcapng capture of Ether-S-Bus is recorded as its packets (its link type, times, \
-     bytes): FILE.pcap, FILE.pcapng, or `-` as pcap; raw names are refused for it"
-);
-/// `SOURCE` in `busnoop sab2 --help`.
-const SAB_SOURCE: &str = "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), \
-     a capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for standard \
-     input. File kinds are recognised by content; `--baud` also sets the byte times of raw files.";
-
-#[derive(Args, Debug)]
-pub struct SbusArgs {
-    #[command(flatten)]
-    pub capture: CaptureArgs,
-
-    /// Serial mode; auto picks data/secure mode when the stream uses 0xB5 framing, break mode
-    /// otherwise.
-    #[arg(long, value_enum, default_value_t = SbusMode::Auto)]
-    pub mode: SbusMode,
-
-    /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
-    /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
-    pub timeout_ms: Option<u64>,
-
-    /// Serial sources with time: a silence longer than this ends a telegram [default: 20
-    /// character times, at least 20 ms].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
-    pub gap_ms: Option<u64>,
-
-    /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`; the same
-    /// as --name.
-    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = crate::sbus::parse_station)]
-    pub stations: Vec<(String, u8)>,
-
-    /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
-    // `--port` was its name first; kept as a hidden alias.
-    #[arg(long = "udp-port", alias = "port", value_name = "PORT",
-          default_value_t = crate::sbus::DEFAULT_PORT,
-          value_parser = clap::value_parser!(u16).range(1..=65_535))]
-    pub port: u16,
+/// The subcommands of the protocols, for `plot --protocol`.
+fn protocol_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(PROTOCOLS.iter().map(|p| p.command))
 }
 
-/// `sbus --mode`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SbusMode {
-    /// Data/secure mode when the stream uses 0xB5 framing, break mode otherwise.
-    Auto,
-    /// SM2 data mode (0xB5 framing, DLE escaping); secure telegrams are read too.
-    Data,
-    /// SM2 secure data mode (`B5 10|11 LEN SEQ` + telegram); standard telegrams are read too.
-    Secure,
-    /// SM0 break mode: a break (read as 0x00) before each request.
-    Break,
-    /// SM1 parity mode: the 9th bit marks the address (lost by most UARTs).
-    Parity,
-}
+/// `--record`'s help; a protocol that reads network captures adds a sentence (see
+/// [`record_help`]).
+const RECORD_HELP: &str = "Keep what came off the wire while decoding: FILE.pcap or FILE.pcapng \
+     with arrival times (busnoop replays both with the original Millis; Wireshark opens them; \
+     pcapng also names the device and baud and comments reconnect gaps), FILE.bin or FILE.raw: \
+     the raw bytes; `-`: the raw bytes on standard output (with -o FILE only). Other names are \
+     refused";
 
-impl SbusArgs {
-    /// The decoder settings for a line at `baud` (`--baud` or the protocol's default).
-    pub(super) fn options(&self, baud: u32) -> crate::sbus::Options {
-        use crate::sbus::Mode;
-        crate::sbus::Options {
-            mode: match self.mode {
-                SbusMode::Auto => Mode::Auto,
-                SbusMode::Data => Mode::Data,
-                SbusMode::Secure => Mode::Secure,
-                SbusMode::Break => Mode::Break,
-                SbusMode::Parity => Mode::Parity,
-            },
-            baud,
-            timeout_ms: self.timeout_ms,
-            gap_ms: self.gap_ms,
-            stations: self.stations.clone(),
-            port: self.port,
-        }
+/// `--record`'s help for `protocol`.
+fn record_help(protocol: &Protocol) -> String {
+    if protocol.reads(InputKind::Pcap) {
+        format!(
+            "{RECORD_HELP}. A pcap/pcapng capture of network traffic is recorded as its packets \
+             (its link type, times, bytes): FILE.pcap, FILE.pcapng, or `-` as pcap; raw names are \
+             refused for it"
+        )
+    } else {
+        RECORD_HELP.to_owned()
     }
 }
 
-#[derive(Args, Debug)]
-pub struct SabArgs {
-    #[command(flatten)]
-    pub capture: CaptureArgs,
-
-    /// Framing on the wire: `sync` = SAB v1 (`54 LEN HDR CMD DATA CRC8`, what modm's
-    /// documentation describes), `hdlc` = SAB2 (`7E HDR CMD DATA CRC16 7E`, what modm's SAB2 code
-    /// sends), `auto` = detect it and say which one was chosen.
-    #[arg(long, value_enum, default_value_t = SabFraming::Auto)]
-    pub framing: SabFraming,
-
-    /// Name a command in the Sensor column (repeatable): `--command speed=0x34`,
-    /// `--command reset=7`.
-    #[arg(long, value_name = "NAME=CODE", value_parser = crate::sab::parse_command)]
-    pub command: Vec<(String, u8)>,
-
-    /// Read a command's payloads as numbers of a type (repeatable): `--value distance=u16*0.01:m`,
-    /// `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32 (little endian); SCALE multiplies
-    /// (a plain decimal); UNIT goes to the Unit column. CMD is a code or a --command name, with
-    /// `.req` or `.ack` for one direction only. Undeclared payloads of 1, 2 or 4 bytes are
-    /// unsigned integers.
-    #[arg(long, value_name = "CMD=TYPE[*SCALE][:UNIT]")]
-    pub value: Vec<String>,
-
-    /// Master timeout: a request without a response within this time gets a `Timeout` row
-    /// [default: 10].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
-    pub timeout_ms: Option<u64>,
-
-    /// SAB2 payload limit (modm's template parameter `N` of `sab2::Interface`): longer frames
-    /// are flagged as overlong.
-    #[arg(long, value_name = "BYTES", default_value_t = crate::sab::hdlc::DEFAULT_MAX_PAYLOAD as u16,
-          value_parser = clap::value_parser!(u16).range(1..=255))]
-    pub max_payload: u16,
+/// The whole command line: the fixed subcommands of [`Cli`] and one subcommand per protocol of
+/// [`PROTOCOLS`], built from its descriptor (its help, its defaults, the shared options and its
+/// own), protocols first.
+pub fn command() -> clap::Command {
+    let mut cmd = Cli::command();
+    let fixed: Vec<String> = cmd
+        .get_subcommands()
+        .map(|c| c.get_name().to_owned())
+        .collect();
+    for (i, p) in PROTOCOLS.iter().enumerate() {
+        cmd = cmd.subcommand(protocol_command(p).display_order(i));
+    }
+    for (i, name) in fixed.iter().enumerate() {
+        cmd = cmd.mut_subcommand(name, |c| c.display_order(PROTOCOLS.len() + i));
+    }
+    cmd
 }
 
-/// `sab2 --framing`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SabFraming {
-    /// Detect the framing from the stream (and say which one was chosen).
-    Auto,
-    /// SAB v1: `54 LEN HDR CMD DATA CRC8` (what modm's documentation describes).
-    #[value(alias = "sab1", alias = "v1")]
-    Sync,
-    /// SAB2: `7E HDR CMD DATA CRC16 7E`, byte-stuffed (what modm's SAB2 code sends).
-    #[value(alias = "sab2")]
-    Hdlc,
-}
-
-impl SabArgs {
-    /// The decoder settings for a line at `baud` (`--baud` or the protocol's default): raw
-    /// captures carry no time, busnoop reconstructs it from the byte position, 10 bits per byte
-    /// at this rate.
-    pub(super) fn options(&self, baud: u32) -> crate::sab::Options {
-        use crate::sab::FramingChoice;
-        crate::sab::Options {
-            framing: match self.framing {
-                SabFraming::Auto => FramingChoice::Auto,
-                SabFraming::Sync => FramingChoice::Sync,
-                SabFraming::Hdlc => FramingChoice::Hdlc,
-            },
-            baud,
-            timeout_micros: self.timeout_ms.unwrap_or(crate::sab::DEFAULT_TIMEOUT_MS) * 1000,
-            max_payload: self.max_payload as usize,
-            devices: Vec::new(),
-            commands: self.command.clone(),
-            values: Vec::new(),
+/// The subcommand of `p`.
+fn protocol_command(p: &'static Protocol) -> clap::Command {
+    let mut cmd = CaptureArgs::augment_args(clap::Command::new(p.command));
+    cmd = (p.front.args)(cmd);
+    let line = p.line;
+    // After the protocol's options: a derived `Args` struct sets the help from its doc comment.
+    cmd = cmd
+        .about(p.summary)
+        .long_about(p.about)
+        .visible_aliases(p.aliases.iter().copied())
+        .after_help(p.examples)
+        .mut_arg("source", |a| a.help(p.source_help))
+        .mut_arg("record", |a| a.help(record_help(p)))
+        .mut_arg("baud", |a| {
+            a.help(format!(
+                "Serial line speed when SOURCE is a device; also sets the byte times of raw \
+                 files [default: {}]",
+                line.baud
+            ))
+        })
+        .mut_arg("line", |a| {
+            a.help(format!(
+                "Character format of a serial device: 8N1, 8E1, 8N2 …, optionally after the \
+                 speed (9600-8E1) [default: {}]",
+                line.format()
+            ))
+        });
+    // Filters that cannot apply to this protocol stay out of its help (and are refused with the
+    // reason when given).
+    let v = p.vocab;
+    if !v.polls {
+        cmd = cmd.mut_arg("hide_polls", |a| a.hide(true));
+    }
+    if !v.keepalives {
+        cmd = cmd.mut_arg("hide_null", |a| a.hide(true));
+    }
+    if v.ids.is_none() {
+        for id in ["id", "not_id", "name"] {
+            cmd = cmd.mut_arg(id, |a| a.hide(true));
         }
     }
+    if p.export.is_none() {
+        cmd = cmd.mut_arg("export", |a| a.hide(true));
+    }
+    cmd
 }
 
-#[derive(Args, Debug)]
-pub struct SportArgs {
-    #[command(flatten)]
+/// A parsed command line.
+pub enum Parsed {
+    /// A protocol's subcommand.
+    Protocol(Box<Run>),
+    /// Any other.
+    Other(Command),
+}
+
+/// A protocol's subcommand, parsed: the shared options and the protocol's own.
+pub struct Run {
+    pub protocol: &'static Protocol,
     pub capture: CaptureArgs,
+    pub options: Box<dyn Options>,
+}
+
+impl Parsed {
+    /// Parses `argv` (the program name first) and the `-v` count.
+    pub fn from(
+        argv: impl IntoIterator<Item = impl Into<std::ffi::OsString> + Clone>,
+    ) -> Result<(Parsed, u8), clap::Error> {
+        let mut cmd = command();
+        let matches = cmd.try_get_matches_from_mut(argv)?;
+        let verbose = matches.get_count("verbose");
+        let run = matches.subcommand().and_then(|(name, sub)| {
+            PROTOCOLS
+                .iter()
+                .find(|p| p.answers_to(name))
+                .map(|&p| (p, sub))
+        });
+        let parsed = match run {
+            Some((protocol, sub)) => {
+                let sub_cmd = cmd
+                    .find_subcommand_mut(protocol.command)
+                    .expect("every protocol has its subcommand");
+                let capture = CaptureArgs::from_arg_matches(sub).map_err(|e| e.format(sub_cmd))?;
+                let options = (protocol.front.parse)(sub).map_err(|e| e.format(sub_cmd))?;
+                Parsed::Protocol(Box::new(Run {
+                    protocol,
+                    capture,
+                    options,
+                }))
+            }
+            None => Parsed::Other(Cli::from_arg_matches(&matches)?.command),
+        };
+        Ok((parsed, verbose))
+    }
 }
 
 /// SOURCE and the options every protocol shares.
@@ -289,18 +239,21 @@ pub struct CaptureArgs {
 /// Options for live capture.
 #[derive(Args, Debug, Clone, Default)]
 pub struct LiveArgs {
-    /// Serial line speed when SOURCE is a device [default: the protocol's: sport 57600, sbus
-    /// 9600, sab2 115200]
+    // The help names the protocol's default (see `protocol_command`).
     #[arg(long, value_name = "BAUD", value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
     pub baud: Option<u32>,
+
+    // The help names the protocol's default (see `protocol_command`).
+    #[arg(long, value_name = "FORMAT")]
+    pub line: Option<String>,
 
     /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
     /// number), go on, and mark the gap with a row.
     #[arg(long)]
     pub reconnect: bool,
 
-    // The help is `record_help!` (sbus extends it for network captures).
-    #[arg(long, value_name = "FILE", help = record_help!())]
+    // The help is `record_help`'s.
+    #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
 
     /// Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with its
@@ -457,9 +410,6 @@ impl OutputArgs {
         }
     }
 }
-
-/// Valid values of the millisecond options (`--timeout-ms`, `--gap-ms`): 1 ms to one hour.
-pub const MS_RANGE: std::ops::RangeInclusive<u64> = 1..=3_600_000;
 
 /// Valid line speeds for `--baud`: 0 would mean "hang up" on a real UART, and nothing on a
 /// bus busnoop reads runs above 12 Mbaud (the fastest USB adapters, FT232H).

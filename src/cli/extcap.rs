@@ -12,34 +12,18 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::exit::Failure;
+use crate::protocol::{Export, Protocol};
+use crate::protocols::PROTOCOLS;
 
-/// The interfaces: (value, display, command, link type name, link type, default baud).
-const INTERFACES: [(&str, &str, &str, &str, u32, u32); 3] = [
-    (
-        "busnoop-sport",
-        "FrSky S.Port (busnoop)",
-        "sport",
-        "USER0",
-        crate::pcap::linktype::USER0,
-        57_600,
-    ),
-    (
-        "busnoop-sab2",
-        "modm SAB / SAB2 (busnoop)",
-        "sab2",
-        "USER1",
-        crate::export::USER1,
-        115_200,
-    ),
-    (
-        "busnoop-sbus",
-        "Saia S-Bus, serial (busnoop)",
-        "sbus",
-        "RAW",
-        crate::pcap::linktype::RAW,
-        9_600,
-    ),
-];
+/// The protocols Wireshark can capture: those with an export, as `busnoop-COMMAND`.
+fn interfaces() -> impl Iterator<Item = (&'static Protocol, Export)> {
+    PROTOCOLS.iter().filter_map(|&p| p.export.map(|e| (p, e)))
+}
+
+/// The interface's name in Wireshark's list: `busnoop-sport`.
+fn value(p: &Protocol) -> String {
+    format!("busnoop-{}", p.command)
+}
 
 /// The options Wireshark passes (see the extcap documentation of Wireshark).
 #[derive(Args, Debug, Default)]
@@ -79,25 +63,14 @@ pub struct ExtcapArgs {
     pub reconnect: bool,
 }
 
-fn interface(
-    name: Option<&str>,
-) -> Result<
-    &'static (
-        &'static str,
-        &'static str,
-        &'static str,
-        &'static str,
-        u32,
-        u32,
-    ),
-    Failure,
-> {
+fn interface(name: Option<&str>) -> Result<(&'static Protocol, Export), Failure> {
     let name =
         name.ok_or_else(|| Failure::Usage("extcap: --extcap-interface NAME is needed".into()))?;
-    INTERFACES.iter().find(|i| i.0 == name).ok_or_else(|| {
+    interfaces().find(|(p, _)| value(p) == name).ok_or_else(|| {
+        let known: Vec<String> = interfaces().map(|(p, _)| value(p)).collect();
         Failure::Usage(format!(
-            "extcap: unknown interface {name}; known: busnoop-sport, busnoop-sab2, \
-             busnoop-sbus"
+            "extcap: unknown interface {name}; known: {}",
+            known.join(", ")
         ))
     })
 }
@@ -110,16 +83,20 @@ pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> 
             "extcap {{version={}}}{{help=https://github.com/busnoop/busnoop/blob/main/docs/wireshark.md}}\n",
             env!("CARGO_PKG_VERSION")
         ));
-        for i in &INTERFACES {
-            s.push_str(&format!("interface {{value={}}}{{display={}}}\n", i.0, i.1));
+        for (p, e) in interfaces() {
+            s.push_str(&format!(
+                "interface {{value={}}}{{display={}}}\n",
+                value(p),
+                e.extcap
+            ));
         }
         return Ok(s);
     }
-    let i = interface(args.extcap_interface.as_deref())?;
+    let (p, e) = interface(args.extcap_interface.as_deref())?;
     if args.extcap_dlts {
         s.push_str(&format!(
             "dlt {{number={}}}{{name={}}}{{display={} frames}}\n",
-            i.4, i.3, i.1
+            e.linktype, e.linktype_name, e.extcap
         ));
         return Ok(s);
     }
@@ -137,7 +114,7 @@ pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> 
         s.push_str(&format!(
             "arg {{number=1}}{{call=--baud}}{{display=Baud rate}}{{type=integer}}\
              {{range=300,4000000}}{{default={}}}{{tooltip=Line speed of the bus}}\n",
-            i.5
+            p.line.baud
         ));
         s.push_str(
             "arg {number=2}{call=--reconnect}{display=Wait for the adapter when it is unplugged}\
@@ -154,7 +131,7 @@ pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> 
 
 /// The busnoop command line a capture runs.
 pub fn capture_command(args: &ExtcapArgs) -> Result<Vec<std::ffi::OsString>, Failure> {
-    let i = interface(args.extcap_interface.as_deref())?;
+    let (p, _) = interface(args.extcap_interface.as_deref())?;
     if args
         .extcap_capture_filter
         .as_deref()
@@ -172,14 +149,14 @@ pub fn capture_command(args: &ExtcapArgs) -> Result<Vec<std::ffi::OsString>, Fai
         Failure::Usage("extcap: --capture needs --port DEVICE (a serial port)".into())
     })?;
     let mut cmd: Vec<std::ffi::OsString> = vec![
-        i.2.into(),
+        p.command.into(),
         port.into(),
         "--export".into(),
         fifo.into(),
         "-o".into(),
         "/dev/null".into(),
         "--baud".into(),
-        args.baud.unwrap_or(i.5).to_string().into(),
+        args.baud.unwrap_or(p.line.baud).to_string().into(),
     ];
     if args.reconnect {
         cmd.push("--reconnect".into());
@@ -193,8 +170,8 @@ pub fn run(args: &ExtcapArgs) -> Result<(), Failure> {
         let cmd = capture_command(args)?;
         let mut argv = vec![std::ffi::OsString::from("busnoop")];
         argv.extend(cmd);
-        let cli = <crate::cli::Cli as clap::Parser>::try_parse_from(argv)
-            .map_err(|e| Failure::Usage(format!("extcap: {e}")))?;
+        let (cli, _) =
+            crate::cli::Parsed::from(argv).map_err(|e| Failure::Usage(format!("extcap: {e}")))?;
         // Wireshark shows an extcap's stderr as an error: no end-of-run summary.
         crate::cli::QUIET_REPORT.store(true, std::sync::atomic::Ordering::Relaxed);
         // Wireshark ends every capture with SIGTERM, or closes the FIFO: the normal end (exit

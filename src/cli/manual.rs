@@ -3,13 +3,11 @@
 
 use std::path::Path;
 
-use clap::CommandFactory;
-
 use crate::exit::Failure;
 
 /// Writes the completion script for `shell` to standard output.
 pub fn completions(shell: clap_complete::Shell) -> Result<(), Failure> {
-    let mut cmd = crate::cli::Cli::command();
+    let mut cmd = super::command();
     let mut buf = Vec::new();
     clap_complete::generate(shell, &mut cmd, "busnoop", &mut buf);
     crate::exit::write_stdout(&buf)
@@ -18,7 +16,7 @@ pub fn completions(shell: clap_complete::Shell) -> Result<(), Failure> {
 /// The manual page of busnoop(1) in roff: every subcommand with its options (the pages of
 /// the subcommands are written by [`man_to_dir`]).
 pub fn man_page() -> Result<Vec<u8>, Failure> {
-    let cmd = crate::cli::Cli::command();
+    let cmd = super::command();
     let mut buf = Vec::new();
     clap_mangen::Man::new(cmd)
         .render(&mut buf)
@@ -45,7 +43,7 @@ pub fn man_to_dir(dir: &Path) -> Result<(), Failure> {
             dir.display()
         )));
     }
-    clap_mangen::generate_to(crate::cli::Cli::command(), dir)
+    clap_mangen::generate_to(super::command(), dir)
         .map_err(|e| Failure::Output(format!("cannot write to {}: {e}", dir.display())))?;
     Ok(())
 }
@@ -58,15 +56,8 @@ mod tests {
     fn the_manual_page_names_every_subcommand_and_the_exit_codes() {
         let page = String::from_utf8(man_page().unwrap()).unwrap();
         assert!(page.starts_with(".ie"), "{}", &page[..80]);
-        for sub in [
-            "sport",
-            "sbus",
-            "sab2",
-            "detect",
-            "ports",
-            "completions",
-            "man",
-        ] {
+        let protocols = crate::protocols::PROTOCOLS.iter().map(|p| p.command);
+        for sub in protocols.chain(["detect", "ports", "completions", "man"]) {
             assert!(page.contains(sub), "{sub}");
         }
         assert!(page.contains("Exit codes"));

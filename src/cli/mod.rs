@@ -4,12 +4,10 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use clap::Parser;
-
 use crate::exit::{Failure, code};
 use crate::filter::Selection;
 use crate::pace::{Paced, Pacer};
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Protocol, Setup};
 use crate::record::{Content, Recorder};
 use crate::run::{Context, drive};
 use crate::signal::Stop;
@@ -25,7 +23,6 @@ mod extcap;
 mod manual;
 mod paths;
 pub mod project;
-mod sab_values;
 
 pub use args::*;
 use paths::check_distinct;
@@ -42,7 +39,7 @@ pub fn main() -> ExitCode {
     {
         argv.insert(1, "extcap".into());
     }
-    let cli = match Cli::try_parse_from(argv) {
+    let (parsed, verbose) = match Parsed::from(argv) {
         Ok(c) => c,
         Err(e) => {
             let _ = e.print();
@@ -53,8 +50,8 @@ pub fn main() -> ExitCode {
             });
         }
     };
-    init_tracing(cli.verbose);
-    match run(cli) {
+    init_tracing(verbose);
+    match run(parsed) {
         Ok(()) => ExitCode::from(code::OK),
         Err(f) => {
             if !f.is_quiet() {
@@ -99,8 +96,9 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
             if pipe {
                 return Err(Failure::Usage(format!(
                     "plot {}: a pipe can be read only once, so its protocol cannot be \
-                     detected before it is plotted; name it with --protocol sport|sbus|sab2",
-                    a.source.display()
+                     detected before it is plotted; name it with --protocol {}",
+                    a.source.display(),
+                    crate::protocols::commands()
                 )));
             }
             let (p, args) = crate::detect::protocol_of(&a.source)?;
@@ -110,15 +108,23 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
     let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
     argv.extend(extra.iter().map(Into::into));
     argv.push(a.source.clone().into());
-    let mut cli = Cli::try_parse_from(argv).map_err(|e| Failure::Usage(e.to_string()))?;
-    let capture = match &mut cli.command {
-        Command::Sport(x) => &mut x.capture,
-        Command::Sbus(x) => &mut x.capture,
-        Command::Sab2(x) => &mut x.capture,
-        _ => return Err(Failure::Internal("plot: not a protocol command".into())),
+    let Ok((Parsed::Protocol(mut run), _)) = Parsed::from(argv) else {
+        return Err(Failure::Internal(format!(
+            "plot: {command} is not a protocol"
+        )));
     };
-    capture.output.plot = Some(crate::plot::PlotSpec {
+    let sensors = (run.protocol.vocab.sensors)();
+    let mut wanted = Vec::new();
+    for name in &a.sensor {
+        wanted.push(name.clone());
+        for s in sensors.iter().filter(|s| s.is(name)) {
+            wanted.push(s.column.clone());
+            wanted.extend(s.parts.iter().cloned());
+        }
+    }
+    run.capture.output.plot = Some(crate::plot::PlotSpec {
         sensors: a.sensor.clone(),
+        wanted,
         path: a.output.clone(),
         title: format!(
             "{} ({command})",
@@ -128,104 +134,59 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
             )
         ),
     });
-    run(cli)
+    run_protocol(run)
 }
 
 /// Runs a parsed command line.
-pub fn run(cli: Cli) -> Result<(), Failure> {
-    use project::{self, File};
-    let (protocol, capture) = match &cli.command {
-        Command::Sport(a) => (&crate::sport::PROTOCOL, &a.capture),
-        Command::Sbus(a) => (&crate::sbus::PROTOCOL, &a.capture),
-        Command::Sab2(a) => (&crate::sab::PROTOCOL, &a.capture),
-        Command::Ports => return list_ports(),
-        Command::Extcap(a) => return extcap::run(a),
-        Command::Detect(a) => return crate::detect::run(&a.options()),
-        Command::Plot(a) => return plot(a),
-        Command::Completions { shell } => return manual::completions(*shell),
-        Command::Man { dir } => return manual::man(dir.as_deref()),
-    };
-    let file = File::load(&capture.select)?;
+pub fn run(parsed: Parsed) -> Result<(), Failure> {
+    match parsed {
+        Parsed::Protocol(r) => run_protocol(r),
+        Parsed::Other(Command::Ports) => list_ports(),
+        Parsed::Other(Command::Extcap(a)) => extcap::run(&a),
+        Parsed::Other(Command::Detect(a)) => crate::detect::run(&a.options()),
+        Parsed::Other(Command::Plot(a)) => plot(&a),
+        Parsed::Other(Command::Completions { shell }) => manual::completions(shell),
+        Parsed::Other(Command::Man { dir }) => manual::man(dir.as_deref()),
+    }
+}
+
+/// A protocol's subcommand: the project file's section under the command line, the filters
+/// and names, then the capture.
+fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
+    let Run {
+        protocol,
+        mut capture,
+        mut options,
+    } = *run;
+    let file = project::File::load(&capture.select)?;
+    if let Some(f) = &file {
+        let empty = toml::Table::new();
+        options.configure(&f.own_keys(protocol, &empty))?;
+    }
     let section = file
         .as_ref()
-        .map(|(f, p)| (f.section(protocol.command), p.as_path()));
-    let named = |pairs: &[(String, u8)]| -> Vec<String> {
-        pairs.iter().map(|(n, a)| format!("{n}={a}")).collect()
-    };
-    match cli.command {
-        Command::Sport(mut args) => {
-            let sel = project::selection(&args.capture.select, protocol, section, &[], &[])?;
-            prepare(&mut args.capture, section);
-            run_capture(&args.capture, protocol, &sel, |_, _| {
-                crate::sport::decoder()
-            })
-        }
-        Command::Sbus(mut args) => {
-            let sel = project::selection(
-                &args.capture.select,
-                protocol,
-                section,
-                &named(&args.stations),
-                &[],
-            )?;
-            prepare(&mut args.capture, section);
-            if args.timeout_ms.is_none() {
-                args.timeout_ms = section.and_then(|s| s.0.timeout_ms);
-            }
-            args.stations = names_u8(&sel.names);
-            run_capture(&args.capture, protocol, &sel, |kind, line| {
-                crate::sbus::decoder(args.options(line.baud), kind)
-            })
-        }
-        Command::Sab2(mut args) => {
-            let mut commands = Vec::new();
-            if let Some((s, path)) = section {
-                for c in project::file_commands(s) {
-                    commands.push(crate::sab::parse_command(&c).map_err(|e| {
-                        Failure::Config(format!("{}: [sab2.commands] {e}", path.display()))
-                    })?);
-                }
-            }
-            commands.append(&mut args.command);
-            args.command = commands;
-            let sensors: Vec<String> = args.command.iter().map(|(n, _)| n.clone()).collect();
-            let sel = project::selection(&args.capture.select, protocol, section, &[], &sensors)?;
-            prepare(&mut args.capture, section);
-            if args.timeout_ms.is_none() {
-                args.timeout_ms = section.and_then(|s| s.0.timeout_ms);
-            }
-            let devices = names_u8(&sel.names);
-            // The file's declarations first, the command line's over them (later ones win).
-            let mut values = Vec::new();
-            if let Some((s, path)) = section {
-                for v in project::file_values(s) {
-                    values.push(sab_values::parse_value(&v, &args.command).map_err(|e| {
-                        Failure::Config(format!("{}: [sab2.values] {e}", path.display()))
-                    })?);
-                }
-            }
-            for v in &args.value {
-                values.push(
-                    sab_values::parse_value(v, &args.command)
-                        .map_err(|e| Failure::Usage(format!("--value {e}")))?,
-                );
-            }
-            run_capture(&args.capture, protocol, &sel, |_, line| {
-                let mut o = args.options(line.baud);
-                o.devices = devices;
-                o.values = values;
-                crate::sab::decoder(o)
-            })
-        }
-        Command::Ports
-        | Command::Extcap(_)
-        | Command::Detect(_)
-        | Command::Plot(_)
-        | Command::Completions { .. }
-        | Command::Man { .. } => {
-            unreachable!("handled above")
-        }
-    }
+        .and_then(|f| Some((f.section(protocol)?, f.name())));
+    let sel = project::selection(
+        &capture.select,
+        protocol,
+        section,
+        &options.names(),
+        &options.sensors(),
+    )?;
+    prepare(&mut capture, section);
+    let names: Vec<(String, u32)> = sel
+        .names
+        .pairs()
+        .map(|(n, id)| (n.to_owned(), id))
+        .collect();
+    let default_line = options.line(protocol.line);
+    run_capture(&capture, protocol, default_line, &sel, |input, line| {
+        options.decoder(&Setup {
+            input,
+            line: *line,
+            names: &names,
+        })
+    })
 }
 
 /// The project file's defaults under the command line's options; `--stats-format` implies
@@ -239,21 +200,13 @@ fn prepare(capture: &mut CaptureArgs, section: Option<(&project::Section, &Path)
     }
 }
 
-/// Names whose IDs fit a byte (S-Bus stations, SAB addresses), for the decoders' statistics.
-fn names_u8(names: &crate::filter::Names) -> Vec<(String, u8)> {
-    names
-        .pairs()
-        .filter_map(|(n, id)| Some((n.to_owned(), u8::try_from(id).ok()?)))
-        .collect()
-}
-
 /// The failure for an input of a kind `protocol` cannot read.
-fn unusable(kind: Kind, protocol: &Protocol) -> Failure {
+fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
     let what = match kind {
-        Kind::Pcap | Kind::Pcapng => "a pcap of network traffic",
-        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
-        Kind::Recording => "a busnoop recording",
-        Kind::Raw | Kind::Serial => "raw serial data",
+        InputKind::Pcap | InputKind::Pcapng => "a pcap of network traffic",
+        InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        InputKind::Recording => "a busnoop recording",
+        InputKind::Raw | InputKind::Serial => "raw serial data",
     };
     Failure::Input(format!(
         "this is {what}; {} captures are {}",
@@ -272,8 +225,9 @@ pub(crate) fn is_dash(p: &Path) -> bool {
 pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
+    default_line: Line,
     selection: &Selection,
-    decoder_for: impl FnOnce(Kind, &Line) -> Box<dyn Decoder>,
+    decoder_for: impl FnOnce(InputKind, &Line) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
     let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
     if record_to_stdout && args.output.output_file().is_none() {
@@ -301,7 +255,7 @@ pub fn run_capture(
         crate::record::RecordFormat::for_path(p)?;
     }
     if let Some(p) = args.live.export.as_deref() {
-        crate::export::check(p, protocol.command)?;
+        crate::export::check(p, protocol)?;
     }
     // A missing folder in any output name, before the input is opened or any output created.
     for p in [
@@ -330,7 +284,17 @@ pub fn run_capture(
     }
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
-    let mut line = protocol.line;
+    let mut line = default_line;
+    if let Some(l) = &args.live.line {
+        line = line
+            .parse_over(l)
+            .map_err(|e| Failure::Usage(format!("--line {e}")))?;
+        if !BAUD_RANGE.contains(&i64::from(line.baud)) {
+            return Err(Failure::Usage(format!(
+                "--line {l}: the speed is out of range (50 to 12000000)"
+            )));
+        }
+    }
     if let Some(b) = args.live.baud {
         line.baud = b;
     }
@@ -350,7 +314,7 @@ pub fn run_capture(
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
     }
-    if args.live.export.is_some() && matches!(kind, Kind::Pcap | Kind::Pcapng) {
+    if args.live.export.is_some() && matches!(kind, InputKind::Pcap | InputKind::Pcapng) {
         // Only a serial line needs re-wrapping: network captures are Wireshark's already.
         return Err(Failure::Usage(format!(
             "--export re-wraps the frames of a serial line; {} is a network capture, which \
@@ -360,9 +324,11 @@ pub fn run_capture(
     }
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
-        Kind::Pcap | Kind::Pcapng => Content::Packets,
-        Kind::Serial | Kind::EdgeTxLog | Kind::Recording => Content::Line { timed: true },
-        Kind::Raw => Content::Line { timed: false },
+        InputKind::Pcap | InputKind::Pcapng => Content::Packets,
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+            Content::Line { timed: true }
+        }
+        InputKind::Raw => Content::Line { timed: false },
     };
     let mut recorder = match &args.live.record {
         Some(_) if record_to_stdout => Some(Recorder::stdout(content)),
@@ -382,17 +348,17 @@ pub fn run_capture(
         eprintln!("busnoop: note: {note}");
     }
     // Files and streams: keep their start, to tell a wrong protocol afterwards.
-    let (reader, kept): (Box<dyn ChunkReader>, _) = if kind == Kind::Serial {
+    let (reader, kept): (Box<dyn ChunkReader>, _) = if kind == InputKind::Serial {
         (reader, None)
     } else {
         let (tee, kept) = crate::detect::Tee::new(reader);
         (Box::new(tee), Some(kept))
     };
-    let mut decoder = decoder_for(kind, &line);
+    let mut decoder = decoder_for(kind, &line)?;
     let mut export = match &args.live.export {
         Some(p) => Some(crate::export::Exporter::create(
             p,
-            protocol.command,
+            protocol,
             &args.source.to_string_lossy(),
             &crate::record::line_description(protocol.name, &line),
         )?),
@@ -432,12 +398,12 @@ pub fn run_capture(
                          Date and Time columns come with any source that has wall-clock time"
                     );
                 }
-                table.set_wide(step, kind == Kind::Serial);
+                table.set_wide(step, kind == InputKind::Serial);
             }
             Some(table)
         }
     };
-    let live = kind == Kind::Serial;
+    let live = kind == InputKind::Serial;
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
     let pacer = if live { None } else { Pacer::new(speed) };
     let rx = source::spawn(reader, progress);
@@ -563,9 +529,9 @@ pub fn run_capture(
 /// Notes on options that cannot do what they ask for this input or output: `--time abs` on a
 /// source without times, `--utc` on times without a zone (or without `--time abs`), an `-o`
 /// extension that names no format.
-fn option_notes(out: &OutputArgs, kind: Kind) -> Vec<String> {
+fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
     let mut notes = Vec::new();
-    if out.time == TimeMode::Abs && kind == Kind::Raw {
+    if out.time == TimeMode::Abs && kind == InputKind::Raw {
         notes.push(
             "--time abs: raw wire bytes carry no wall-clock time, so the Time column stays \
              empty (a recording made with --record FILE.pcap keeps the times)"
@@ -574,7 +540,7 @@ fn option_notes(out: &OutputArgs, kind: Kind) -> Vec<String> {
     }
     if out.utc && out.time != TimeMode::Abs {
         notes.push("--utc has an effect only with --time abs".to_string());
-    } else if out.utc && kind == Kind::EdgeTxLog {
+    } else if out.utc && kind == InputKind::EdgeTxLog {
         notes.push(
             "--utc: an EdgeTX log's times have no time zone; they are shown as logged".to_string(),
         );
@@ -652,7 +618,7 @@ fn open_source(
                     eprintln!("busnoop: note: {w}");
                 }
                 let reader = SerialReader::new(path, port, *cfg, reconnect);
-                return Ok((Kind::Serial, Box::new(reader), None));
+                return Ok((InputKind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
             Err(e) if serial::is_not_a_tty(&e) => {}
@@ -662,12 +628,12 @@ fn open_source(
     let (opened, progress) = source::open(&input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
-        Kind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
-        Kind::Pcap | Kind::Pcapng => {
+        InputKind::EdgeTxLog => Box::new(source::edgetx::EdgeTxReader::new(opened)),
+        InputKind::Recording => Box::new(source::recording::RecordingReader::new(opened)),
+        InputKind::Pcap | InputKind::Pcapng => {
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
-        Kind::Raw | Kind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
     };
     Ok((kind, reader, Some(progress)))
 }
@@ -765,25 +731,34 @@ mod tests {
     fn args(extra: &[&str]) -> OutputArgs {
         let mut argv = vec!["busnoop", "sport", "x"];
         argv.extend_from_slice(extra);
-        match Cli::try_parse_from(argv).unwrap().command {
-            Command::Sport(a) => a.capture.output,
-            _ => unreachable!(),
+        match Parsed::from(argv).unwrap().0 {
+            Parsed::Protocol(r) => r.capture.output,
+            Parsed::Other(_) => unreachable!(),
         }
     }
 
+    /// The command line lists every protocol of the table first, in its order, each with its
+    /// aliases, and parses each one's subcommand into that protocol.
     #[test]
-    fn every_protocol_subcommand_is_in_the_protocol_table() {
-        use clap::CommandFactory;
+    fn every_protocol_of_the_table_has_its_subcommand() {
         let table: Vec<&str> = crate::protocols::PROTOCOLS
             .iter()
             .map(|p| p.command)
             .collect();
-        let subcommands: Vec<String> = Cli::command()
-            .get_subcommands()
-            .map(|c| c.get_name().to_owned())
-            .filter(|n| !OTHER_COMMANDS.contains(&n.as_str()))
-            .collect();
-        assert_eq!(subcommands, table);
+        let mut cmd = args::command();
+        cmd.build();
+        let mut subs: Vec<&clap::Command> = cmd.get_subcommands().collect();
+        subs.sort_by_key(|c| c.get_display_order());
+        let names: Vec<&str> = subs.iter().map(|c| c.get_name()).collect();
+        assert_eq!(names[..table.len()], table[..]);
+        for p in crate::protocols::PROTOCOLS {
+            for name in std::iter::once(p.command).chain(p.aliases.iter().copied()) {
+                match Parsed::from(["busnoop", name, "x"]).unwrap().0 {
+                    Parsed::Protocol(r) => assert_eq!(r.protocol.command, p.command),
+                    Parsed::Other(_) => panic!("{name}"),
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,10 +1,11 @@
 //! The options that choose rows and name devices (shared by every protocol), the project file
 //! `busnoop.toml`, and how the two combine into a [`Spec`](crate::filter::Spec).
 //!
-//! The project file holds one table per protocol (`[sport]`, `[sbus]`, `[sab2]`) with defaults
-//! (`baud`, `format`, `stats`, `timeout-ms` where the protocol has one), `names`, SAB's
-//! `commands` and a `filter` table. Unknown keys and bad values are errors that name the file
-//! and the line. Options on the command line override the file: a list option given on the
+//! The project file holds one table per protocol (`[sport]`, `[sbus]`, …: its subcommand or an
+//! alias) with the keys every protocol has (`baud`, `format`, `stats`, `names` and a `filter`
+//! table) and the protocol's own (its descriptor's `config_keys`, such as `timeout-ms`, read by
+//! the protocol's options). Unknown keys and bad values are errors that name the file and the
+//! line. Options on the command line override the file: a list option given on the
 //! command line replaces the file's list, names are added (the command line's name for an ID
 //! wins), and a switch (`--hide-polls`) is on when either turns it on. `docs/config.md`
 //! describes the format.
@@ -19,6 +20,8 @@ use crate::cli::OutputArgs;
 use crate::exit::Failure;
 use crate::filter::{Filter, Names, Selection, Spec};
 use crate::protocol::Protocol;
+use crate::protocol::front::{FileKeys, find_key, line_of};
+use crate::protocols::PROTOCOLS;
 use crate::sink::Format;
 
 /// The file looked for in the current directory.
@@ -82,42 +85,37 @@ pub struct SelectArgs {
     pub no_config: bool,
 }
 
-/// The project file.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The project file: one section per protocol, by its subcommand or an alias (`[sport]`,
+/// `[sab]`), and the file's name and text for messages.
+#[derive(Debug, Default)]
 pub struct File {
-    #[serde(default)]
-    pub sport: Section,
-    #[serde(default)]
-    pub sbus: Section,
-    #[serde(default, alias = "sab")]
-    pub sab2: Section,
+    sections: BTreeMap<String, Section>,
+    path: PathBuf,
+    text: String,
 }
 
-/// One protocol's table. `timeout-ms` is refused for S.Port, `commands` for all but SAB (see
-/// [`File::check`]).
+/// One protocol's section: the keys every protocol has, and its own (the descriptor's
+/// `config_keys`, read by the protocol's options).
 #[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+#[serde(rename_all = "kebab-case")]
 pub struct Section {
     #[serde(default, deserialize_with = "baud")]
     pub baud: Option<u32>,
     #[serde(default, deserialize_with = "format")]
     pub format: Option<Format>,
     pub stats: Option<bool>,
-    #[serde(default, deserialize_with = "millis")]
-    pub timeout_ms: Option<u64>,
     /// Name → ID.
     #[serde(default)]
     pub names: BTreeMap<String, Value>,
-    /// SAB: name → command code.
-    #[serde(default)]
-    pub commands: BTreeMap<String, Value>,
-    /// SAB: command → `TYPE[*SCALE][:UNIT]` (`--value`), or per direction (`CMD.req = "u8"`).
-    #[serde(default)]
-    pub values: BTreeMap<String, ValueSpec>,
     #[serde(default)]
     pub filter: FilterSection,
+    /// The protocol's own keys.
+    #[serde(flatten)]
+    pub own: toml::Table,
 }
+
+/// The keys every protocol's section has.
+const SHARED_KEYS: &str = "baud, format, stats, names, filter";
 
 /// `[<protocol>.filter]`.
 #[derive(Debug, Default, Deserialize)]
@@ -152,43 +150,6 @@ impl Value {
     }
 }
 
-/// `[sab2.values]`: a declaration, or one per direction (`heading.req = "u8"` is a dotted key).
-#[derive(Debug, Clone)]
-pub enum ValueSpec {
-    Spec(String),
-    Directions(BTreeMap<String, String>),
-}
-
-/// What a `[sab2.values]` entry must be, for the error message.
-const VALUE_SPEC: &str = "a text such as \"u16*0.01:m\" (TYPE[*SCALE][:UNIT]), or `req`/`ack` \
-     entries of such texts (CMD.req = \"u8\")";
-
-impl<'de> Deserialize<'de> for ValueSpec {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> serde::de::Visitor<'de> for V {
-            type Value = ValueSpec;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str(VALUE_SPEC)
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ValueSpec, E> {
-                Ok(ValueSpec::Spec(v.to_owned()))
-            }
-            fn visit_map<A: serde::de::MapAccess<'de>>(
-                self,
-                mut map: A,
-            ) -> Result<ValueSpec, A::Error> {
-                let mut out = BTreeMap::new();
-                while let Some((k, v)) = map.next_entry::<String, String>()? {
-                    out.insert(k, v);
-                }
-                Ok(ValueSpec::Directions(out))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
 /// One value or an array of them.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(untagged)]
@@ -217,16 +178,6 @@ fn baud<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
     Ok(Some(v as u32))
 }
 
-fn millis<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
-    let v = i64::deserialize(d)?;
-    match u64::try_from(v) {
-        Ok(ms) if crate::cli::MS_RANGE.contains(&ms) => Ok(Some(ms)),
-        _ => Err(D::Error::custom(format!(
-            "timeout-ms {v} is out of range (1 to 3600000)"
-        ))),
-    }
-}
-
 fn format<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Format>, D::Error> {
     let s = String::deserialize(d)?;
     Format::from_str(&s, true).map(Some).map_err(|_| {
@@ -236,19 +187,10 @@ fn format<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Format>, D::Error> {
     })
 }
 
-/// The 1-based line of byte `offset` in `text`.
-fn line_of(text: &str, offset: usize) -> usize {
-    text.as_bytes()[..offset.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
-}
-
 impl File {
     /// Parses the text of a project file; errors name `path` and the line.
     pub fn parse(text: &str, path: &Path) -> Result<File, Failure> {
-        let file: File = toml::from_str(text).map_err(|e| {
+        let err = |e: toml::de::Error| {
             let line = e
                 .span()
                 .map_or(String::new(), |s| format!(":{}", line_of(text, s.start)));
@@ -257,45 +199,66 @@ impl File {
                 path.display(),
                 e.message().trim_end()
             ))
-        })?;
-        file.check(text, path)?;
-        Ok(file)
-    }
-
-    /// Refuses keys a protocol does not have (`timeout-ms` for S.Port, `commands` outside SAB).
-    fn check(&self, text: &str, path: &Path) -> Result<(), Failure> {
-        let bad = |section: &str, key: &str, what: &str| {
-            let line = find_key(text, section, key).map_or(String::new(), |l| format!(":{l}"));
-            Failure::Config(format!(
-                "{}{line}: [{section}] has no key `{key}`: {what}",
-                path.display()
-            ))
         };
-        if self.sport.timeout_ms.is_some() {
-            return Err(bad("sport", "timeout-ms", "S.Port has no master timeout"));
-        }
-        for (name, s) in [("sport", &self.sport), ("sbus", &self.sbus)] {
-            if !s.commands.is_empty() {
-                return Err(bad(
-                    name,
-                    "commands",
-                    "command names are for SAB ([sab2.commands])",
-                ));
+        let raw: BTreeMap<String, Section> = toml::from_str(text).map_err(err)?;
+        let at = |section: &str, key: Option<&str>| {
+            let line = match key {
+                Some(k) => find_key(text, section, k),
+                None => find_section(text, section),
+            };
+            format!(
+                "{}{}",
+                path.display(),
+                line.map_or(String::new(), |l| format!(":{l}"))
+            )
+        };
+        let mut sections = BTreeMap::new();
+        for (name, section) in raw {
+            let Some(p) = PROTOCOLS.iter().find(|p| p.answers_to(&name)) else {
+                let known: Vec<&str> = PROTOCOLS.iter().map(|p| p.command).collect();
+                return Err(Failure::Config(format!(
+                    "{}: unknown field `{name}`: sections are {}",
+                    at(&name, None),
+                    known
+                        .iter()
+                        .map(|c| format!("[{c}]"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            };
+            for key in section.own.keys() {
+                if p.config_keys.iter().any(|(k, _)| k == key) {
+                    continue;
+                }
+                let owners: Vec<String> = PROTOCOLS
+                    .iter()
+                    .filter(|o| o.config_keys.iter().any(|(k, _)| k == key))
+                    .map(|o| format!("[{}]", o.command))
+                    .collect();
+                let own: Vec<&str> = p.config_keys.iter().map(|(k, _)| *k).collect();
+                let keys = if own.is_empty() {
+                    SHARED_KEYS.to_string()
+                } else {
+                    format!("{SHARED_KEYS}, {}", own.join(", "))
+                };
+                let what = PROTOCOLS
+                    .iter()
+                    .flat_map(|o| o.config_keys.iter())
+                    .find(|(k, _)| k == key)
+                    .map(|(_, w)| *w);
+                return Err(Failure::Config(match what {
+                    Some(what) => format!(
+                        "{}: [{name}] has no key `{key}`: {what} are for {}",
+                        at(&name, Some(key)),
+                        owners.join(", ")
+                    ),
+                    None => format!(
+                        "{}: unknown field `{key}` in [{name}]; its keys are {keys}",
+                        at(&name, Some(key))
+                    ),
+                }));
             }
-            if !s.values.is_empty() {
-                return Err(bad(
-                    name,
-                    "values",
-                    "value declarations are for SAB ([sab2.values])",
-                ));
-            }
-        }
-        for (name, s) in [
-            ("sport", &self.sport),
-            ("sbus", &self.sbus),
-            ("sab2", &self.sab2),
-        ] {
-            let ints = match &s.filter.sensor {
+            let ints = match &section.filter.sensor {
                 Some(List::One(Value::Int(_))) => true,
                 Some(List::Many(v)) => v.iter().any(|v| matches!(v, Value::Int(_))),
                 _ => false,
@@ -312,8 +275,20 @@ impl File {
                     path.display()
                 )));
             }
+            if sections.insert(p.command.to_owned(), section).is_some() {
+                return Err(Failure::Config(format!(
+                    "{}: [{name}] repeats the section of {} ([{}]): keep one",
+                    at(&name, None),
+                    p.name,
+                    p.command
+                )));
+            }
         }
-        Ok(())
+        Ok(File {
+            sections,
+            path: path.to_owned(),
+            text: text.to_owned(),
+        })
     }
 
     /// The project file a run reads: `--config FILE`, or ./busnoop.toml when it exists; none
@@ -328,8 +303,8 @@ impl File {
         }
     }
 
-    /// Reads the project file ([`File::path`]). Returns the file and its name (for messages).
-    pub fn load(args: &SelectArgs) -> Result<Option<(File, PathBuf)>, Failure> {
+    /// Reads the project file ([`File::path`]).
+    pub fn load(args: &SelectArgs) -> Result<Option<File>, Failure> {
         let Some(path) = File::path(args) else {
             return Ok(None);
         };
@@ -356,17 +331,41 @@ impl File {
                 )));
             }
         };
-        Ok(Some((File::parse(&text, &path)?, path)))
+        Ok(Some(File::parse(&text, &path)?))
     }
 
-    /// The section of the protocol with subcommand `command`.
-    pub fn section(&self, command: &str) -> &Section {
-        match command {
-            "sport" => &self.sport,
-            "sbus" => &self.sbus,
-            _ => &self.sab2,
+    /// The file's name.
+    pub fn name(&self) -> &Path {
+        &self.path
+    }
+
+    /// The section of `protocol`, if the file has one.
+    pub fn section(&self, protocol: &Protocol) -> Option<&Section> {
+        self.sections.get(protocol.command)
+    }
+
+    /// The protocol's own keys of its section, for its options (empty when it has none).
+    pub fn own_keys<'a>(&'a self, protocol: &'a Protocol, empty: &'a toml::Table) -> FileKeys<'a> {
+        FileKeys {
+            table: self.section(protocol).map_or(empty, |s| &s.own),
+            path: &self.path,
+            text: &self.text,
+            section: protocol.command,
         }
     }
+}
+
+/// The line of the header `[section]` (or the first `[section.*]`).
+fn find_section(text: &str, section: &str) -> Option<usize> {
+    text.lines()
+        .position(|l| {
+            let t = l.trim();
+            t.strip_prefix('[').is_some_and(|h| {
+                let h = h.trim_end_matches(']').trim();
+                h == section || h.starts_with(&format!("{section}."))
+            })
+        })
+        .map(|i| i + 1)
 }
 
 /// The largest project file read: ample for any TOML a person writes, and a bound on what
@@ -403,30 +402,6 @@ fn radix_literal(line: &str) -> Option<&str> {
                 }
             }
             _ => {}
-        }
-    }
-    None
-}
-
-/// The line of `key` inside `[section]` (or `[section.*]`), for messages.
-fn find_key(text: &str, section: &str, key: &str) -> Option<usize> {
-    let mut inside = false;
-    for (i, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if let Some(h) = t.strip_prefix('[') {
-            let h = h.trim_end_matches(']').trim();
-            inside = h == section || h.starts_with(&format!("{section}."));
-            if inside && h == format!("{section}.{key}") {
-                return Some(i + 1);
-            }
-            continue;
-        }
-        if inside
-            && t.split(['=', '.'])
-                .next()
-                .is_some_and(|k| k.trim().trim_matches('"') == key)
-        {
-            return Some(i + 1);
         }
     }
     None
@@ -474,29 +449,6 @@ pub fn spec(args: &SelectArgs, file: Option<&Section>, extra_names: &[String]) -
 /// as the file's (with its name), not as an option's.
 pub fn file_spec(section: &Section) -> Spec {
     spec(&SelectArgs::default(), Some(section), &[])
-}
-
-/// SAB's command names from the file, as `NAME=CODE`.
-pub fn file_commands(section: &Section) -> Vec<String> {
-    section
-        .commands
-        .iter()
-        .map(|(n, v)| format!("{n}={}", v.text()))
-        .collect()
-}
-
-/// SAB's value declarations from the file, as `CMD=SPEC` (`CMD.req=SPEC` for a dotted key).
-pub fn file_values(section: &Section) -> Vec<String> {
-    let mut out = Vec::new();
-    for (cmd, v) in &section.values {
-        match v {
-            ValueSpec::Spec(s) => out.push(format!("{cmd}={s}")),
-            ValueSpec::Directions(m) => {
-                out.extend(m.iter().map(|(d, s)| format!("{cmd}.{d}={s}")));
-            }
-        }
-    }
-    out
 }
 
 /// The filter and names of a run on `protocol`: the file's section (checked on its own first,
@@ -578,15 +530,20 @@ speed = 0x34
 "#,
         )
         .unwrap();
-        assert_eq!(f.sport.baud, Some(115_200));
-        assert_eq!(f.sport.format, Some(Format::Csv));
-        assert_eq!(f.sbus.timeout_ms, Some(500));
-        let s = file_spec(&f.sport);
+        let sport = f.section(&crate::sport::PROTOCOL).unwrap();
+        assert_eq!(sport.baud, Some(115_200));
+        assert_eq!(sport.format, Some(Format::Csv));
+        let empty = toml::Table::new();
+        let sbus = f.own_keys(&crate::sbus::PROTOCOL, &empty);
+        assert_eq!(sbus.millis("timeout-ms").unwrap(), Some(500));
+        let s = file_spec(sport);
         assert_eq!(s.id, ["1", "24"]);
         assert!(s.hide_polls && !s.errors);
         assert_eq!(s.sensor, ["Cels"]);
         assert_eq!(s.names, ["Pack=1", "Rx=24"]);
-        assert_eq!(file_commands(&f.sab2), ["speed=52"]);
+        // `[sab]` is the section of `sab2`, its alias.
+        let sab = f.own_keys(&crate::sab::PROTOCOL, &empty);
+        assert_eq!(sab.pairs("commands").unwrap(), ["speed=52"]);
     }
 
     #[test]
@@ -641,7 +598,7 @@ speed = 0x34
             device: vec!["motor=5".into(), "FLVSS".into()],
             ..SelectArgs::default()
         };
-        let s = spec(&args, Some(&f.sport), &["S=3".into()]);
+        let s = spec(&args, f.section(&crate::sport::PROTOCOL), &["S=3".into()]);
         assert_eq!(
             s.id,
             ["2"],

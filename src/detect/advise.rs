@@ -78,7 +78,7 @@ pub enum Advice {
 /// protocol a much better fit, or did almost nothing decode? `kept` is the start of the input.
 pub fn advise(
     protocol: &Protocol,
-    kind: Kind,
+    kind: InputKind,
     kept: &Kept,
     valid_frames: u64,
     source: &Path,
@@ -105,11 +105,12 @@ pub fn advise(
     let suggestion = better.map(|b| {
         if b.inverted {
             format!(
-                "it looks like S.Port with inverted bytes ({} of the bytes in {} frames once \
+                "it looks like {} with inverted bytes ({} of the bytes in {} frames once \
                  inverted): {}",
+                b.protocol.name,
                 percent(b.score.share()),
                 b.score.frames,
-                INVERTED_FIX
+                inverted_fix(b)
             )
         } else {
             format!(

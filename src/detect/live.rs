@@ -2,26 +2,40 @@
 
 use super::*;
 
-/// One baud rate's listen.
+/// One listen: a line setting (speed and character format) and what arrived.
 pub(super) struct Listen {
-    pub(super) baud: u32,
+    pub(super) line: Line,
     pub(super) batches: Vec<Batch>,
     pub(super) bytes: u64,
 }
 
-/// `busnoop detect /dev/ttyUSB0`: listens at each rate in turn, passively (the device is
-/// opened read-only, as for a capture), and ranks every (rate, protocol) pair.
+/// The line settings to listen at: each protocol's character format at each of its rates (or at
+/// each of `bauds`, when given), once each, by format and then speed. A UART set to 8N1 loses
+/// the characters of an 8E2 line, so every protocol is heard in its own format.
+pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
+    let mut out: Vec<Line> = Vec::new();
+    for p in PROTOCOLS {
+        let rates = if bauds.is_empty() { p.rates } else { bauds };
+        for &baud in rates {
+            let line = Line { baud, ..p.line };
+            if !out.contains(&line) {
+                out.push(line);
+            }
+        }
+    }
+    out.sort_by_key(|l| (l.format(), l.baud));
+    out
+}
+
+/// `busnoop detect /dev/ttyUSB0`: listens at each line setting in turn, passively (the device
+/// is opened read-only, as for a capture), and ranks every (setting, protocol) pair.
 pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
-    let bauds: Vec<u32> = if args.bauds.is_empty() {
-        USUAL_BAUDS.to_vec()
-    } else {
-        args.bauds.clone()
-    };
+    let lines = listen_lines(&args.bauds);
     let listen = Duration::from_millis(args.listen_ms);
     let mut listens = Vec::new();
-    for &baud in &bauds {
+    for &line in &lines {
         let cfg = SerialConfig {
-            line: Line::n81(baud),
+            line,
             lines: args.dtr_rts,
         };
         let mut port = match serial::open(path, &cfg) {
@@ -34,18 +48,24 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
         // Said once the device is known to be a serial port (/dev/zero is read as a file).
         if listens.is_empty() {
             eprintln!(
-                "busnoop: listening to {} for {} ms at each of {} baud rates",
+                "busnoop: listening to {} for {} ms at each of {} line settings (speed and \
+                 character format)",
                 path.display(),
                 args.listen_ms,
-                bauds.len()
+                lines.len()
             );
         }
-        listens.push(listen_once(port.as_mut(), path, baud, listen).map_err(LiveError::Failed)?);
+        listens.push(listen_once(port.as_mut(), path, line, listen).map_err(LiveError::Failed)?);
     }
     let mut text = format!("{}: a serial line\n", path.display());
     let report = judge_live(&listens);
     for (l, best) in listens.iter().zip(&report.per_rate) {
-        text.push_str(&format!("  {:>7} baud: {:>7} bytes", l.baud, l.bytes));
+        text.push_str(&format!(
+            "  {:>7} baud {}: {:>7} bytes",
+            l.line.baud,
+            l.line.format(),
+            l.bytes
+        ));
         match best {
             Some(r) => text.push_str(&format!(
                 ", best {} ({} in {} frames)\n",
@@ -58,12 +78,13 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
     }
     let result = match &report.best {
         _ if listens.iter().all(|l| l.bytes == 0) => Err(Failure::NothingDecoded(format!(
-            "no bytes arrived at any rate in {} ms each: check the wiring (the adapter's RX to \
-             the bus line, GND to ground) and that the bus is talking",
+            "no bytes arrived at any line setting in {} ms each: check the wiring (the adapter's \
+             RX to the bus line, GND to ground) and that the bus is talking",
             args.listen_ms
         ))),
-        Some((i, r)) => {
-            found_text(&mut text, r, path, Some(listens[*i].baud));
+        Some(i) => {
+            let r = report.per_rate[*i].as_ref().expect("the winner's row");
+            found_text(&mut text, r, path, Some(listens[*i].line.baud));
             Ok(())
         }
         None => {
@@ -83,7 +104,7 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
 fn listen_once(
     port: &mut dyn serialport::SerialPort,
     path: &Path,
-    baud: u32,
+    line: Line,
     listen: Duration,
 ) -> Result<Listen, Failure> {
     use std::io::ErrorKind::*;
@@ -117,7 +138,7 @@ fn listen_once(
         }
     }
     Ok(Listen {
-        baud,
+        line,
         batches,
         bytes,
     })
@@ -125,36 +146,36 @@ fn listen_once(
 
 /// The outcome of a live detection.
 pub(super) struct LiveReport {
-    /// The best candidate at each rate, when one was recognised.
+    /// The best candidate at each line setting, when one was recognised.
     pub(super) per_rate: Vec<Option<Ranked>>,
-    /// Index of the rate and the winner.
-    pub(super) best: Option<(usize, Ranked)>,
+    /// The line setting of the winner (its row in `per_rate`).
+    pub(super) best: Option<usize>,
 }
 
-/// Ranks every rate's bytes; the winner is the best share over all rates, ties (a pty, or a
-/// line that looks the same at two rates) going to the protocol's own default rate.
+/// Ranks every listen's bytes against the protocols of its character format; the winner is the
+/// best share over all settings, ties (a pty, or a line that looks the same at two rates) going
+/// to the protocol's own default rate.
 pub(super) fn judge_live(listens: &[Listen]) -> LiveReport {
     let mut per_rate: Vec<Option<Ranked>> = Vec::new();
     for l in listens {
         let ranked = rank(
-            candidates(Kind::Serial, Some(l.baud)),
+            candidates(InputKind::Serial, Some(l.line)),
             &l.batches,
-            Kind::Serial,
+            InputKind::Serial,
         );
         let best = ranked.into_iter().next().filter(|r| r.score.recognised());
         per_rate.push(best);
     }
     let key = |i: usize, r: &Ranked| {
         let share = (r.score.share() * 50.0).round() as i64; // 2 % steps
-        let default = i64::from(listens[i].baud == r.protocol.line.baud);
+        let default = i64::from(listens[i].line.baud == r.protocol.line.baud);
         (share, default, r.score.frames)
     };
-    let best_i = per_rate
+    let best = per_rate
         .iter()
         .enumerate()
         .filter_map(|(i, r)| r.as_ref().map(|r| (i, key(i, r))))
         .max_by_key(|&(_, k)| k)
         .map(|(i, _)| i);
-    let best = best_i.and_then(|i| per_rate[i].take().map(|r| (i, r)));
     LiveReport { per_rate, best }
 }

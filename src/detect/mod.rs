@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::exit::Failure;
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, InputKind, Line, Probe, Protocol};
 use crate::protocols::PROTOCOLS;
 use crate::row::{Class, Row, RowOut, RowResult, kind as row_kind};
 use crate::source::serial::{self, ModemLines, SerialConfig};
@@ -28,11 +28,6 @@ pub const SCAN_BYTES: usize = 2 << 20;
 /// apart, small enough that scoring it against every candidate after a run with problems costs
 /// well under a tenth of a second (S-Bus break mode, the slowest candidate, searches CRCs).
 pub const ADVICE_BYTES: usize = 16 << 10;
-
-/// The baud rates tried on a live port, the usual ones of the field.
-pub const USUAL_BAUDS: [u32; 9] = [
-    9600, 19200, 38400, 57600, 100_000, 115_200, 230_400, 400_000, 420_000,
-];
 
 /// A frame-looking variant must find at least this many frames to count.
 const MIN_FRAMES: u64 = 3;
@@ -59,94 +54,49 @@ pub struct Options {
 pub struct Candidate {
     pub protocol: &'static Protocol,
     /// "S-Bus break mode".
-    pub label: &'static str,
+    pub label: String,
     /// Options to add to the protocol's command for this variant.
     pub args: &'static [&'static str],
-    /// The bytes are inverted (S.Port through an adapter that does not invert).
+    /// The bytes are inverted (an inverted line read through an adapter that does not invert).
     pub inverted: bool,
     decoder: Box<dyn Decoder>,
 }
 
-/// The variants of every protocol that reads inputs of `kind`, at `baud`.
-pub fn candidates(kind: Kind, baud: Option<u32>) -> Vec<Candidate> {
+/// The variants of every protocol that reads inputs of `kind` (each protocol's own, see
+/// `Protocol::variants`), on a line of `line`'s format and speed, or on each protocol's own
+/// line when `line` is `None` (files). A protocol whose line is inverted is also tried on the
+/// bytes inverted, as a plain adapter reads them.
+pub fn candidates(kind: InputKind, line: Option<Line>) -> Vec<Candidate> {
     let mut out = Vec::new();
-    let byte_stream = matches!(kind, Kind::Raw | Kind::Serial | Kind::Recording);
+    let byte_stream = matches!(
+        kind,
+        InputKind::Raw | InputKind::Serial | InputKind::Recording
+    );
     for &p in PROTOCOLS {
-        if !p.reads(kind) {
+        // A line read in another character format gives this protocol nothing but noise.
+        if !p.reads(kind) || line.is_some_and(|l| !l.same_format(&p.line)) {
             continue;
         }
-        let baud = baud.unwrap_or(p.line.baud);
-        let mut add = |label, args, inverted, decoder| {
-            out.push(Candidate {
-                protocol: p,
-                label,
-                args,
-                inverted,
-                decoder,
-            })
-        };
-        match p.command {
-            "sport" => {
-                add("S.Port", &[], false, crate::sport::decoder());
-                if byte_stream {
-                    add("S.Port, inverted line", &[], true, crate::sport::decoder());
-                }
+        let line = line.unwrap_or(p.line);
+        let probe = Probe { input: kind, line };
+        let flip = p.inverted && byte_stream;
+        for inverted in [false, true] {
+            if inverted && !flip {
+                continue;
             }
-            "sbus" => {
-                use crate::sbus::{Mode, Options};
-                let opts = |mode| Options {
-                    mode,
-                    baud,
-                    ..Options::default()
-                };
-                if byte_stream {
-                    add(
-                        "S-Bus data mode",
-                        &[],
-                        false,
-                        crate::sbus::decoder(opts(Mode::Data), kind),
-                    );
-                    add(
-                        "S-Bus break mode",
-                        &[],
-                        false,
-                        crate::sbus::decoder(opts(Mode::Break), kind),
-                    );
-                    add(
-                        "S-Bus parity mode",
-                        &["--mode", "parity"],
-                        false,
-                        crate::sbus::decoder(opts(Mode::Parity), kind),
-                    );
-                } else {
-                    // Scored on the capture's bytes: the pcap reader runs inside.
-                    add(
-                        "Ether-S-Bus",
-                        &[],
-                        false,
-                        Box::new(crate::protocol::PcapBytes::new(
-                            crate::sbus::EtherDecoder::new(&opts(Mode::Auto)),
-                        )),
-                    );
-                }
+            for v in (p.variants)(&probe) {
+                out.push(Candidate {
+                    protocol: p,
+                    label: if inverted {
+                        format!("{}, inverted line", v.label)
+                    } else {
+                        v.label.to_owned()
+                    },
+                    args: v.args,
+                    inverted,
+                    decoder: v.decoder,
+                });
             }
-            "sab2" => {
-                use crate::sab::{FramingChoice, Options};
-                for (label, framing) in [
-                    ("SAB v1 (sync framing)", FramingChoice::Sync),
-                    ("SAB2 (HDLC framing)", FramingChoice::Hdlc),
-                ] {
-                    let opts = Options {
-                        framing,
-                        baud,
-                        ..Options::default()
-                    };
-                    add(label, &[], false, crate::sab::decoder(opts));
-                }
-            }
-            // A protocol without variants here is still tried, with its defaults; the test
-            // below makes sure every protocol of the table is listed.
-            _ => {}
         }
     }
     out
@@ -192,7 +142,7 @@ impl Score {
 /// A candidate after the scan.
 pub struct Ranked {
     pub protocol: &'static Protocol,
-    pub label: &'static str,
+    pub label: String,
     pub args: &'static [&'static str],
     pub inverted: bool,
     pub score: Score,
@@ -293,9 +243,9 @@ impl RowOut for Tally {
 /// Feeds `segments` (bytes with their times) through every candidate and ranks them, best
 /// first. `total` is the number of bytes for the share (the wire bytes; for network captures,
 /// where the file holds more than the payloads, the payload bytes the decoder saw).
-pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: Kind) -> Vec<Ranked> {
+pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: InputKind) -> Vec<Ranked> {
     let wire: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
-    let network = matches!(kind, Kind::Pcap | Kind::Pcapng);
+    let network = matches!(kind, InputKind::Pcap | InputKind::Pcapng);
     let mut ranked: Vec<Ranked> = candidates
         .drain(..)
         .map(|mut c| {
@@ -414,24 +364,34 @@ pub fn evidence(ranked: &[Ranked]) -> String {
     s
 }
 
-/// The fix for an S.Port line read without inversion.
-pub const INVERTED_FIX: &str = "the line is inverted: 0x81 arrives where S.Port's 0x7E belongs, \
-     so the adapter does not invert. Set \"invert RXD\" on an FTDI adapter (FT_PROG, or \
-     `ftdi_eeprom`), or put a one-transistor inverter before RX (docs/live.md)";
+/// The fix for an inverted line read without inversion, with the byte that gave it away (the
+/// most frequent first byte of the frames found once the bytes were inverted back).
+pub fn inverted_fix(r: &Ranked) -> String {
+    let seen = match r.score.starts.first() {
+        Some(&(b, _)) => format!(
+            "0x{:02X} arrives where {}'s 0x{b:02X} belongs, ",
+            !b, r.protocol.name
+        ),
+        None => String::new(),
+    };
+    format!(
+        "the line is inverted: {seen}so the adapter does not invert. Set \"invert RXD\" on an \
+         FTDI adapter (FT_PROG, or `ftdi_eeprom`), or put a one-transistor inverter before RX \
+         (docs/live.md)"
+    )
+}
 
-/// A file's content as batches: at most [`SCAN_BYTES`] wire bytes, read through the same
-/// readers as a capture.
 /// The input's kind and its first [`SCAN_BYTES`] (fewer when it ends), and the signal that cut
 /// the reading short: SIGINT/SIGTERM end the wait of a slow pipe (`cat /dev/ttyUSB0 | busnoop
 /// detect -`), and what arrived is judged.
-fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure> {
+fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Failure> {
     let stop = crate::signal::Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let (opened, progress) = crate::source::open(input)?;
     let kind = opened.kind;
     let reader: Box<dyn ChunkReader> = match kind {
-        Kind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
-        Kind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
+        InputKind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
+        InputKind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
         _ => Box::new(crate::source::RawReader::new(opened)),
     };
     let feed = crate::source::spawn(reader, Some(progress));
@@ -458,13 +418,13 @@ fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure
     Ok((kind, batches, signal))
 }
 
-fn kind_text(kind: Kind) -> &'static str {
+fn kind_text(kind: InputKind) -> &'static str {
     match kind {
-        Kind::Raw => "raw bytes",
-        Kind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
-        Kind::Pcap | Kind::Pcapng => "a network capture",
-        Kind::Recording => "a busnoop recording",
-        Kind::Serial => "a serial line",
+        InputKind::Raw => "raw bytes",
+        InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
+        InputKind::Pcap | InputKind::Pcapng => "a network capture",
+        InputKind::Recording => "a busnoop recording",
+        InputKind::Serial => "a serial line",
     }
 }
 
@@ -481,8 +441,9 @@ pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'stat
     match verdict(&ranked) {
         Verdict::Found(i, _) => Ok((ranked[i].protocol, ranked[i].args)),
         _ => Err(Failure::NoProtocol(format!(
-            "no known protocol in {name}; name it with --protocol sport|sbus|sab2 \
-             (busnoop detect {name} shows the evidence)"
+            "no known protocol in {name}; name it with --protocol {} (busnoop detect {name} \
+             shows the evidence)",
+            crate::protocols::commands()
         ))),
     }
 }
@@ -583,7 +544,7 @@ fn found_text(text: &mut String, best: &Ranked, source: &Path, baud: Option<u32>
     }
     text.push_str(")\n");
     if best.inverted {
-        text.push_str(&format!("fix:  {INVERTED_FIX}\n"));
+        text.push_str(&format!("fix:  {}\n", inverted_fix(best)));
         if baud.is_none() {
             text.push_str(
                 "      this capture holds the inverted bytes; invert them back before decoding: \

@@ -17,10 +17,17 @@ fn untimed(bytes: &[u8]) -> Vec<Batch> {
 }
 
 /// The ranking of raw bytes and the verdict's winner (label), or `None`.
-fn winner(bytes: &[u8]) -> (Option<&'static str>, Option<&'static str>) {
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(bytes), Kind::Raw);
+fn winner(bytes: &[u8]) -> (Option<String>, Option<String>) {
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(bytes),
+        InputKind::Raw,
+    );
     match verdict(&ranked) {
-        Verdict::Found(i, mixed) => (Some(ranked[i].label), mixed.map(|j| ranked[j].label)),
+        Verdict::Found(i, mixed) => (
+            Some(ranked[i].label.clone()),
+            mixed.map(|j| ranked[j].label.clone()),
+        ),
         _ => (None, None),
     }
 }
@@ -51,7 +58,7 @@ fn sbus_break_session() -> Vec<u8> {
 #[test]
 fn every_protocol_of_the_table_has_candidates() {
     for p in PROTOCOLS {
-        let raw = candidates(Kind::Raw, None);
+        let raw = candidates(InputKind::Raw, None);
         assert!(
             raw.iter().any(|c| c.protocol.command == p.command),
             "{} is not tried by detect",
@@ -59,26 +66,33 @@ fn every_protocol_of_the_table_has_candidates() {
         );
     }
     // Network captures: only what reads them.
-    let net = candidates(Kind::Pcap, None);
-    assert!(net.iter().all(|c| c.protocol.reads(Kind::Pcap)));
+    let net = candidates(InputKind::Pcap, None);
+    assert!(net.iter().all(|c| c.protocol.reads(InputKind::Pcap)));
     assert_eq!(net.len(), 1);
 }
 
 #[test]
 fn each_fixture_names_its_protocol() {
-    assert_eq!(winner(&fixture("sport-sample.bin")).0, Some("S.Port"));
+    assert_eq!(
+        winner(&fixture("sport-sample.bin")).0,
+        Some("S.Port".to_owned())
+    );
     assert_eq!(
         winner(&fixture("sab1-session.bin")).0,
-        Some("SAB v1 (sync framing)")
+        Some("SAB v1 (sync framing)".to_owned())
     );
     assert_eq!(
         winner(&fixture("sab2-session.bin")).0,
-        Some("SAB2 (HDLC framing)")
+        Some("SAB2 (HDLC framing)".to_owned())
     );
-    assert_eq!(winner(&sbus_data_session()).0, Some("S-Bus data mode"));
+    assert_eq!(
+        winner(&sbus_data_session()).0,
+        Some("S-Bus data mode".to_owned())
+    );
     let (b, _) = winner(&sbus_break_session());
     assert!(
-        b.is_some_and(|l| l.starts_with("S-Bus break") || l.starts_with("S-Bus parity")),
+        b.as_deref()
+            .is_some_and(|l| l.starts_with("S-Bus break") || l.starts_with("S-Bus parity")),
         "{b:?}"
     );
 }
@@ -86,9 +100,9 @@ fn each_fixture_names_its_protocol() {
 #[test]
 fn the_evidence_names_frames_and_their_start_bytes() {
     let ranked = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&fixture("sport-sample.bin")),
-        Kind::Raw,
+        InputKind::Raw,
     );
     let s = &ranked[0].score;
     assert_eq!((s.frames, s.valid_bytes, s.total), (30, 220, 220));
@@ -104,9 +118,9 @@ fn the_evidence_names_frames_and_their_start_bytes() {
 fn random_bytes_are_no_known_protocol() {
     for seed in [1u64, 0x2545_F491_4F6C_DD1D, 0x9E37_79B9_7F4A_7C15] {
         let ranked = rank(
-            candidates(Kind::Raw, None),
+            candidates(InputKind::Raw, None),
             &untimed(&noise(100_000, seed)),
-            Kind::Raw,
+            InputKind::Raw,
         );
         assert_eq!(verdict(&ranked), Verdict::Unknown, "seed {seed}");
     }
@@ -114,18 +128,21 @@ fn random_bytes_are_no_known_protocol() {
 
 #[test]
 fn empty_input_is_empty() {
-    let ranked = rank(candidates(Kind::Raw, None), &[], Kind::Raw);
+    let ranked = rank(candidates(InputKind::Raw, None), &[], InputKind::Raw);
     assert_eq!(verdict(&ranked), Verdict::Empty);
 }
 
 #[test]
 fn a_truncated_file_still_names_its_protocol() {
     let sport = fixture("sport-sample.bin");
-    assert_eq!(winner(&sport[..sport.len() / 2 + 3]).0, Some("S.Port"));
+    assert_eq!(
+        winner(&sport[..sport.len() / 2 + 3]).0,
+        Some("S.Port".to_owned())
+    );
     let sab = fixture("sab2-session.bin");
     assert_eq!(
         winner(&sab[5..sab.len() - 7]).0,
-        Some("SAB2 (HDLC framing)")
+        Some("SAB2 (HDLC framing)".to_owned())
     );
 }
 
@@ -135,7 +152,11 @@ fn frames_among_garbage_are_found() {
     let mut bytes = noise(300, 7);
     bytes.extend(fixture("sport-sample.bin"));
     bytes.extend(noise(100, 8));
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(&bytes), Kind::Raw);
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(&bytes),
+        InputKind::Raw,
+    );
     assert_eq!(verdict(&ranked), Verdict::Found(0, None));
     assert_eq!(ranked[0].label, "S.Port");
 }
@@ -145,8 +166,8 @@ fn a_mixed_file_names_both_protocols() {
     let mut bytes = fixture("sport-sample.bin");
     bytes.extend(fixture("sab1-session.bin"));
     let (first, second) = winner(&bytes);
-    assert_eq!(first, Some("S.Port"));
-    assert_eq!(second, Some("SAB v1 (sync framing)"));
+    assert_eq!(first, Some("S.Port".to_owned()));
+    assert_eq!(second, Some("SAB v1 (sync framing)".to_owned()));
     // S-Bus break mode reads S.Port's keep-alives, but only bytes S.Port covers: not mixed.
     assert_eq!(winner(&fixture("sport-sample.bin")).1, None);
 }
@@ -155,7 +176,11 @@ fn a_mixed_file_names_both_protocols() {
 fn an_inverted_sport_line_is_recognised() {
     let inverted: Vec<u8> = fixture("sport-sample.bin").iter().map(|b| !b).collect();
     assert_eq!(inverted[0], 0x81, "0x81 where 0x7E belongs");
-    let ranked = rank(candidates(Kind::Raw, None), &untimed(&inverted), Kind::Raw);
+    let ranked = rank(
+        candidates(InputKind::Raw, None),
+        &untimed(&inverted),
+        InputKind::Raw,
+    );
     assert!(matches!(verdict(&ranked), Verdict::Found(0, _)));
     assert!(ranked[0].inverted);
     let mut text = String::new();
@@ -179,9 +204,9 @@ fn an_inverted_sport_line_is_recognised() {
 #[test]
 fn the_command_carries_options_and_a_quoted_path() {
     let ranked = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&fixture("sport-sample.bin")),
-        Kind::Raw,
+        InputKind::Raw,
     );
     assert_eq!(
         ranked[0].command(Path::new("my capture.bin"), None),
@@ -197,9 +222,9 @@ fn the_command_carries_options_and_a_quoted_path() {
         "the protocol's own rate is not repeated"
     );
     let parity = rank(
-        candidates(Kind::Raw, None),
+        candidates(InputKind::Raw, None),
         &untimed(&sbus_break_session()),
-        Kind::Raw,
+        InputKind::Raw,
     )
     .into_iter()
     .find(|r| r.label == "S-Bus parity mode")
@@ -223,7 +248,7 @@ fn listen(baud: u32, bytes: &[u8]) -> Listen {
         })
         .collect();
     Listen {
-        baud,
+        line: Line::n81(baud),
         batches,
         bytes: bytes.len() as u64,
     }
@@ -233,20 +258,25 @@ fn listen(baud: u32, bytes: &[u8]) -> Listen {
 fn live_picks_the_rate_where_frames_decode() {
     // At the wrong rates a UART delivers garbage; at 57600 the S.Port frames.
     let sport = fixture("sport-sample.bin").repeat(4);
-    let listens: Vec<Listen> = USUAL_BAUDS
-        .iter()
-        .enumerate()
-        .map(|(i, &b)| {
-            if b == 57_600 {
-                listen(b, &sport)
-            } else {
-                listen(b, &noise(600, i as u64 + 1))
-            }
-        })
-        .collect();
+    let listens: Vec<Listen> = [
+        9600, 19200, 38400, 57600, 100_000, 115_200, 230_400, 400_000, 420_000,
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &b)| {
+        if b == 57_600 {
+            listen(b, &sport)
+        } else {
+            listen(b, &noise(600, i as u64 + 1))
+        }
+    })
+    .collect();
     let report = judge_live(&listens);
-    let (i, best) = report.best.expect("found");
-    assert_eq!(listens[i].baud, 57_600);
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
+    assert_eq!(listens[i].line.baud, 57_600);
     assert_eq!(best.label, "S.Port");
     assert!(!best.inverted);
 }
@@ -260,9 +290,12 @@ fn live_ties_go_to_the_protocols_own_rate() {
         .map(|&b| listen(b, &sab))
         .collect();
     let report = judge_live(&listens);
-    let (i, best) = report.best.expect("found");
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
     assert_eq!(best.protocol.command, "sab2");
-    assert_eq!(listens[i].baud, 115_200);
+    assert_eq!(listens[i].line.baud, 115_200);
 }
 
 #[test]
@@ -277,8 +310,12 @@ fn live_recognises_an_inverted_sport_line() {
         listen(57_600, &inverted),
         listen(115_200, &noise(500, 4)),
     ];
-    let (i, best) = judge_live(&listens).best.expect("found");
-    assert_eq!(listens[i].baud, 57_600);
+    let report = judge_live(&listens);
+    let i = report.best.expect("found");
+    let best = report.per_rate[i]
+        .as_ref()
+        .expect("the winner keeps its row");
+    assert_eq!(listens[i].line.baud, 57_600);
     assert!(best.inverted);
     assert_eq!(best.protocol.command, "sport");
 }
@@ -302,11 +339,23 @@ fn advice_after_a_run() {
     let sport = fixture("sport-sample.bin");
     // The right protocol: nothing to say.
     assert_eq!(
-        advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&sport), 30, src),
+        advise(
+            &crate::sport::PROTOCOL,
+            InputKind::Raw,
+            &kept(&sport),
+            30,
+            src
+        ),
         Advice::Fine
     );
     // S-Bus reads 16 telegrams in it: a note naming S.Port and the command.
-    match advise(&crate::sbus::PROTOCOL, Kind::Raw, &kept(&sport), 24, src) {
+    match advise(
+        &crate::sbus::PROTOCOL,
+        InputKind::Raw,
+        &kept(&sport),
+        24,
+        src,
+    ) {
         Advice::Note(n) => {
             assert!(n.contains("it looks like S.Port"), "{n}");
             assert!(n.ends_with("try: busnoop sport cap.bin"), "{n}");
@@ -314,7 +363,7 @@ fn advice_after_a_run() {
         a => panic!("{a:?}"),
     }
     // SAB finds nothing: the failure, naming S.Port.
-    match advise(&crate::sab::PROTOCOL, Kind::Raw, &kept(&sport), 0, src) {
+    match advise(&crate::sab::PROTOCOL, InputKind::Raw, &kept(&sport), 0, src) {
         Advice::NothingDecoded(m) => {
             assert!(
                 m.starts_with("no SAB frame in cap.bin; it looks like S.Port"),
@@ -325,13 +374,13 @@ fn advice_after_a_run() {
     }
     // Empty.
     assert_eq!(
-        advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&[]), 0, src),
+        advise(&crate::sport::PROTOCOL, InputKind::Raw, &kept(&[]), 0, src),
         Advice::NothingDecoded("empty input: cap.bin holds no bytes".into())
     );
     // Noise: no protocol fits.
     match advise(
         &crate::sport::PROTOCOL,
-        Kind::Raw,
+        InputKind::Raw,
         &kept(&noise(20_000, 5)),
         0,
         Path::new("-"),
@@ -344,7 +393,13 @@ fn advice_after_a_run() {
     }
     // Inverted S.Port given to sport: the fix.
     let inverted: Vec<u8> = sport.iter().map(|b| !b).collect();
-    match advise(&crate::sport::PROTOCOL, Kind::Raw, &kept(&inverted), 0, src) {
+    match advise(
+        &crate::sport::PROTOCOL,
+        InputKind::Raw,
+        &kept(&inverted),
+        0,
+        src,
+    ) {
         Advice::NothingDecoded(m) => assert!(m.contains("inverted"), "{m}"),
         a => panic!("{a:?}"),
     }
@@ -353,7 +408,7 @@ fn advice_after_a_run() {
 #[test]
 fn every_descriptor_has_a_pretty_width_per_column() {
     // The widths of the protocol descriptor follow its decoders' columns (every variant).
-    for kind in [Kind::Raw, Kind::Pcap] {
+    for kind in [InputKind::Raw, InputKind::Pcap] {
         for c in candidates(kind, None) {
             assert_eq!(
                 c.protocol.pretty_widths.len(),

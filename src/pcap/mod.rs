@@ -41,7 +41,15 @@ pub mod linktype {
     pub const RAW: u32 = 101;
     pub const LOOP: u32 = 108;
     pub const LINUX_SLL: u32 = 113;
+    /// LINKTYPE_USER0 to USER15 (147-162): private use; busnoop's exports take one per
+    /// protocol (S.Port USER0, SAB USER1, …), read by the Lua dissectors in contrib/wireshark.
     pub const USER0: u32 = 147;
+    pub const USER1: u32 = 148;
+    pub const USER2: u32 = 149;
+    pub const USER3: u32 = 150;
+    pub const USER4: u32 = 151;
+    pub const USER5: u32 = 152;
+    pub const USER6: u32 = 153;
     pub const IPV4: u32 = 228;
     pub const IPV6: u32 = 229;
     pub const RTAC_SERIAL: u32 = 250;

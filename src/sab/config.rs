@@ -1,22 +1,69 @@
 //! SAB settings: line defaults, the table's extra columns, `--framing` and the decoder options.
 
 use super::hdlc;
-use crate::protocol::{Kind, Line, Protocol};
+use crate::protocol::{Export, Front, InputKind, Line, Probe, Protocol, Variant};
 
 /// SAB runs at 115200 baud 8N1.
 pub const DEFAULT_BAUD: u32 = 115_200;
 
-/// What the shared command-line code needs to know about SAB.
+/// modm SAB / SAB2 at 115200 baud 8N1.
 pub const PROTOCOL: Protocol = Protocol {
     name: "SAB",
     command: "sab2",
+    aliases: &["sab"],
+    summary: "modm SAB / SAB2: both framings (0x54 + CRC-8, 0x7E + CRC-16) auto-detected, \
+              requests paired with responses",
+    about: "modm SAB (Sensor Actuator Bus) and SAB2: SAB v1 frames `54 LEN HDR CMD DATA CRC8`, \
+            SAB2 frames `7E HDR CMD DATA CRC16 7E` (byte-stuffed); the framing is detected (or \
+            set with --framing), responses are paired with requests and timed. 115200 baud 8N1.",
+    examples: "Examples:\n  busnoop sab2 /dev/ttyUSB0 --command speed=0x34\n  busnoop sab2 \
+               session.bin --value speed=u16*0.01:m/s\n  busnoop sab2 session.bin --stats",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording) or `-` for \
+                  standard input. File kinds are recognised by content; `--baud` also sets the \
+                  byte times of raw files.",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::Recording],
+    inverted: false,
+    rates: &[DEFAULT_BAUD, 9600, 19_200, 38_400, 57_600, 230_400],
+    accepts: &[InputKind::Raw, InputKind::Serial, InputKind::Recording],
     accepts_text: "raw wire bytes or busnoop recordings",
     // Counter Millis ID Device Type Sensor#(0x10) Sensor Data | Unit Addr Resp ms Framing Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 36, 4, 4, 7, 7, 0],
     vocab: &super::vocab::VOCAB,
+    front: Front::of::<super::args::Args>(),
+    variants,
+    config_keys: &[
+        ("timeout-ms", "master timeouts"),
+        ("commands", "command names"),
+        ("values", "value declarations"),
+    ],
+    export: Some(Export {
+        linktype: crate::pcap::linktype::USER1,
+        linktype_name: "USER1",
+        dissector: "busnoop-sab.lua",
+        extcap: "modm SAB / SAB2 (busnoop)",
+        wrap: None,
+    }),
 };
+
+/// `detect` tries each framing on its own.
+fn variants(probe: &Probe) -> Vec<Variant> {
+    [
+        ("SAB v1 (sync framing)", FramingChoice::Sync),
+        ("SAB2 (HDLC framing)", FramingChoice::Hdlc),
+    ]
+    .into_iter()
+    .map(|(label, framing)| Variant {
+        label,
+        args: &[],
+        decoder: super::decoder(Options {
+            framing,
+            baud: probe.line.baud,
+            ..Options::default()
+        }),
+    })
+    .collect()
+}
 
 /// modm's `sab::Master` waits 10 ms for a response.
 pub const DEFAULT_TIMEOUT_MS: u64 = 10;

@@ -10,7 +10,9 @@
 //!
 //! The table mapping, the timing rules and the options are documented in `docs/sab.md`.
 
+mod args;
 mod config;
+pub(crate) mod declare;
 mod decoder;
 pub(crate) mod detect;
 pub mod frame;

@@ -1,12 +1,12 @@
 //! What a SAB table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::Vocab;
 use crate::row::kind;
 
 /// Addresses 0-63; Sensor # is the command code in hex (`0x34`); the Sensor and Device
 /// columns hold only the names given with `--command` and `--name`/`--device`.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=63,
+    ids: Some(0..=63),
     id_name: "address",
     id_hint: no_hint,
     types: &[

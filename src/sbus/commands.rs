@@ -8,6 +8,8 @@
 //! the number of bytes that follow it in the telegram (CRC excluded) − 1; a **fio-count** is
 //! the number of bits − 1.
 
+use crate::fmt::{push_i64, push_u64};
+
 /// Memory areas, with their S-Bus notation prefix.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Elem {
@@ -440,6 +442,56 @@ pub fn status_name(ch: u8) -> &'static str {
         b'D' => "disconnected",
         b'X' => "exceptional intermediate",
         _ => "unknown",
+    }
+}
+
+// Element names and values as the table shows them, shared by the telegram decoding and the
+// media lists.
+
+/// A big-endian number of up to four bytes.
+pub fn be(bytes: &[u8]) -> u32 {
+    bytes.iter().fold(0u32, |a, &b| a << 8 | b as u32)
+}
+
+/// Appends the S-Bus name of element `index` after the first (`R101`, `DB4000[3]`).
+pub fn push_elem(out: &mut String, elem: Elem, block: u16, addr: u32) {
+    match elem {
+        Elem::DataBlock => {
+            out.push_str("DB");
+            push_u64(out, block as u64);
+            out.push('[');
+            push_u64(out, addr as u64);
+            out.push(']');
+        }
+        Elem::Byte => {
+            out.push_str("0x");
+            push_hex_width(out, addr, 6);
+        }
+        Elem::Text => {
+            out.push('X');
+            push_u64(out, block as u64);
+        }
+        e => {
+            out.push_str(e.prefix());
+            push_u64(out, addr as u64);
+        }
+    }
+}
+
+/// `v` as `width` upper-case hex digits.
+pub(super) fn push_hex_width(out: &mut String, v: u32, width: usize) {
+    const HEX: &[u8; 16] = b"0123456789ABCDEF";
+    for i in (0..width).rev() {
+        out.push(HEX[((v >> (i * 4)) & 0xF) as usize] as char);
+    }
+}
+
+/// An element's value: timers and counters unsigned, registers and the rest signed.
+pub(super) fn push_value(out: &mut String, elem: Elem, v: u32) {
+    if elem.is_unsigned() {
+        push_u64(out, v as u64);
+    } else {
+        push_i64(out, v as i32 as i64);
     }
 }
 

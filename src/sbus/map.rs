@@ -313,7 +313,7 @@ impl Mapper {
         let sc = &mut self.tsc;
         sc.clear();
         if let Some(e) = p.info.elem {
-            telegram::push_elem(&mut sc.sensor_no, e, p.info.block, p.info.addr);
+            super::commands::push_elem(&mut sc.sensor_no, e, p.info.block, p.info.addr);
         }
         if let Some(s) = p.seq {
             sc.seq(s);
@@ -472,7 +472,7 @@ impl Mapper {
         let kind = ack_text(&mut self.sc, code, short);
         if let Some((req, st)) = paired {
             if let Some(e) = req.elem {
-                telegram::push_elem(&mut self.sc.sensor_no, e, req.block, req.addr);
+                super::commands::push_elem(&mut self.sc.sensor_no, e, req.block, req.addr);
             }
             if code == 0 {
                 st.acks += 1;

@@ -3,8 +3,7 @@
 //! (`Row::parts`) need not be read back from the text; and read back from the text
 //! ([`media_parts`]) where nothing was recorded.
 
-use super::commands::Elem;
-use super::telegram::{be, push_elem, push_value};
+use super::commands::{Elem, be, push_elem, push_value};
 use crate::digits::put_u32;
 use crate::row::Part;
 

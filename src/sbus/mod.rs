@@ -10,9 +10,11 @@
 //! * `serial_decoder.rs` ([`SerialDecoder`]: mode detection, framer events to rows) and
 //!   `ether_decoder.rs` ([`EtherDecoder`]: packets, conversations and PLCs to rows).
 
+mod args;
 pub mod commands;
 pub mod ether;
 mod ether_decoder;
+mod export;
 mod map;
 mod media;
 pub(crate) mod pairing;
@@ -26,29 +28,90 @@ pub use ether_decoder::EtherDecoder;
 pub use serial_decoder::{Resolved, SerialDecoder};
 pub use stats::{MAX_PLCS, StationStats, Totals};
 
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
 
 /// Default serial speed of S-Bus ports.
 pub const DEFAULT_BAUD: u32 = 9600;
-/// What the shared command-line code needs to know: name and serial line format (8N1; a
-/// parity-mode line has a 9th bit that a standard UART cannot follow, see docs/sbus.md).
+/// Saia S-Bus: serial lines at 9600 baud 8N1 (a parity-mode line has a 9th bit that a standard
+/// UART cannot follow, see docs/sbus.md), and Ether-S-Bus captures.
 pub const PROTOCOL: Protocol = Protocol {
     name: "S-Bus",
     command: "sbus",
+    aliases: &[],
+    summary: "Saia S-Bus (PCD controllers): serial data/secure/break/parity modes, and Ether-S-Bus \
+              (UDP 5050) captures",
+    about: "Saia S-Bus, the bus of Saia PCD controllers: serial data, secure data, break and parity \
+            modes (9600 baud by default; the mode is detected or set with --mode), and Ether-S-Bus \
+            (UDP 5050) from pcap/pcapng files or a `tcpdump -U -w -` pipe. Requests are paired \
+            with their answers and timed.",
+    examples: "Examples:\n  busnoop sbus /dev/ttyUSB0 --baud 19200\n  busnoop sbus plant.pcap \
+               --station Boiler=10\n  tcpdump -U -w - udp port 5050 | busnoop sbus -",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng \
+                  capture of Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w \
+                  -` pipe). File kinds are recognised by content; `--baud` also sets the byte \
+                  times of raw files.",
     line: Line::n81(DEFAULT_BAUD),
+    inverted: false,
+    rates: &[DEFAULT_BAUD, 19_200, 38_400, 57_600, 115_200],
     accepts: &[
-        Kind::Raw,
-        Kind::Serial,
-        Kind::Recording,
-        Kind::Pcap,
-        Kind::Pcapng,
+        InputKind::Raw,
+        InputKind::Serial,
+        InputKind::Recording,
+        InputKind::Pcap,
+        InputKind::Pcapng,
     ],
     accepts_text: "raw serial bytes, busnoop recordings or pcap/pcapng files of Ether-S-Bus traffic",
     // Counter Millis ID Device(IP:port) Type Sensor#(DB4000[2]) Sensor(command) Data | Resp ms
     // Seq Note
     pretty_widths: &[7, 8, 3, 15, 9, 9, 22, 40, 7, 5, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[("timeout-ms", "master timeouts")],
+    export: Some(Export {
+        linktype: crate::pcap::linktype::RAW,
+        linktype_name: "RAW",
+        dissector: "sbus (Wireshark's own)",
+        extcap: "Saia S-Bus, serial (busnoop)",
+        wrap: Some(wrap),
+    }),
 };
+
+fn wrap() -> Box<dyn crate::protocol::Wrap> {
+    Box::<export::SbusWrap>::default()
+}
+
+/// `detect` tries each serial mode on a byte stream, Ether-S-Bus on a network capture (scored
+/// on the capture's bytes: the pcap reader runs inside).
+fn variants(probe: &Probe) -> Vec<Variant> {
+    let opts = |mode| Options {
+        mode,
+        baud: probe.line.baud,
+        ..Options::default()
+    };
+    match probe.input {
+        InputKind::Pcap | InputKind::Pcapng => vec![Variant {
+            label: "Ether-S-Bus",
+            args: &[],
+            decoder: Box::new(crate::protocol::PcapBytes::new(EtherDecoder::new(&opts(
+                Mode::Auto,
+            )))),
+        }],
+        input => [
+            ("S-Bus data mode", &[][..], Mode::Data),
+            ("S-Bus break mode", &[][..], Mode::Break),
+            ("S-Bus parity mode", &["--mode", "parity"][..], Mode::Parity),
+        ]
+        .into_iter()
+        .map(|(label, args, mode)| Variant {
+            label,
+            args,
+            decoder: decoder(opts(mode), input),
+        })
+        .collect(),
+    }
+}
 
 /// Ether-S-Bus server port.
 pub const DEFAULT_PORT: u16 = 5050;
@@ -106,10 +169,10 @@ impl Default for Options {
 
 /// The S-Bus decoder for an input of `kind` (one that [`PROTOCOL`] accepts): serial bytes
 /// (raw files, devices, busnoop recordings) or Ether-S-Bus captures (pcap, pcapng).
-pub fn decoder(opts: Options, kind: Kind) -> Box<dyn Decoder> {
+pub fn decoder(opts: Options, kind: InputKind) -> Box<dyn Decoder> {
     match kind {
-        Kind::Pcap | Kind::Pcapng => Box::new(EtherDecoder::new(&opts)),
-        Kind::Raw | Kind::Serial | Kind::Recording | Kind::EdgeTxLog => {
+        InputKind::Pcap | InputKind::Pcapng => Box::new(EtherDecoder::new(&opts)),
+        InputKind::Raw | InputKind::Serial | InputKind::Recording | InputKind::EdgeTxLog => {
             Box::new(SerialDecoder::new(opts))
         }
     }

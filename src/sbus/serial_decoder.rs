@@ -287,7 +287,7 @@ impl SerialCore {
     }
 
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
-        time.unwrap_or_else(|| offset_micros(offset, self.bits, self.baud))
+        time.unwrap_or_else(|| crate::protocol::untimed_micros(offset, self.bits, self.baud))
     }
 
     fn device(&self, station: Option<u8>) -> &str {
@@ -475,7 +475,12 @@ impl SerialCore {
                 match self.pairing.pending().copied() {
                     Some(p) => {
                         if let Some(e) = p.info.elem {
-                            telegram::push_elem(&mut sc.sensor_no, e, p.info.block, p.info.addr);
+                            super::commands::push_elem(
+                                &mut sc.sensor_no,
+                                e,
+                                p.info.block,
+                                p.info.addr,
+                            );
                         }
                         self.per[p.info.station as usize].crc_errors += 1;
                         self.pairing.bad_answer();
@@ -648,17 +653,6 @@ impl SerialCore {
     }
 }
 
-/// The time of byte `offset` on a line of `baud` with `bits` per character (sources without
-/// times), in µs.
-fn offset_micros(offset: u64, bits: u32, baud: u32) -> u64 {
-    match offset.checked_mul(bits as u64 * 1_000_000) {
-        // The quotient of the u128 reading below, without its division routine, while the
-        // product fits (offsets below 10^12 bytes).
-        Some(p) => p / baud as u64,
-        None => (offset as u128 * bits as u128 * 1_000_000 / baud as u128) as u64,
-    }
-}
-
 /// The Device column of a station: its `--station` name, or `PCD`.
 fn device(names: &[Option<String>], station: Option<u8>) -> &str {
     match station.and_then(|s| names[s as usize].as_deref()) {
@@ -737,42 +731,5 @@ impl Decoder for SerialDecoder {
 
     fn no_frames_hint(&self) -> &'static str {
         "check the baud rate (S-Bus ports default to 9600) and the mode (--mode data|break|parity)"
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::offset_micros;
-
-    #[test]
-    fn offset_micros_in_u64_is_the_u128_reading() {
-        let wide = |o: u64, bits: u32, baud: u32| {
-            (o as u128 * bits as u128 * 1_000_000 / baud as u128) as u64
-        };
-        let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        let mut offsets = vec![0, 1, 1 << 20, u64::MAX / 11_000_000, u64::MAX / 10_000_000];
-        offsets.extend([
-            u64::MAX / 10_000_000 + 1,
-            u64::MAX / 2,
-            u64::MAX - 1,
-            u64::MAX,
-        ]);
-        for _ in 0..2000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            offsets.push(x >> (x % 64));
-        }
-        for o in offsets {
-            for bits in [10, 11] {
-                for baud in [1, 300, 9600, 38_400, 115_200, u32::MAX] {
-                    assert_eq!(
-                        offset_micros(o, bits, baud),
-                        wide(o, bits, baud),
-                        "{o} {bits} {baud}"
-                    );
-                }
-            }
-        }
     }
 }

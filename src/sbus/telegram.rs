@@ -1,7 +1,7 @@
 //! S-Bus telegrams: CRC, DLE escaping, encoders (for tests and benchmarks), and the decoding of
 //! request and response contents into the table's `Sensor #` and `Data` text.
 
-use super::commands::{self, Command, Elem, Expect, Layout};
+use super::commands::{self, Command, Elem, Expect, Layout, be, push_elem, push_hex_width};
 use super::media::{MediaSpans, ascii_text, medium_letter, push_bits, push_words};
 use crate::digits::put_u32;
 use crate::fmt::{push_hex, push_i64, push_u64};
@@ -190,50 +190,6 @@ pub fn command_name(cmd: u8) -> &'static str {
     match commands::command(cmd) {
         Some(c) => c.name,
         None => "Unknown command",
-    }
-}
-
-pub(super) fn be(bytes: &[u8]) -> u32 {
-    bytes.iter().fold(0u32, |a, &b| a << 8 | b as u32)
-}
-
-/// Appends the S-Bus name of element `index` after the first (`R101`, `DB4000[3]`).
-pub fn push_elem(out: &mut String, elem: Elem, block: u16, addr: u32) {
-    match elem {
-        Elem::DataBlock => {
-            out.push_str("DB");
-            push_u64(out, block as u64);
-            out.push('[');
-            push_u64(out, addr as u64);
-            out.push(']');
-        }
-        Elem::Byte => {
-            out.push_str("0x");
-            push_hex_width(out, addr, 6);
-        }
-        Elem::Text => {
-            out.push('X');
-            push_u64(out, block as u64);
-        }
-        e => {
-            out.push_str(e.prefix());
-            push_u64(out, addr as u64);
-        }
-    }
-}
-
-fn push_hex_width(out: &mut String, v: u32, width: usize) {
-    const HEX: &[u8; 16] = b"0123456789ABCDEF";
-    for i in (0..width).rev() {
-        out.push(HEX[((v >> (i * 4)) & 0xF) as usize] as char);
-    }
-}
-
-pub(super) fn push_value(out: &mut String, elem: Elem, v: u32) {
-    if elem.is_unsigned() {
-        push_u64(out, v as u64);
-    } else {
-        push_i64(out, v as i32 as i64);
     }
 }
 

@@ -1,13 +1,13 @@
 //! What an S-Bus table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab};
 use crate::row::kind;
 
 /// Stations 0-255; the Sensor column names the command (as Wireshark does); Sensor # is the
 /// first element in S-Bus notation. The Device column is open: Ether-S-Bus shows PLC
 /// addresses, which only the capture knows.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=255,
+    ids: Some(0..=255),
     id_name: "station",
     id_hint: no_hint,
     types: &[
@@ -41,12 +41,12 @@ fn no_hint(_: u32) -> Option<String> {
 }
 
 /// Every command name of the Sensor column, each once.
-fn sensors() -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
+fn sensors() -> Vec<Sensor> {
+    let mut out: Vec<Sensor> = Vec::new();
     for cmd in 0..=u8::MAX {
         let name = super::telegram::command_name(cmd);
-        if !out.iter().any(|n| n == name) {
-            out.push(name.to_owned());
+        if !out.iter().any(|n| n.column == name) {
+            out.push(Sensor::named(name));
         }
     }
     out
@@ -92,6 +92,6 @@ mod tests {
             assert!(!element(e), "{e}");
         }
         let s = sensors();
-        assert!(s.iter().any(|n| n == "Read register(s)"), "{s:?}");
+        assert!(s.iter().any(|n| n.column == "Read register(s)"), "{s:?}");
     }
 }

@@ -118,7 +118,7 @@ mod tests {
     /// Every message the reader sends, in order, with packets as (time, bytes).
     fn messages(bytes: Vec<u8>, keep_input: u64) -> Vec<String> {
         let opened = Opened {
-            kind: crate::protocol::Kind::Pcap,
+            kind: crate::protocol::InputKind::Pcap,
             prefix: Vec::new(),
             reader: Box::new(io::Cursor::new(bytes)),
             name: "c.pcap".into(),
@@ -180,7 +180,7 @@ mod tests {
         }
         for (limit, want) in [(0, 0), (1000, 1000), (READ_SIZE as u64 + 7, READ_SIZE + 7)] {
             let opened = Opened {
-                kind: crate::protocol::Kind::Pcap,
+                kind: crate::protocol::InputKind::Pcap,
                 prefix: Vec::new(),
                 reader: Box::new(io::Cursor::new(f.clone())),
                 name: "c.pcap".into(),

@@ -48,13 +48,13 @@ pub fn looks_like_log(prefix: &[u8]) -> Option<bool> {
 
 /// A parsed log line.
 #[derive(Debug, PartialEq, Eq)]
-pub struct Line {
+pub struct LogLine {
     pub time: NaiveDateTime,
     pub bytes: Vec<u8>,
 }
 
 /// Parses one line (without its line end). `None` if it is not a log line.
-pub fn parse_line(line: &[u8]) -> Option<Line> {
+pub fn parse_line(line: &[u8]) -> Option<LogLine> {
     let text = std::str::from_utf8(line).ok()?.trim_end_matches('\r');
     if looks_like_log(text.as_bytes()) != Some(true) {
         return None;
@@ -68,7 +68,7 @@ pub fn parse_line(line: &[u8]) -> Option<Line> {
         }
         bytes.push(u8::from_str_radix(tok, 16).ok()?);
     }
-    Some(Line { time, bytes })
+    Some(LogLine { time, bytes })
 }
 
 /// Streams a log file as batches, one time mark per line.
@@ -297,7 +297,7 @@ mod tests {
     fn reads_batches_with_marks() {
         let text = b"2014-07-11,22:41:01.340: 7E 00\n\nnot a log line\n2014-07-11,22:41:01.350: 7E A1\n2014-07-11,22:41:01.360: 7E".to_vec();
         let opened = Opened {
-            kind: super::super::Kind::EdgeTxLog,
+            kind: super::super::InputKind::EdgeTxLog,
             prefix: Vec::new(),
             reader: Box::new(std::io::Cursor::new(text)),
             name: "t".into(),
@@ -324,7 +324,7 @@ mod tests {
     /// Every message the reader sends, batches included, in order.
     fn messages(text: &[u8]) -> Vec<Message> {
         let opened = Opened {
-            kind: super::super::Kind::EdgeTxLog,
+            kind: super::super::InputKind::EdgeTxLog,
             prefix: Vec::new(),
             reader: Box::new(std::io::Cursor::new(text.to_vec())),
             name: "t".into(),

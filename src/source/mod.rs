@@ -25,7 +25,7 @@ use std::thread;
 use std::time::Duration;
 
 use crate::exit::Failure;
-use crate::protocol::Kind;
+use crate::protocol::InputKind;
 use crate::time::Anchor;
 
 /// Read size for files and streams (a read of a pipe or a port returns what is there, so
@@ -167,7 +167,7 @@ pub const DETECT_LEN: usize = 256;
 
 /// Decides what `prefix` (the first bytes of the input) is. With fewer than [`DETECT_LEN`]
 /// bytes the answer may change as more arrive, unless `complete` says there are no more.
-pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
+pub fn detect(prefix: &[u8], complete: bool) -> Option<InputKind> {
     const PCAP: [[u8; 4]; 4] = [
         [0xD4, 0xC3, 0xB2, 0xA1],
         [0xA1, 0xB2, 0xC3, 0xD4],
@@ -181,8 +181,8 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
             }
             use crate::pcap::linktype::{RTAC_SERIAL, USER0};
             return Some(match crate::pcap::link_type(prefix) {
-                Some(RTAC_SERIAL | USER0) => Kind::Recording,
-                _ => Kind::Pcap,
+                Some(RTAC_SERIAL | USER0) => InputKind::Recording,
+                _ => InputKind::Pcap,
             });
         }
         if prefix[..4] == [0x0A, 0x0D, 0x0D, 0x0A] {
@@ -190,19 +190,19 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<Kind> {
             // (`--record FILE.pcapng`), not network traffic.
             use crate::pcap::linktype::{RTAC_SERIAL, USER0};
             return match crate::pcap::pcapng_first_interface(prefix) {
-                Ok(Some(RTAC_SERIAL | USER0)) => Some(Kind::Recording),
-                Ok(_) => Some(Kind::Pcapng),
+                Ok(Some(RTAC_SERIAL | USER0)) => Some(InputKind::Recording),
+                Ok(_) => Some(InputKind::Pcapng),
                 Err(crate::pcap::NeedMore) if complete || prefix.len() >= DETECT_LEN => {
-                    Some(Kind::Pcapng)
+                    Some(InputKind::Pcapng)
                 }
                 Err(crate::pcap::NeedMore) => None,
             };
         }
     }
     match edgetx::looks_like_log(prefix) {
-        Some(true) => Some(Kind::EdgeTxLog),
-        Some(false) => Some(Kind::Raw),
-        None if complete => Some(Kind::Raw),
+        Some(true) => Some(InputKind::EdgeTxLog),
+        Some(false) => Some(InputKind::Raw),
+        None if complete => Some(InputKind::Raw),
         None => None,
     }
 }
@@ -233,7 +233,7 @@ impl Input {
 
 /// An opened input with its first bytes already read for detection.
 pub struct Opened {
-    pub kind: Kind,
+    pub kind: InputKind,
     pub prefix: Vec<u8>,
     pub reader: Box<dyn Read + Send>,
     pub name: String,
@@ -323,14 +323,14 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
             break k;
         }
         if prefix.len() >= DETECT_LEN {
-            break detect(&prefix, true).unwrap_or(Kind::Raw);
+            break detect(&prefix, true).unwrap_or(InputKind::Raw);
         }
         if let Some(fd) = &fd {
             wait_readable(fd.as_fd()).map_err(fail)?;
         }
         let want = DETECT_LEN - prefix.len();
         match reader.read(&mut buf[..want]) {
-            Ok(0) => break detect(&prefix, true).unwrap_or(Kind::Raw),
+            Ok(0) => break detect(&prefix, true).unwrap_or(InputKind::Raw),
             Ok(n) => prefix.extend_from_slice(&buf[..n]),
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             Err(e) => return Err(fail(e)),
@@ -447,7 +447,7 @@ impl ChunkReader for RawReader {
 }
 
 /// An opened source: its kind, its reader, and for files and streams how far it was read.
-pub type Reading = (Kind, Box<dyn ChunkReader>, Option<Progress>);
+pub type Reading = (InputKind, Box<dyn ChunkReader>, Option<Progress>);
 
 /// The receiving end of a reader thread.
 pub struct Feed {
@@ -522,34 +522,40 @@ mod tests {
     fn detects_by_content() {
         assert_eq!(
             detect(b"2014-07-11,22:41:01.340: 7E 00\n", false),
-            Some(Kind::EdgeTxLog)
+            Some(InputKind::EdgeTxLog)
         );
-        assert_eq!(detect(&[0x7E, 0x00, 0x7E, 0xA1], false), Some(Kind::Raw));
+        assert_eq!(
+            detect(&[0x7E, 0x00, 0x7E, 0xA1], false),
+            Some(InputKind::Raw)
+        );
         let mut pcap = vec![0xD4, 0xC3, 0xB2, 0xA1];
         assert_eq!(detect(&pcap, false), None, "needs the link type");
-        assert_eq!(detect(&pcap, true), Some(Kind::Pcap));
+        assert_eq!(detect(&pcap, true), Some(InputKind::Pcap));
         pcap.extend_from_slice(&[0; 16]);
         pcap.extend_from_slice(&1u32.to_le_bytes());
-        assert_eq!(detect(&pcap, false), Some(Kind::Pcap));
+        assert_eq!(detect(&pcap, false), Some(InputKind::Pcap));
         pcap[20] = 250;
-        assert_eq!(detect(&pcap, false), Some(Kind::Recording));
+        assert_eq!(detect(&pcap, false), Some(InputKind::Recording));
         // pcapng: the first interface's link type tells a recording from network traffic.
         assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], false), None);
-        assert_eq!(detect(&[0x0A, 0x0D, 0x0D, 0x0A], true), Some(Kind::Pcapng));
+        assert_eq!(
+            detect(&[0x0A, 0x0D, 0x0D, 0x0A], true),
+            Some(InputKind::Pcapng)
+        );
         let mut ng = Vec::new();
         crate::pcap::write_ng::section_header(&mut ng);
         assert_eq!(detect(&ng, false), None);
         let mut other = ng.clone();
         crate::pcap::write_ng::packet(&mut other, 0, 0, b"x", None);
-        assert_eq!(detect(&other, false), Some(Kind::Pcapng));
+        assert_eq!(detect(&other, false), Some(InputKind::Pcapng));
         let mut eth = ng.clone();
         crate::pcap::write_ng::interface(&mut eth, 1, None, None);
-        assert_eq!(detect(&eth, false), Some(Kind::Pcapng));
+        assert_eq!(detect(&eth, false), Some(InputKind::Pcapng));
         crate::pcap::write_ng::interface(&mut ng, 250, Some("/dev/ttyUSB0"), None);
-        assert_eq!(detect(&ng, false), Some(Kind::Recording));
+        assert_eq!(detect(&ng, false), Some(InputKind::Recording));
         assert_eq!(detect(b"2014-07", false), None);
-        assert_eq!(detect(b"2014-07", true), Some(Kind::Raw));
-        assert_eq!(detect(b"", true), Some(Kind::Raw));
+        assert_eq!(detect(b"2014-07", true), Some(InputKind::Raw));
+        assert_eq!(detect(b"", true), Some(InputKind::Raw));
     }
 
     #[test]

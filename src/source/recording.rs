@@ -424,7 +424,7 @@ mod tests {
 
     fn replay(bytes: Vec<u8>) -> Vec<Message> {
         let opened = Opened {
-            kind: crate::protocol::Kind::Recording,
+            kind: crate::protocol::InputKind::Recording,
             prefix: Vec::new(),
             reader: Box::new(io::Cursor::new(bytes)),
             name: "rec.pcap".into(),

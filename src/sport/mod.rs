@@ -2,6 +2,7 @@
 //!
 //! The table mapping and the timing rule are documented in `docs/sport.md`.
 
+mod args;
 pub mod names;
 pub(crate) mod passthrough;
 pub(crate) mod values;
@@ -10,7 +11,7 @@ pub mod wire;
 
 use crate::fmt::{push_0x, push_hex, push_hex_u8, push_u64};
 use crate::numbers::push_uint;
-use crate::protocol::{Decoder, Kind, Line, Protocol};
+use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
 use crate::row::{Class, Row};
 use crate::row::{Latch, RowOut, RowResult};
 use crate::stats::{Column, Problems, Report};
@@ -22,18 +23,55 @@ pub const SLOT_MICROS: u64 = 12_000;
 /// Default serial speed.
 pub const DEFAULT_BAUD: u32 = 57_600;
 
-/// What the command line needs to know: 57600 baud 8N1 (inverted on the wire: the adapter must
-/// invert, see docs/live.md).
+/// FrSky S.Port: 57600 baud 8N1, inverted on the wire (the adapter must invert, see
+/// docs/live.md).
 pub const PROTOCOL: Protocol = Protocol {
     name: "S.Port",
     command: "sport",
+    aliases: &[],
+    summary: "FrSky S.Port: polls `7E id`, 8-byte responses, byte stuffing, sum CRC (57600 baud)",
+    about: "FrSky S.Port (Smart Port) telemetry: the receiver polls `7E id`, sensors answer with \
+            8-byte frames (byte stuffing, sum CRC). 57600 baud 8N1, inverted on the wire: the \
+            adapter must invert (docs/live.md). The table follows the S-Port_Snoop sample.",
+    examples: "Examples:\n  busnoop sport /dev/ttyUSB0\n  busnoop sport flight.log --hide-polls \
+               --sensor VFAS\n  busnoop sport capture.bin -o capture.csv",
+    source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
+                  capture file (raw wire bytes, an EdgeTX/OpenTX S.Port debug log, a busnoop \
+                  .pcap or .pcapng recording) or `-` for standard input. File kinds are \
+                  recognised by content.",
     line: Line::n81(DEFAULT_BAUD),
-    accepts: &[Kind::Raw, Kind::Serial, Kind::EdgeTxLog, Kind::Recording],
+    inverted: true,
+    rates: &[DEFAULT_BAUD],
+    accepts: &[
+        InputKind::Raw,
+        InputKind::Serial,
+        InputKind::EdgeTxLog,
+        InputKind::Recording,
+    ],
     accepts_text: "raw wire bytes, EdgeTX logs or busnoop recordings",
     // Counter Millis ID Device Type Sensor# Sensor Data | Unit Note
     pretty_widths: &[7, 8, 3, 10, 9, 8, 10, 30, 4, 0],
     vocab: &vocab::VOCAB,
+    front: Front::of::<args::Args>(),
+    variants,
+    config_keys: &[],
+    export: Some(Export {
+        linktype: crate::pcap::linktype::USER0,
+        linktype_name: "USER0",
+        dissector: "busnoop-sport.lua",
+        extcap: "FrSky S.Port (busnoop)",
+        wrap: None,
+    }),
 };
+
+/// `detect` reads S.Port one way (the inverted line is tried for every inverted protocol).
+fn variants(_: &Probe) -> Vec<Variant> {
+    vec![Variant {
+        label: "S.Port",
+        args: &[],
+        decoder: decoder(),
+    }]
+}
 
 /// Extra columns after the eight base columns.
 pub const COLUMNS: &[&str] = &["Unit", "Note"];
@@ -500,17 +538,13 @@ impl Decoder for SportDecoder {
     }
 
     fn push(&mut self, data: &[u8], time: Option<u64>, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let table = &mut self.table;
-        self.re.push(data, time, &mut |e| table.event(e, &mut out));
-        out.result()
+        let (re, table) = (&mut self.re, &mut self.table);
+        Latch::with(out, |out| re.push(data, time, &mut |e| table.event(e, out)))
     }
 
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
-        let mut out = Latch::new(out);
-        let table = &mut self.table;
-        self.re.finish(&mut |e| table.event(e, &mut out));
-        out.result()
+        let (re, table) = (&mut self.re, &mut self.table);
+        Latch::with(out, |out| re.finish(&mut |e| table.event(e, out)))
     }
 
     fn valid_frames(&self) -> u64 {

@@ -460,11 +460,12 @@ const CELL_COUNTS: [&str; 16] = [
     "count=8", "count=9", "count=10", "count=11", "count=12", "count=13", "count=14", "count=15",
 ];
 
-/// ` cell`, the 0-based index of a cell (0-15: the second cell of a frame is shown only when
-/// its index is below the count) and `=`, as constants.
+/// ` cell`, the number of a cell from 1 as the radio numbers them (`Cell1` … `Cell16`; the
+/// wire's 0-based index 0-15, the second cell of a frame shown only when its index is below the
+/// count) and `=`, as constants.
 const CELL_KEYS: [&str; 16] = [
-    " cell0=", " cell1=", " cell2=", " cell3=", " cell4=", " cell5=", " cell6=", " cell7=",
-    " cell8=", " cell9=", " cell10=", " cell11=", " cell12=", " cell13=", " cell14=", " cell15=",
+    " cell1=", " cell2=", " cell3=", " cell4=", " cell5=", " cell6=", " cell7=", " cell8=",
+    " cell9=", " cell10=", " cell11=", " cell12=", " cell13=", " cell14=", " cell15=", " cell16=",
 ];
 
 /// FLVSS cells: bits 0-3 first index, 4-7 count, 8-19 and 20-31 two cells in 2 mV units,
@@ -548,8 +549,9 @@ fn hub(
         let hi = (value >> 8) as u8;
         let idx = lo >> 4;
         let raw = ((lo as u32 & 0x0F) << 8) | hi as u32;
+        // Numbered from 1, like FLVSS cells and the radio (`Cell1`).
         data.push_str("idx");
-        push_uint(data, idx as u64);
+        push_uint(data, idx as u64 + 1);
         data.push('=');
         nums.fixed(cell_name(idx as u32), "V", (raw * 2) as i64, 3);
         data.push_str(nums.last_text());
@@ -696,16 +698,16 @@ mod tests {
     fn cell_texts_match_formatting() {
         for n in 0..16 {
             assert_eq!(CELL_COUNTS[n], format!("count={n}"));
-            assert_eq!(CELL_KEYS[n], format!(" cell{n}="));
+            assert_eq!(CELL_KEYS[n], format!(" cell{}=", n + 1));
         }
         for index in 0..16u32 {
             for count in 0..16u32 {
                 let value = index | count << 4 | 1959 << 8 | 1000 << 20;
                 let (mut data, mut nums) = (String::new(), SportNumbers::default());
                 cells(value, &mut data, &mut nums);
-                let mut want = format!("count={count} cell{index}=3.918");
+                let mut want = format!("count={count} cell{}=3.918", index + 1);
                 if index + 1 < count {
-                    want.push_str(&format!(" cell{}=2.000", index + 1));
+                    want.push_str(&format!(" cell{}=2.000", index + 2));
                 }
                 assert_eq!(data, want, "index {index} count {count}");
             }
@@ -735,8 +737,8 @@ mod tests {
 
     #[test]
     fn packed_values() {
-        assert_eq!(d(0x0300, 0x8188_0D30).1, "count=3 cell0=4.122 cell1=4.144");
-        assert_eq!(d(0x0300, 0x0008_3432).1, "count=3 cell2=4.200");
+        assert_eq!(d(0x0300, 0x8188_0D30).1, "count=3 cell1=4.122 cell2=4.144");
+        assert_eq!(d(0x0300, 0x0008_3432).1, "count=3 cell3=4.200");
         assert_eq!(d(0x0800, 0x8071_0700).1, "lon=12.3456000");
         assert_eq!(d(0x0800, 0x4071_0700).1, "lat=-12.3456000");
         assert_eq!(
@@ -751,7 +753,7 @@ mod tests {
         assert_eq!(d(0xF101, 0x9612_005A).1, "90");
         assert_eq!(
             d(0x0006, 0xD007),
-            ("Hub Cell".into(), "idx0=4.000".into(), "V")
+            ("Hub Cell".into(), "idx1=4.000".into(), "V")
         );
         assert_eq!(d(0x0010, 638).0, "Hub BARO_ALT_BP");
         assert_eq!(d(0x0B00, 5000 | 120 << 16).1, "RB1V=5.000V RB1A=1.20A");
@@ -786,7 +788,7 @@ mod tests {
     fn full_wire_precision_and_numbers() {
         // 12 bits of 2 mV: raw 1959 (0x7A7) is 3.918 V, where the radio keeps 3.91.
         let v = 0x7A7 << 8 | 1 << 4;
-        assert_eq!(d(0x0300, v).1, "count=1 cell0=3.918");
+        assert_eq!(d(0x0300, v).1, "count=1 cell1=3.918");
         assert_eq!(
             n(1, 0x0300, v),
             ("3.918".into(), "V", "Cell1=3.918V".into())

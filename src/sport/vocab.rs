@@ -1,12 +1,12 @@
 //! What an S.Port table can show, for checking filters and names (`crate::filter`).
 
-use crate::filter::Vocab;
+use crate::protocol::vocab::{Sensor, Vocab};
 use crate::row::kind;
 
 /// Physical IDs 0-31; the Sensor column names app IDs as EdgeTX does; Sensor # is the app ID
 /// in hex.
 pub const VOCAB: Vocab = Vocab {
-    ids: 0..=31,
+    ids: Some(0..=31),
     id_name: "physical ID",
     id_hint,
     types: &[
@@ -47,23 +47,42 @@ fn id_hint(id: u32) -> Option<String> {
     })
 }
 
-/// Every sensor label of an app ID busnoop knows (EdgeTX's names), each once.
-fn sensors() -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    let mut label = String::new();
-    let mut hex = String::new();
+/// Every sensor busnoop knows by app ID, each once: the Sensor column's label (S-Port_Snoop's
+/// `Volts`, `Cels`) with the names of its numbers (EdgeTX's `VFAS`, `Cell1` … `Cell16`).
+fn sensors() -> Vec<Sensor> {
+    let mut out: Vec<Sensor> = Vec::new();
+    let (mut label, mut hex, mut data) = (String::new(), String::new(), String::new());
+    let mut nums = super::values::SportNumbers::default();
     for app_id in 0..=u16::MAX {
         label.clear();
         hex.clear();
-        super::values::label(app_id, &mut label);
+        data.clear();
+        nums.clear();
+        super::values::decode_numbers(0, app_id, 0, &mut label, &mut data, &mut nums);
         super::values::push_hex_id(&mut hex, app_id);
         // Hub frames of unknown IDs are named by number (`Hub 0x41`): not worth listing.
-        if !label.is_empty()
-            && label != hex
-            && !label.starts_with("Hub 0x")
-            && !out.contains(&label)
-        {
-            out.push(label.clone());
+        if label.is_empty() || label == hex || label.starts_with("Hub 0x") {
+            continue;
+        }
+        let mut parts: Vec<String> =
+            nums.with_parts(|p| p.iter().map(|p| p.name.to_owned()).collect());
+        // A cell frame names the cells it carries; the sensor has all of them.
+        if parts.iter().any(|p| p.starts_with("Cell")) {
+            parts = (1..=16).map(|i| format!("Cell{i}")).collect();
+        }
+        parts.retain(|p| *p != label && *p != hex);
+        match out.iter_mut().find(|s| s.column == label) {
+            Some(s) => {
+                for p in parts {
+                    if !s.parts.contains(&p) {
+                        s.parts.push(p);
+                    }
+                }
+            }
+            None => out.push(Sensor {
+                column: label.clone(),
+                parts,
+            }),
         }
     }
     out
@@ -90,11 +109,23 @@ mod tests {
     fn knows_the_common_sensors_and_hints_at_poll_bytes() {
         let s = sensors();
         for name in ["Cels", "RxBt", "RSSI", "Alt", "Volts"] {
-            assert!(s.iter().any(|n| n == name), "{name} in {s:?}");
+            assert!(s.iter().any(|n| n.column == name), "{name} in {s:?}");
         }
+        // Both names of a sensor: the table's and the radio's.
+        let of = |name: &str| -> Vec<&str> {
+            s.iter()
+                .filter(|n| n.is(name))
+                .map(|n| n.column.as_str())
+                .collect()
+        };
+        assert_eq!(of("VFAS"), ["Hub VFAS", "Volts"]);
+        assert_eq!(of("Curr"), ["Amps"]);
+        assert_eq!(of("VSpd"), ["Vario"]);
+        assert_eq!(of("cell3"), ["Hub Cell", "Cels"]);
+        assert_eq!(of("RxBt"), ["RxBt"]);
         assert!(
             !s.iter()
-                .any(|n| n.len() == 4 && n.bytes().all(|b| b.is_ascii_hexdigit()))
+                .any(|n| n.column.len() == 4 && n.column.bytes().all(|b| b.is_ascii_hexdigit()))
         );
         assert!(id_hint(0xA1).unwrap().contains("physical ID 1"));
         assert!(id_hint(40).is_none());

@@ -35,7 +35,7 @@ pub struct Key {
 
 /// One device/sensor.
 #[derive(Clone, Debug)]
-pub struct Line {
+pub struct Track {
     pub key: Key,
     pub device: String,
     /// The `Data` column of the last row that carried a value.
@@ -62,9 +62,9 @@ pub struct Line {
     pub marked: bool,
 }
 
-impl Line {
-    fn new(key: Key, device: &str, now: u64) -> Line {
-        Line {
+impl Track {
+    fn new(key: Key, device: &str, now: u64) -> Track {
+        Track {
             key,
             device: cut(device),
             value: String::new(),
@@ -167,7 +167,7 @@ impl Sort {
 /// Every line and the totals.
 #[derive(Clone, Debug)]
 pub struct Model {
-    lines: Vec<Line>,
+    lines: Vec<Track>,
     index: HashMap<Key, usize>,
     /// Index of the `Unit` column among the decoder's extra columns.
     unit_col: Option<usize>,
@@ -210,7 +210,7 @@ impl Model {
         }
     }
 
-    pub fn lines(&self) -> &[Line] {
+    pub fn lines(&self) -> &[Track] {
         &self.lines
     }
 
@@ -277,7 +277,7 @@ impl Model {
                 return;
             }
             None => {
-                self.lines.push(Line::new(key.clone(), row.device, now));
+                self.lines.push(Track::new(key.clone(), row.device, now));
                 self.index.insert(key, self.lines.len() - 1);
                 self.lines.len() - 1
             }
@@ -413,7 +413,7 @@ impl Model {
 
 /// The filter (lower case) is a substring of the line's ID (decimal or 0x hex), device, sensor
 /// number or sensor name.
-fn matches(l: &Line, filter: &str) -> bool {
+fn matches(l: &Track, filter: &str) -> bool {
     let id = l
         .key
         .id

@@ -6,7 +6,7 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line as Text, Span};
 use ratatui::widgets::{Cell, Paragraph, Row as TableRow, Table};
 
-use super::model::{Key, Line, Model, Sort};
+use super::model::{Key, Model, Sort, Track};
 use crate::row::Class;
 
 /// What the header says about the source.
@@ -226,7 +226,7 @@ fn dim() -> Style {
     Style::new().add_modifier(Modifier::DIM)
 }
 
-fn line_row<'a>(l: &'a Line, selected: Option<&Key>, now: u64) -> TableRow<'a> {
+fn line_row<'a>(l: &'a Track, selected: Option<&Key>, now: u64) -> TableRow<'a> {
     let count = |n: u64| {
         let c = Cell::from(if n == 0 { String::new() } else { n.to_string() });
         if n > 0 {
