@@ -182,6 +182,10 @@ pub fn recording(data: &[u8]) {
     d.finish(&mut out).unwrap();
 }
 
+/// Writers of logic-analyzer traces from known characters (sigrok sessions, VCD, Saleae CSV),
+/// for the tests.
+pub use crate::source::logic::write as trace_writer;
+
 /// A reader that fails at once (a trace whose header is unusable).
 struct Refused(Option<crate::exit::Failure>);
 
@@ -221,7 +225,7 @@ fn open_trace(mut o: Opened) -> Box<dyn ChunkReader> {
 /// UART): never panic, read sizes do not matter, every character's time is at or after the
 /// one before, and the S.Port decoder accepts whatever they yield.
 pub fn logic_trace(data: &[u8]) {
-    let (bytes, _) = read_all(open_trace, Kind::Raw, data);
+    let (bytes, _) = read_all(open_trace, InputKind::Trace, data);
     let times: Vec<u64> = bytes
         .iter()
         .map(|b| b.1.expect("a trace's characters have times"))

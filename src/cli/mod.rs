@@ -207,6 +207,7 @@ fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
         InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
         InputKind::Recording => "a busnoop recording",
         InputKind::Raw | InputKind::Serial => "raw serial data",
+        InputKind::Trace => "a logic-analyzer trace",
     };
     Failure::Input(format!(
         "this is {what}; {} captures are {}",
@@ -285,6 +286,8 @@ pub fn run_capture(
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut line = default_line;
+    // A trace's rate is measured unless it is given (--baud, or a speed in --line).
+    let mut fixed_baud = args.live.baud;
     if let Some(l) = &args.live.line {
         line = line
             .parse_over(l)
@@ -293,6 +296,9 @@ pub fn run_capture(
             return Err(Failure::Usage(format!(
                 "--line {l}: the speed is out of range (50 to 12000000)"
             )));
+        }
+        if line.baud != default_line.baud {
+            fixed_baud = fixed_baud.or(Some(line.baud));
         }
     }
     if let Some(b) = args.live.baud {
@@ -309,7 +315,19 @@ pub fn run_capture(
     } else {
         crate::detect::ADVICE_BYTES as u64
     };
-    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
+    let trace = source::logic::Options {
+        line,
+        baud: fixed_baud,
+        channel: args.live.channel.clone(),
+    };
+    let (kind, reader, progress) =
+        open_source(input, &serial, &trace, args.live.reconnect, keep_input)?;
+    if args.live.channel.is_some() && kind != InputKind::Trace {
+        return Err(Failure::Usage(format!(
+            "--channel picks a wire of a logic-analyzer trace; {} is not one",
+            args.source.display()
+        )));
+    }
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -325,7 +343,7 @@ pub fn run_capture(
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
         InputKind::Pcap | InputKind::Pcapng => Content::Packets,
-        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording | InputKind::Trace => {
             Content::Line { timed: true }
         }
         InputKind::Raw => Content::Line { timed: false },
@@ -608,6 +626,7 @@ fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
+    trace: &source::logic::Options,
     reconnect: bool,
     keep_input: u64,
 ) -> Result<source::Reading, Failure> {
@@ -634,6 +653,7 @@ fn open_source(
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
         InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Trace => source::logic::reader(opened, trace)?,
     };
     Ok((kind, reader, Some(progress)))
 }

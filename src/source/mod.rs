@@ -9,8 +9,6 @@
 
 pub mod capture;
 pub mod edgetx;
-// Wired into the command line with the registration kit (phase 2 of issue 31).
-#[allow(dead_code)]
 pub mod logic;
 pub mod recording;
 pub mod serial;
@@ -198,6 +196,12 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<InputKind> {
                 Err(crate::pcap::NeedMore) => None,
             };
         }
+    }
+    // Logic-analyzer traces: a zip (sigrok session), a VCD keyword, a Saleae CSV header.
+    match logic::recognise(prefix, complete || prefix.len() >= DETECT_LEN) {
+        Some(Some(_)) => return Some(InputKind::Trace),
+        Some(None) => {}
+        None => return None,
     }
     match edgetx::looks_like_log(prefix) {
         Some(true) => Some(InputKind::EdgeTxLog),

@@ -148,6 +148,8 @@ pub struct Options {
 }
 
 impl Options {
+    /// The protocol's line; the rate measured, the channel found.
+    #[cfg(any(test, feature = "selfcheck"))]
     pub fn new(line: Line) -> Self {
         Options {
             line,

@@ -43,7 +43,7 @@ fn unzip(mut reader: Box<dyn Read + Send>, tx: SyncSender<Part>) {
                 return;
             }
             Err(e) => {
-                let _ = tx.send(Part::Failed(e.to_string()));
+                let _ = tx.send(Part::Failed(zip_error(&e)));
                 return;
             }
         };
@@ -60,7 +60,7 @@ fn unzip(mut reader: Box<dyn Read + Send>, tx: SyncSender<Part>) {
                     Ok(k) => n += k,
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                     Err(e) => {
-                        let _ = tx.send(Part::Failed(e.to_string()));
+                        let _ = tx.send(Part::Failed(io_error(&e)));
                         return;
                     }
                 }
@@ -76,6 +76,22 @@ fn unzip(mut reader: Box<dyn Read + Send>, tx: SyncSender<Part>) {
                 break;
             }
         }
+    }
+}
+
+/// What went wrong in the archive, in words.
+fn zip_error(e: &zip::result::ZipError) -> String {
+    match e {
+        zip::result::ZipError::Io(e) => io_error(e),
+        e => e.to_string(),
+    }
+}
+
+fn io_error(e: &std::io::Error) -> String {
+    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+        "the archive ends early (cut short?)".into()
+    } else {
+        e.to_string()
     }
 }
 

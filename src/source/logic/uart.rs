@@ -74,6 +74,7 @@ pub enum Event {
 }
 
 impl Event {
+    #[cfg(test)]
     pub fn tick(&self) -> u64 {
         match *self {
             Event::Char { tick, .. } | Event::Break { tick, .. } => tick,
