@@ -1,5 +1,5 @@
 use super::*;
-use crate::protocol::{Kind, Line, Parity};
+use crate::protocol::{InputKind, Line, Parity};
 use write::{Levels, Noise, Signal};
 
 /// What a reader made of a trace.
@@ -16,7 +16,7 @@ struct Out {
 fn opened(data: &[u8]) -> Opened {
     let split = data.len().min(crate::source::DETECT_LEN);
     Opened {
-        kind: Kind::Raw,
+        kind: InputKind::Trace,
         prefix: data[..split].to_vec(),
         reader: Box::new(io::Cursor::new(data[split..].to_vec())),
         name: "trace".into(),
