@@ -256,6 +256,15 @@ fn the_rate_is_measured_when_the_protocol_default_does_not_fit_and_baud_wins() {
         "{}",
         text(&given.stderr)
     );
+    let abs = run(
+        &["sport", "-f", "tsv", "--baud", "115200", "--time", "abs"],
+        &path,
+    );
+    assert!(
+        text(&abs.stderr).contains("a logic-analyzer trace carries no wall-clock time"),
+        "{}",
+        text(&abs.stderr)
+    );
 }
 
 #[test]

@@ -556,6 +556,13 @@ fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
                 .to_string(),
         );
     }
+    if out.time == TimeMode::Abs && kind == InputKind::Trace {
+        notes.push(
+            "--time abs: a logic-analyzer trace carries no wall-clock time busnoop can trust, so \
+             the Time column stays empty; Millis counts from the start of the trace"
+                .to_string(),
+        );
+    }
     if out.utc && out.time != TimeMode::Abs {
         notes.push("--utc has an effect only with --time abs".to_string());
     } else if out.utc && kind == InputKind::EdgeTxLog {
