@@ -203,7 +203,9 @@ fn parse_rate(text: &str) -> Option<u64> {
 
 /// A sigrok session's logic samples as edges.
 pub struct SrWave {
-    rx: Receiver<Part>,
+    /// `None` once dropped (then the unzipping thread stops at its next hand-over).
+    rx: Option<Receiver<Part>>,
+    unzipper: Option<std::thread::JoinHandle<()>>,
     name: String,
     header: Header,
     /// A part received while looking for the metadata.
@@ -230,12 +232,42 @@ impl SrWave {
     pub fn open(opened: Opened) -> Result<Self, Failure> {
         let (reader, name) = whole_input(opened);
         let (tx, rx) = sync_channel(2);
-        std::thread::Builder::new()
+        let unzipper = std::thread::Builder::new()
             .name("busnoop-unzip".into())
             .spawn(move || unzip(reader, tx))
             .map_err(|e| Failure::Internal(format!("cannot start a thread: {e}")))?;
+        let mut wave = SrWave {
+            rx: Some(rx),
+            unzipper: Some(unzipper),
+            name,
+            header: Header {
+                channels: Vec::new(),
+                base: TimeBase::rate(1),
+                sample_rate: None,
+            },
+            pending: None,
+            unitsize: 1,
+            capturefile: String::new(),
+            probes: Vec::new(),
+            selected: Vec::new(),
+            in_logic: false,
+            chunk: 0,
+            carry: Vec::new(),
+            samples: 0,
+            ended: false,
+        };
+        wave.read_metadata()?;
+        Ok(wave)
+    }
+
+    /// Reads the entries up to the metadata; it must come before the samples.
+    fn read_metadata(&mut self) -> Result<(), Failure> {
+        let name = self.name.clone();
         let bad =
             |what: String| Failure::Input(format!("{name}: not a usable sigrok session: {what}"));
+        let Some(rx) = self.rx.as_ref() else {
+            return Err(bad("the archive reader stopped".into()));
+        };
         // Entries up to the metadata; it must come before the samples.
         let mut entry = String::new();
         let mut metadata: Option<Vec<u8>> = None;
@@ -280,30 +312,20 @@ impl SrWave {
                 name: name.clone(),
             })
             .collect();
-        let probes = m
+        self.probes = m
             .probes
             .iter()
             .map(|&(bit, _)| (bit / 8, 1u8 << (bit % 8)))
             .collect();
-        Ok(SrWave {
-            rx,
-            name,
-            header: Header {
-                channels,
-                base: TimeBase::rate(m.rate),
-                sample_rate: Some(m.rate),
-            },
-            pending: Some(pending),
-            unitsize: m.unitsize,
-            capturefile: m.capturefile,
-            probes,
-            selected: Vec::new(),
-            in_logic: false,
-            chunk: 0,
-            carry: Vec::new(),
-            samples: 0,
-            ended: false,
-        })
+        self.header = Header {
+            channels,
+            base: TimeBase::rate(m.rate),
+            sample_rate: Some(m.rate),
+        };
+        self.pending = Some(pending);
+        self.unitsize = m.unitsize;
+        self.capturefile = m.capturefile;
+        Ok(())
     }
 
     fn bad(&self, what: &str) -> Failure {
@@ -364,6 +386,17 @@ impl SrWave {
     }
 }
 
+impl Drop for SrWave {
+    /// Stops the unzipping thread (its next hand-over fails) and waits for it, so no thread
+    /// outlives its reader.
+    fn drop(&mut self) {
+        self.rx = None;
+        if let Some(t) = self.unzipper.take() {
+            let _ = t.join();
+        }
+    }
+}
+
 impl super::Wave for SrWave {
     fn header(&self) -> &Header {
         &self.header
@@ -393,8 +426,9 @@ impl super::Wave for SrWave {
                 Some(p) => p,
                 None => self
                     .rx
-                    .recv()
-                    .map_err(|_| self.bad("the archive reader stopped"))?,
+                    .as_ref()
+                    .and_then(|rx| rx.recv().ok())
+                    .ok_or_else(|| self.bad("the archive reader stopped"))?,
             };
             match part {
                 Part::Entry(e) => {
