@@ -92,3 +92,8 @@ fn fport_corpus() {
 fn modbus_corpus() {
     replay("modbus", busnoop::selfcheck::modbus);
 }
+
+#[test]
+fn logic_trace_corpus() {
+    replay("logic_trace", busnoop::selfcheck::logic_trace);
+}

@@ -279,6 +279,12 @@ pub struct LiveArgs {
     #[arg(long, value_name = "FORMAT")]
     pub line: Option<String>,
 
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level; see
+    /// docs/logic.md).
+    #[arg(long, value_name = "NAME|N")]
+    pub channel: Option<String>,
+
     /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
     /// number), go on, and mark the gap with a row.
     #[arg(long)]
@@ -462,8 +468,8 @@ pub const BAUD_RANGE: std::ops::RangeInclusive<i64> = 50..=12_000_000;
 #[derive(Args, Debug)]
 pub struct DetectArgs {
     /// What to examine: a capture file (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap
-    /// recording, a pcap/pcapng capture), `-` for standard input, or a serial device, which is
-    /// listened to (passively, read-only) at each baud rate in turn.
+    /// recording, a pcap/pcapng capture, a logic-analyzer trace), `-` for standard input, or a
+    /// serial device, which is listened to (passively, read-only) at each baud rate in turn.
     pub source: PathBuf,
 
     /// Serial devices: how long to listen at each baud rate.
@@ -480,6 +486,11 @@ pub struct DetectArgs {
     /// Serial devices: DTR and RTS, as for the protocol commands.
     #[arg(long, value_enum, value_name = "MODE", default_value_t)]
     pub dtr_rts: crate::source::serial::ModemLines,
+
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level).
+    #[arg(long, value_name = "NAME|N")]
+    pub channel: Option<String>,
 }
 
 impl DetectArgs {
@@ -489,6 +500,7 @@ impl DetectArgs {
             listen_ms: self.listen_ms,
             bauds: self.bauds.clone(),
             dtr_rts: self.dtr_rts,
+            channel: self.channel.clone(),
         }
     }
 }

@@ -80,13 +80,14 @@ pub(super) fn run(
     args: &CaptureArgs,
     protocol: &Protocol,
     serial: &SerialConfig,
+    trace: &crate::source::logic::Options,
     selection: &Selection,
     decoder_for: &DecoderFor<'_>,
     stop: &Stop,
 ) -> Result<(), Failure> {
     check(args)?;
     let clock = Instant::now();
-    let opened = open_all(args, protocol, serial, clock)?;
+    let opened = open_all(args, protocol, serial, trace, clock)?;
     let live = opened[0].kind == InputKind::Serial;
     if let Some(o) = opened
         .iter()
@@ -368,6 +369,7 @@ fn open_all(
     args: &CaptureArgs,
     protocol: &Protocol,
     serial: &SerialConfig,
+    trace: &crate::source::logic::Options,
     clock: Instant,
 ) -> Result<Vec<Opening>, Failure> {
     let mut opened: Vec<Opening> = Vec::new();
@@ -396,7 +398,7 @@ fn open_all(
             _ => crate::detect::ADVICE_BYTES as u64,
         };
         let (kind, reader, progress) =
-            open_source(input, serial, args.live.reconnect, keep, Some(clock))?;
+            open_source(input, serial, trace, args.live.reconnect, keep, Some(clock))?;
         tracing::info!("{}: {:?}", source.display(), kind);
         if !protocol.reads(kind) {
             return Err(in_source(source, unusable(kind, protocol)));

@@ -286,6 +286,7 @@ fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
         InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
         InputKind::Recording => "a busnoop recording",
         InputKind::Raw | InputKind::Serial => "raw serial data",
+        InputKind::Trace => "a logic-analyzer trace",
     };
     Failure::Input(format!(
         "this is {what}; {} captures are {}",
@@ -366,6 +367,8 @@ pub fn run_capture(
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut line = default_line;
+    // A trace's rate is measured unless it is given (--baud, or a speed in --line).
+    let mut fixed_baud = args.live.baud;
     if let Some(l) = &args.live.line {
         line = line
             .parse_over(l)
@@ -375,6 +378,9 @@ pub fn run_capture(
                 "--line {l}: the speed is out of range (50 to 12000000)"
             )));
         }
+        if line.baud != default_line.baud {
+            fixed_baud = fixed_baud.or(Some(line.baud));
+        }
     }
     if let Some(b) = args.live.baud {
         line.baud = b;
@@ -383,8 +389,21 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
+    let trace = source::logic::Options {
+        line,
+        baud: fixed_baud,
+        channel: args.live.channel.clone(),
+    };
     if !args.more.is_empty() || many::several_ports(&input) {
-        return many::run(args, protocol, &serial, selection, &decoder_for, &stop);
+        return many::run(
+            args,
+            protocol,
+            &serial,
+            &trace,
+            selection,
+            &decoder_for,
+            &stop,
+        );
     }
     // A capture reader hands on its first input bytes for the wrong-protocol check after the
     // run (which looks at the first ADVICE_BYTES only); a recording keeps its packets.
@@ -393,8 +412,20 @@ pub fn run_capture(
     } else {
         crate::detect::ADVICE_BYTES as u64
     };
-    let (kind, reader, progress) =
-        open_source(input, &serial, args.live.reconnect, keep_input, None)?;
+    let (kind, reader, progress) = open_source(
+        input,
+        &serial,
+        &trace,
+        args.live.reconnect,
+        keep_input,
+        None,
+    )?;
+    if args.live.channel.is_some() && kind != InputKind::Trace {
+        return Err(Failure::Usage(format!(
+            "--channel picks a wire of a logic-analyzer trace; {} is not one",
+            args.source.display()
+        )));
+    }
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -410,7 +441,7 @@ pub fn run_capture(
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
         InputKind::Pcap | InputKind::Pcapng => Content::Packets,
-        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording | InputKind::Trace => {
             Content::Line { timed: true }
         }
         InputKind::Raw => Content::Line { timed: false },
@@ -642,6 +673,13 @@ fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
                 .to_string(),
         );
     }
+    if out.time == TimeMode::Abs && kind == InputKind::Trace {
+        notes.push(
+            "--time abs: a logic-analyzer trace carries no wall-clock time busnoop can trust, so \
+             the Time column stays empty; Millis counts from the start of the trace"
+                .to_string(),
+        );
+    }
     if out.utc && out.time != TimeMode::Abs {
         notes.push("--utc has an effect only with --time abs".to_string());
     } else if out.utc && kind == InputKind::EdgeTxLog {
@@ -714,6 +752,7 @@ fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
+    trace: &source::logic::Options,
     reconnect: bool,
     keep_input: u64,
     clock: Option<std::time::Instant>,
@@ -744,6 +783,7 @@ fn open_source(
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
         InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Trace => source::logic::reader(opened, trace)?,
     };
     Ok((kind, reader, Some(progress)))
 }

@@ -9,6 +9,7 @@
 
 pub mod capture;
 pub mod edgetx;
+pub mod logic;
 pub mod recording;
 pub mod serial;
 
@@ -195,6 +196,12 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<InputKind> {
                 Err(crate::pcap::NeedMore) => None,
             };
         }
+    }
+    // Logic-analyzer traces: a zip (sigrok session), a VCD keyword, a Saleae CSV header.
+    match logic::recognise(prefix, complete || prefix.len() >= DETECT_LEN) {
+        Some(Some(_)) => return Some(InputKind::Trace),
+        Some(None) => {}
+        None => return None,
     }
     match edgetx::looks_like_log(prefix) {
         Some(true) => Some(InputKind::EdgeTxLog),
@@ -592,6 +599,22 @@ mod tests {
         assert_eq!(detect(&eth, false), Some(InputKind::Pcapng));
         crate::pcap::write_ng::interface(&mut ng, 250, Some("/dev/ttyUSB0"), None);
         assert_eq!(detect(&ng, false), Some(InputKind::Recording));
+        // Logic-analyzer traces: a zip (sigrok session), a VCD, a Saleae export.
+        assert_eq!(detect(b"PK\x03\x04\x14\x00", false), Some(InputKind::Trace));
+        assert_eq!(
+            detect(b"$timescale 1 us $end", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(detect(b"$times", false), None);
+        assert_eq!(
+            detect(b"Time [s],Channel 0\n0,1\n", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(
+            detect(b"Time [s],Value,Parity", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(detect(b"$GPGGA,1", true), Some(InputKind::Raw));
         assert_eq!(detect(b"2014-07", false), None);
         assert_eq!(detect(b"2014-07", true), Some(InputKind::Raw));
         assert_eq!(detect(b"", true), Some(InputKind::Raw));
