@@ -180,6 +180,74 @@ fn two_lines(dir: &Path) -> PathBuf {
     path
 }
 
+/// `--channel RX,TX`: each channel a port of its own, merged by time with a Port column; each
+/// port's rows are those of its channel read alone.
+#[test]
+fn several_channels_are_several_ports() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_lines(dir.path());
+    let both = run(&["sport", "--channel", "RX,TX", "-f", "tsv"], &path);
+    let repeated = run(
+        &["sport", "--channel", "0", "--channel", "TX", "-f", "tsv"],
+        &path,
+    );
+    let both = ok(&both);
+    let header: Vec<&str> = both.lines().next().unwrap().split('\t').collect();
+    let port = header
+        .iter()
+        .position(|c| *c == "Port")
+        .expect("a Port column");
+    let millis = header.iter().position(|c| *c == "Millis").unwrap();
+    // The same ports, named by what was asked for.
+    assert_eq!(
+        ok(&repeated)
+            .replace(":0\t", ":RX\t")
+            .replace(":0\n", ":RX\n"),
+        both
+    );
+    for (channel, id) in [("RX", 0), ("TX", 2)] {
+        let alone = run(&["sport", "--channel", &id.to_string(), "-f", "tsv"], &path);
+        // (TX alone carries no frame: exit 10, its garbage row still written)
+        let alone: Vec<String> = text(&alone.stdout)
+            .lines()
+            .skip(1)
+            .map(|l| l.split('\t').skip(1).collect::<Vec<_>>().join("\t"))
+            .collect();
+        let want = format!("{}:{channel}", path.display());
+        let mine: Vec<String> = both
+            .lines()
+            .skip(1)
+            .filter(|l| l.split('\t').nth(port) == Some(want.as_str()))
+            .map(|l| {
+                let c: Vec<&str> = l.split('\t').collect();
+                c[1..port]
+                    .iter()
+                    .chain(&c[port + 1..])
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .join("\t")
+            })
+            .collect();
+        assert!(!mine.is_empty(), "{channel}: {both}");
+        assert_eq!(mine, alone, "{channel}");
+    }
+    // Merged by time.
+    let times: Vec<f64> = both
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').nth(millis).unwrap().parse().unwrap())
+        .collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "{both}");
+    // A pipe cannot be read once per channel.
+    let piped = busnoop()
+        .args(["sport", "--channel", "RX,TX", "-"])
+        .stdin(std::fs::File::open(&path).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(piped.status.code(), Some(2), "{}", text(&piped.stderr));
+    assert!(text(&piped.stderr).contains("must be a file"));
+}
+
 #[test]
 fn channel_is_chosen_by_name_or_number_and_asked_for_when_several_move() {
     let dir = tempfile::tempdir().unwrap();

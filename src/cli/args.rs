@@ -281,9 +281,10 @@ pub struct LiveArgs {
 
     /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
     /// name or number (default: the only channel, or the only one that changes level; see
-    /// docs/logic.md).
-    #[arg(long, value_name = "NAME|N")]
-    pub channel: Option<String>,
+    /// docs/logic.md). Several (`--channel RX,TX` or repeated): each channel is a port of its
+    /// own, merged by time with a Port column.
+    #[arg(long, value_name = "NAME|N", value_delimiter = ',')]
+    pub channel: Vec<String>,
 
     /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
     /// number), go on, and mark the gap with a row.

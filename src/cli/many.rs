@@ -397,19 +397,53 @@ fn open_all(
             Input::Device(_) => 0,
             _ => crate::detect::ADVICE_BYTES as u64,
         };
-        let (kind, reader, progress) =
-            open_source(input, serial, trace, args.live.reconnect, keep, Some(clock))?;
-        tracing::info!("{}: {:?}", source.display(), kind);
-        if !protocol.reads(kind) {
-            return Err(in_source(source, unusable(kind, protocol)));
+        // A trace read once per channel asked for: each channel a port (`trace.sr:RX`).
+        let channels: Vec<Option<&String>> = if args.live.channel.len() > 1 {
+            args.live.channel.iter().map(Some).collect()
+        } else {
+            vec![args.live.channel.first()]
+        };
+        if channels.len() > 1 && !matches!(input, Input::File(_)) {
+            return Err(Failure::Usage(format!(
+                "several --channel values read the trace once per channel: {} must be a file",
+                source.display()
+            )));
         }
-        opened.push(Opening {
-            name: source.display().to_string(),
-            source: source.clone(),
-            kind,
-            reader,
-            progress,
-        });
+        for channel in channels {
+            let trace = crate::source::logic::Options {
+                channel: channel.cloned(),
+                ..trace.clone()
+            };
+            let (kind, reader, progress) = open_source(
+                input.clone(),
+                serial,
+                &trace,
+                args.live.reconnect,
+                keep,
+                Some(clock),
+            )?;
+            tracing::info!("{}: {:?}", source.display(), kind);
+            if !protocol.reads(kind) {
+                return Err(in_source(source, unusable(kind, protocol)));
+            }
+            if channel.is_some() && kind != InputKind::Trace {
+                return Err(Failure::Usage(format!(
+                    "--channel picks a wire of a logic-analyzer trace; {} is not one",
+                    source.display()
+                )));
+            }
+            let name = match channel {
+                Some(c) if args.live.channel.len() > 1 => format!("{}:{c}", source.display()),
+                _ => source.display().to_string(),
+            };
+            opened.push(Opening {
+                name,
+                source: source.clone(),
+                kind,
+                reader,
+                progress,
+            });
+        }
     }
     // Two ports of one name (two recordings of the same device) are told apart.
     for i in 1..opened.len() {

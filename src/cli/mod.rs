@@ -392,9 +392,9 @@ pub fn run_capture(
     let trace = source::logic::Options {
         line,
         baud: fixed_baud,
-        channel: args.live.channel.clone(),
+        channel: args.live.channel.first().cloned(),
     };
-    if !args.more.is_empty() || many::several_ports(&input) {
+    if !args.more.is_empty() || args.live.channel.len() > 1 || many::several_ports(&input) {
         return many::run(
             args,
             protocol,
@@ -420,7 +420,7 @@ pub fn run_capture(
         keep_input,
         None,
     )?;
-    if args.live.channel.is_some() && kind != InputKind::Trace {
+    if !args.live.channel.is_empty() && kind != InputKind::Trace {
         return Err(Failure::Usage(format!(
             "--channel picks a wire of a logic-analyzer trace; {} is not one",
             args.source.display()
