@@ -336,8 +336,8 @@ impl Recorder {
         data: &[u8],
         comment: Option<&str>,
     ) -> Result<(), Failure> {
-        let t = anchor + chrono::Duration::microseconds(micros as i64);
-        let ts = t.timestamp_micros();
+        // Plain µs arithmetic: a corrupt time cannot panic (pcap stamps hold what they can).
+        let ts = (anchor.timestamp_micros()).saturating_add(micros.min(i64::MAX as u64) as i64);
         self.scratch.clear();
         if self.format == RecordFormat::Pcapng {
             let mut body = Vec::with_capacity(rtac::HEADER_LEN + data.len());

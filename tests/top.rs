@@ -354,3 +354,43 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     assert_eq!(term.lflag(), before, "terminal modes restored");
     drop(reader);
 }
+
+/// H1 (issue 32): a time stamp beyond the calendar panicked inside `--top` (the table's
+/// `--time abs`), leaving an empty table and a raw terminal. Now it is a `TimeJump` row.
+#[test]
+fn top_on_a_time_stamp_beyond_the_calendar_keeps_every_row() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    let t0 = 1_700_000_000_000_000u64;
+    let input = dir.path().join("far.pcapng");
+    std::fs::write(
+        &input,
+        common::pcapng(
+            147,
+            6,
+            &[(t0, &sample), (t0 | 1 << 63, &sample), (t0 + 1, &sample)],
+        ),
+    )
+    .unwrap();
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = term.run(&[
+        &"sport", &"--top", &"--time", &"abs", &"-f", &"tsv", &"-o", &table, &input,
+    ]);
+    let at = wait_for(&screen, 0, "END OF INPUT");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(0));
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before);
+    let table = std::fs::read_to_string(&table).unwrap();
+    assert_eq!(table.lines().count(), 92, "{table}");
+    assert_eq!(table.matches("\tTimeJump\t").count(), 1, "{table}");
+}

@@ -59,7 +59,8 @@ pub struct Packet<'a> {
     /// the decoders work in µs.
     pub nanos: Option<u16>,
     /// Capture time in µs since the first packet of the stream (0 for a packet stamped before
-    /// it): the `time` every decoder works with.
+    /// it): the `time` every decoder works with. A packet whose `ts_micros` is not
+    /// [`in_calendar`] gets the time of the packet before it (and does not start the stream).
     pub time: u64,
     /// LINKTYPE_* of the interface that captured it.
     pub link_type: u32,
@@ -196,7 +197,18 @@ pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, NeedMore> {
 /// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),
 /// when it is one.
 pub fn anchor(ts_micros: i64) -> Option<Anchor> {
-    chrono::DateTime::from_timestamp_micros(ts_micros).map(Anchor::Instant)
+    in_calendar(ts_micros)
+        .then(|| chrono::DateTime::from_timestamp_micros(ts_micros).map(Anchor::Instant))
+        .flatten()
+}
+
+/// A time stamp (µs since the Unix epoch) within the years 1 to 9999, the ones RFC 3339 and
+/// the table's `Time` column can write. A stamp outside (a flipped top bit, `if_tsresol` 10^0
+/// with a far time) is corrupt: the reader gives its packet the time of the one before, and the
+/// sources say so in a `TimeJump` row.
+pub fn in_calendar(ts_micros: i64) -> bool {
+    // 0001-01-01T00:00:00Z and 9999-12-31T23:59:59.999999Z.
+    (-62_135_596_800_000_000..=253_402_300_799_999_999).contains(&ts_micros)
 }
 
 /// Where one packet of [`Packets`] is.

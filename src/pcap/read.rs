@@ -78,6 +78,8 @@ pub struct PcapStream {
     offset: u64,
     /// Last packet time (for simple packet blocks, which carry none).
     last_ts: i64,
+    /// [`Packet::time`] of the packet before: a packet stamped outside the calendar gets it.
+    last_time: u64,
     /// Time of the first packet: [`Packet::time`] counts from it.
     first_ts: Option<i64>,
     /// The link type of a classic pcap's header or of the first pcapng interface, kept after
@@ -127,6 +129,7 @@ impl PcapStream {
             pending: Vec::new(),
             offset: 0,
             last_ts: 0,
+            last_time: 0,
             first_ts: None,
             first_link_type: None,
             packets: 0,
@@ -161,8 +164,12 @@ impl PcapStream {
 
     /// µs since the first packet for a packet stamped `ts` (the first one sets the start).
     fn time(&mut self, ts: i64) -> u64 {
+        if !super::in_calendar(ts) {
+            return self.last_time;
+        }
         let first = *self.first_ts.get_or_insert(ts);
-        ts.saturating_sub(first).max(0) as u64
+        self.last_time = ts.saturating_sub(first).max(0) as u64;
+        self.last_time
     }
 
     /// pcapng interfaces kept for the current section (for tests of the bound).

@@ -326,7 +326,7 @@ impl SerialCore {
 
     fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         if let Some(p) = self.pairing.expire(now) {
-            let at = p.time + self.pairing.timeout;
+            let at = p.time.saturating_add(self.pairing.timeout);
             self.timeout_row(&p, TimeoutWhy::Deadline, at, out)?;
         }
         Ok(())

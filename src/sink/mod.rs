@@ -381,19 +381,14 @@ impl Table {
 
     fn wall_time(&mut self, micros: Option<u64>) -> &str {
         self.scratch.clear();
-        if let (Some(anchor), Some(us)) = (self.anchor, micros) {
-            let delta = chrono::Duration::microseconds(us as i64);
+        // Beyond the calendar (a corrupt time stamp): an empty cell.
+        if let Some(at) = self.anchor.zip(micros).and_then(|(a, us)| a.plus(us)) {
             use std::fmt::Write as _;
-            match anchor {
+            match at {
                 Anchor::Naive(n) => {
-                    let _ = write!(
-                        self.scratch,
-                        "{}",
-                        (n + delta).format("%Y-%m-%dT%H:%M:%S%.3f")
-                    );
+                    let _ = write!(self.scratch, "{}", n.format("%Y-%m-%dT%H:%M:%S%.3f"));
                 }
                 Anchor::Instant(t) => {
-                    let t = t + delta;
                     if self.opts.utc {
                         let _ = write!(self.scratch, "{}", t.format("%Y-%m-%dT%H:%M:%S%.3fZ"));
                     } else {

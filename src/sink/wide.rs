@@ -329,26 +329,23 @@ impl Wide {
         }
         let sep = self.sep();
         self.line.clear();
-        match anchor {
-            Some(a) if wall => {
-                let delta = chrono::Duration::microseconds(at.min(i64::MAX as u64) as i64);
-                let (date, time) = match a {
-                    Anchor::Naive(n) => {
-                        let t = n + delta;
-                        (t.format("%Y-%m-%d"), t.format("%H:%M:%S%.3f"))
-                    }
+        match anchor.filter(|_| wall).map(|a| a.plus(at)) {
+            Some(Some(t)) => {
+                let (date, time) = match t {
+                    Anchor::Naive(t) => (t.format("%Y-%m-%d"), t.format("%H:%M:%S%.3f")),
                     Anchor::Instant(i) if self.utc => {
-                        let t = (i + delta).naive_utc();
+                        let t = i.naive_utc();
                         (t.format("%Y-%m-%d"), t.format("%H:%M:%S%.3f"))
                     }
                     Anchor::Instant(i) => {
-                        let l: DateTime<Local> = (i + delta).into();
+                        let l: DateTime<Local> = i.into();
                         let t = l.naive_local();
                         (t.format("%Y-%m-%d"), t.format("%H:%M:%S%.3f"))
                     }
                 };
                 let _ = write!(self.line, "{date}{sep}{time}");
             }
+            // No anchor, or beyond the calendar (a corrupt time stamp): empty cells.
             _ if wall => self.line.push(sep),
             _ => {
                 let _ = write!(self.line, "{}", at / 1000);

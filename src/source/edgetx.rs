@@ -166,9 +166,12 @@ impl EdgeTxReader {
                         self.held = true;
                         return true;
                     }
-                    let before = anchor + chrono::Duration::microseconds(self.last as i64);
+                    // `last` is at most the span of the log's own years: these cannot leave
+                    // chrono's range, but stay checked all the same.
+                    let last = chrono::Duration::microseconds(self.last as i64);
+                    let before = anchor.checked_add_signed(last).unwrap_or(anchor);
                     let back = (before - l.time).num_microseconds().unwrap_or(i64::MAX);
-                    let new_anchor = l.time - chrono::Duration::microseconds(self.last as i64);
+                    let new_anchor = l.time.checked_sub_signed(last).unwrap_or(l.time);
                     self.anchor = Some(new_anchor);
                     let _ = tx.send(Message::Note {
                         micros: Some(self.last),

@@ -142,6 +142,23 @@ pub enum Message {
     Failed(Failure),
 }
 
+/// The row for the first of a run of packets or records stamped outside the calendar
+/// ([`crate::pcap::in_calendar`]: a flipped bit, a wrong `if_tsresol`): it says so, at the time
+/// of the packet before, which those packets get too.
+pub fn time_out_of_range(ts_micros: i64, micros: Option<u64>) -> Message {
+    Message::Note {
+        micros,
+        kind: crate::row::kind::TIME_JUMP,
+        class: crate::row::Class::Warning,
+        data: format!(
+            "time stamp out of range ({} s since 1970, outside the years 1 to 9999): a corrupt \
+             capture; its packets are shown at the time of the packet before",
+            ts_micros.div_euclid(1_000_000)
+        ),
+        gap: false,
+    }
+}
+
 /// Something that yields batches; runs inside the reader thread.
 pub trait ChunkReader: Send {
     /// The next batch, or `None` at the end of the input. Other messages (the anchor, notes,

@@ -69,6 +69,8 @@ pub struct RecordingReader {
     eof: bool,
     anchored: bool,
     untimed: bool,
+    /// The last record was stamped outside the calendar (a `TimeJump` row said so).
+    out_of_range: bool,
     pending: Option<Message>,
     /// A failure met after some records were read; reported on the next call.
     failure: Option<Failure>,
@@ -132,6 +134,7 @@ impl RecordingReader {
             eof: false,
             anchored: false,
             untimed: false,
+            out_of_range: false,
             pending: None,
             failure: None,
             counts: EventCounts::default(),
@@ -278,7 +281,18 @@ impl RecordingReader {
                 return Ok(());
             };
             let micros = p.time;
-            if !self.anchored {
+            let stamped = pcap::in_calendar(p.ts_micros);
+            if !stamped && !self.out_of_range {
+                if !batch.bytes.is_empty() {
+                    // The row goes between the bytes before and after: take the record again.
+                    return Ok(());
+                }
+                let time = (!self.untimed).then_some(micros);
+                let _ = tx.send(super::time_out_of_range(p.ts_micros, time));
+            }
+            self.out_of_range = !stamped;
+            // The first record in the calendar starts the capture (PcapStream::start).
+            if !self.anchored && stamped {
                 self.anchored = true;
                 if let Some(a) = pcap::anchor(p.ts_micros) {
                     let _ = tx.send(Message::Anchor(a));

@@ -91,7 +91,7 @@ impl<'a> Top<'a> {
             self.pacer.as_ref().map_or(0.0, Pacer::speed)
         };
         let t = match self.latest {
-            Some((m, at)) => m + (at.elapsed().as_micros() as f64 * factor) as u64,
+            Some((m, at)) => m.saturating_add((at.elapsed().as_micros() as f64 * factor) as u64),
             None if self.info.live => self.start.elapsed().as_micros() as u64,
             None => 0,
         };

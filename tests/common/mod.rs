@@ -199,3 +199,56 @@ pub fn output_within_10s(
     }
     child.wait_with_output().unwrap()
 }
+
+/// A pcapng file of one interface of `link_type` whose time stamps count in units of
+/// 10^-`tsresol` s (`if_tsresol`), holding `packets` as (time stamp in those units, bytes).
+pub fn pcapng(link_type: u16, tsresol: u8, packets: &[(u64, &[u8])]) -> Vec<u8> {
+    fn block(out: &mut Vec<u8>, kind: u32, body: &[u8]) {
+        let pad = (4 - body.len() % 4) % 4;
+        let len = (12 + body.len() + pad) as u32;
+        out.extend_from_slice(&kind.to_le_bytes());
+        out.extend_from_slice(&len.to_le_bytes());
+        out.extend_from_slice(body);
+        out.extend_from_slice(&[0; 3][..pad]);
+        out.extend_from_slice(&len.to_le_bytes());
+    }
+    let mut out = Vec::new();
+    let mut shb = Vec::new();
+    shb.extend_from_slice(&0x1A2B_3C4Du32.to_le_bytes());
+    shb.extend_from_slice(&[1, 0, 0, 0]);
+    shb.extend_from_slice(&(-1i64).to_le_bytes());
+    block(&mut out, 0x0A0D_0D0A, &shb);
+    let mut idb = Vec::new();
+    idb.extend_from_slice(&link_type.to_le_bytes());
+    idb.extend_from_slice(&[0, 0, 0, 0, 0, 0]);
+    // if_tsresol, then the end of options.
+    idb.extend_from_slice(&[9, 0, 1, 0, tsresol, 0, 0, 0, 0, 0, 0, 0]);
+    block(&mut out, 1, &idb);
+    for &(ts, data) in packets {
+        let mut epb = Vec::new();
+        epb.extend_from_slice(&0u32.to_le_bytes());
+        epb.extend_from_slice(&((ts >> 32) as u32).to_le_bytes());
+        epb.extend_from_slice(&(ts as u32).to_le_bytes());
+        epb.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        epb.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        epb.extend_from_slice(data);
+        block(&mut out, 6, &epb);
+    }
+    out
+}
+
+/// The packets of a classic pcap file (little-endian, microsecond magic) as (µs since 1970,
+/// bytes), and its link type.
+pub fn pcap_packets(file: &[u8]) -> (u32, Vec<(u64, Vec<u8>)>) {
+    let u32_at = |i: usize| u32::from_le_bytes(file[i..i + 4].try_into().unwrap());
+    assert_eq!(u32_at(0), 0xA1B2_C3D4, "a little-endian microsecond pcap");
+    let mut packets = Vec::new();
+    let mut at = 24;
+    while at + 16 <= file.len() {
+        let ts = u32_at(at) as u64 * 1_000_000 + u32_at(at + 4) as u64;
+        let len = u32_at(at + 8) as usize;
+        packets.push((ts, file[at + 16..at + 16 + len].to_vec()));
+        at += 16 + len;
+    }
+    (u32_at(20), packets)
+}

@@ -399,3 +399,35 @@ fn packets_nanoseconds_and_the_link_type() {
     ng.extend(epb_le(1, 7_000_000, b"b"));
     assert_eq!(nanos_of(&ng), (vec![Some(123), None], Some(276)));
 }
+
+/// A packet stamped outside the years 1 to 9999 (a flipped top bit, seconds as `if_tsresol`)
+/// gets the time of the packet before and does not start the capture.
+#[test]
+fn a_time_stamp_beyond_the_calendar_takes_the_time_before() {
+    let t0 = 1_700_000_000_000_000u64;
+    let mut f = shb_le();
+    f.extend(idb_le(147, None));
+    for ts in [t0 | 1 << 63, t0, t0 + 5, t0 | 1 << 62, t0 + 9] {
+        f.extend(epb_le(0, ts, b"x"));
+    }
+    let mut s = PcapStream::new();
+    let mut times = Vec::new();
+    s.push(&f, &mut |p| {
+        times.push((p.time, crate::pcap::in_calendar(p.ts_micros)))
+    })
+    .unwrap();
+    assert_eq!(
+        times,
+        [(0, false), (0, true), (5, true), (5, false), (9, true)]
+    );
+    assert_eq!(s.start(), Some(t0 as i64));
+    assert!(crate::pcap::anchor(i64::MAX).is_none());
+    assert!(
+        crate::time::Anchor::Instant(chrono::DateTime::UNIX_EPOCH)
+            .plus(u64::MAX)
+            .is_none()
+    );
+    let a = crate::time::Anchor::Instant(chrono::DateTime::UNIX_EPOCH);
+    assert!(a.plus(253_402_300_799_000_000).is_some());
+    assert!(a.plus(253_402_300_800_000_000).is_none());
+}

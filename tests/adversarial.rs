@@ -1,0 +1,158 @@
+//! Hostile inputs and conditions from the third reliability round (issue 32): each case of
+//! docs/robustness.md's "Round three" table has its test here (the pty and signal cases are in
+//! tests/top.rs and tests/signals.rs).
+
+mod common;
+
+use std::path::Path;
+use std::process::Output;
+
+use common::{busnoop, fixture, no_panic, pcap_packets, pcapng, text};
+
+/// The rows of a TSV table, split into cells (the header first).
+fn cells(table: &str) -> Vec<Vec<&str>> {
+    table.lines().map(|l| l.split('\t').collect()).collect()
+}
+
+/// Runs busnoop with `args`, the table to `dir/out.tsv`; returns the run and the table.
+fn run_to_file(dir: &Path, args: &[&str]) -> (Output, String) {
+    let out_path = dir.join("out.tsv");
+    let _ = std::fs::remove_file(&out_path);
+    let out = busnoop()
+        .args(args)
+        .args(["-f", "tsv", "-o"])
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    no_panic(&out);
+    let table = std::fs::read_to_string(&out_path).unwrap_or_default();
+    (out, table)
+}
+
+/// H1: a time stamp beyond chrono's range (a flipped top bit in a pcapng packet, `if_tsresol`
+/// 10^0 with a far time) panicked in `--time abs`, `--wide`, `--record`, `--export` with an
+/// empty output. Now it is a `TimeJump` row, its packet goes on at the time before, and every
+/// row is written.
+#[test]
+fn h1_a_time_stamp_beyond_the_calendar_is_a_row_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read(fixture("sport-sample.bin")).unwrap();
+    // Seconds (10^0): 2023, then 2^62 s, then a second later than the first.
+    let seconds = pcapng(
+        147,
+        0,
+        &[
+            (1_700_000_000, &sample),
+            (1 << 62, &sample),
+            (1_700_000_001, &sample),
+        ],
+    );
+    // Microseconds, the second packet's top bit flipped.
+    let t0 = 1_700_000_000_000_000u64;
+    let flipped = pcapng(
+        147,
+        6,
+        &[
+            (t0, &sample),
+            ((t0 + 500_000) | (1 << 63), &sample),
+            (t0 + 1_000_000, &sample),
+        ],
+    );
+    for (name, bytes) in [("seconds.pcapng", &seconds), ("flipped.pcapng", &flipped)] {
+        let input = dir.path().join(name);
+        std::fs::write(&input, bytes).unwrap();
+        let input = input.to_str().unwrap();
+        let rec = dir.path().join("r.pcap");
+        let rec_ng = dir.path().join("r.pcapng");
+        let export = dir.path().join("e.pcapng");
+        for extra in [
+            vec!["--time", "abs"],
+            vec!["--time", "abs", "--utc"],
+            vec!["--record", rec.to_str().unwrap()],
+            vec!["--record", rec_ng.to_str().unwrap()],
+            vec!["--export", export.to_str().unwrap(), "--time", "abs"],
+        ] {
+            let mut args = vec!["sport", input];
+            args.extend(&extra);
+            let (out, table) = run_to_file(dir.path(), &args);
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{extra:?}: {}",
+                text(&out.stderr)
+            );
+            let rows = cells(&table);
+            // The header, 3 × 30 frames and the note.
+            assert_eq!(rows.len(), 1 + 90 + 1, "{name} {extra:?}:\n{table}");
+            let jump: Vec<_> = rows.iter().filter(|r| r[4] == "TimeJump").collect();
+            assert_eq!(jump.len(), 1, "{table}");
+            assert!(jump[0][7].contains("out of range"), "{:?}", jump[0]);
+            // It comes after the first packet's rows, at the time before.
+            let at = rows.iter().position(|r| r[4] == "TimeJump").unwrap();
+            assert_eq!(at, 31, "{table}");
+            assert_eq!(jump[0][1], rows[30][1]);
+            if extra.contains(&"abs") {
+                let time = rows[0].iter().position(|c| *c == "Time").unwrap();
+                assert!(rows[1][time].starts_with("2023-11-"), "{:?}", rows[1]);
+                assert!(rows[91][time].starts_with("2023-11-"), "{:?}", rows[91]);
+            }
+        }
+        // The recordings hold the bytes at the times busnoop gave them: the same frames, with
+        // no time out of range left.
+        for r in [&rec, &rec_ng] {
+            let (out, again) = run_to_file(dir.path(), &["sport", r.to_str().unwrap()]);
+            assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+            assert_eq!(cells(&again).len(), 91, "{again}");
+        }
+        let out = busnoop()
+            .args(["sport", input, "--wide", "-f", "csv"])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    }
+}
+
+/// H1 for network captures: an Ether-S-Bus pcapng with one packet's top bit flipped.
+#[test]
+fn h1_an_ether_sbus_packet_beyond_the_calendar_is_a_row_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let (link, packets) = pcap_packets(&std::fs::read(fixture("sbus-digimat.pcap")).unwrap());
+    let n = packets.len();
+    let stamped: Vec<(u64, &[u8])> = packets
+        .iter()
+        .enumerate()
+        .map(|(i, (ts, d))| (if i == n / 2 { ts | 1 << 63 } else { *ts }, &d[..]))
+        .collect();
+    let input = dir.path().join("bad.pcapng");
+    std::fs::write(&input, pcapng(link as u16, 6, &stamped)).unwrap();
+    let input = input.to_str().unwrap();
+    let (good, good_table) = run_to_file(
+        dir.path(),
+        &["sbus", &fixture("sbus-digimat.pcap").to_string_lossy()],
+    );
+    assert_eq!(good.status.code(), Some(0));
+    let good_rows = cells(&good_table).len();
+    let rec = dir.path().join("r.pcapng");
+    for extra in [
+        vec!["--time", "abs"],
+        vec!["--record", rec.to_str().unwrap()],
+        vec!["--wide"],
+    ] {
+        let mut args = vec!["sbus", input];
+        args.extend(&extra);
+        let (out, table) = run_to_file(dir.path(), &args);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{extra:?}: {}",
+            text(&out.stderr)
+        );
+        if extra == ["--wide"] {
+            continue;
+        }
+        let rows = cells(&table);
+        assert_eq!(rows.len(), good_rows + 1, "{extra:?}\n{table}");
+        assert_eq!(rows.iter().filter(|r| r[4] == "TimeJump").count(), 1);
+    }
+}
