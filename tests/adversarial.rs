@@ -156,3 +156,69 @@ fn h1_an_ether_sbus_packet_beyond_the_calendar_is_a_row_not_a_panic() {
         assert_eq!(rows.iter().filter(|r| r[4] == "TimeJump").count(), 1);
     }
 }
+
+/// S.Port data frames: first `columns` frames of app IDs never seen before (a new wide column
+/// each), then `frames` more of the first 28 of them, physical IDs 0 to 27 in turn.
+fn many_columns_sport(columns: u32, frames: u32) -> Vec<u8> {
+    use busnoop::sport::wire;
+    let mut bytes = Vec::new();
+    for i in 0..columns + frames {
+        let k = if i < columns { i } else { i % 28 };
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((k % 28) as u8),
+            0x10,
+            0x5100 + (k / 28) as u16 * 16,
+            i,
+        );
+    }
+    bytes
+}
+
+/// H2: `--wide` padded every line to every column seen so far and spooled all of them: the
+/// spool grew with lines × columns (a crafted 10 MB S.Port capture: 5.75 GB in `$TMPDIR`). Now
+/// the spool holds what changed, lines are padded at the end, and the columns are capped
+/// (`--max-columns`, default 2000) with a note.
+#[test]
+fn h2_wide_spools_only_changes_and_caps_the_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("columns.bin");
+    std::fs::write(&input, many_columns_sport(6000, 60_000)).unwrap();
+    // Any file busnoop writes (its temporary file) is limited to 4 MB; the table goes to a pipe.
+    let mut cmd = busnoop();
+    cmd.args(["sport", "--wide", "-f", "tsv"]).arg(&input);
+    common::limit_file_size(&mut cmd, 4 << 20);
+    let out = cmd.output().unwrap();
+    no_panic(&out);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("--wide: the table keeps the first 2000 columns")
+            && err.contains("--max-columns"),
+        "{err}"
+    );
+    let table = text(&out.stdout);
+    let rows = cells(&table);
+    assert_eq!(rows[0].len(), 1 + 2000, "Millis and 2000 columns");
+    assert!(rows.iter().all(|r| r.len() == 2001), "every line padded");
+    // One line per poll cycle of 28 IDs.
+    assert_eq!(rows.len(), 1 + 66_000 / 28 + 1, "{}", rows.len());
+    // A lower cap.
+    let out = busnoop()
+        .args(["sport", "--wide", "-f", "csv", "--max-columns", "10"])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let table = text(&out.stdout);
+    let header = table.lines().next().unwrap();
+    assert_eq!(header.split(',').count(), 11, "{header}");
+    assert!(text(&out.stderr).contains("the first 10 columns"));
+    // Only with --wide.
+    let out = busnoop()
+        .args(["sport", "--max-columns", "10"])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -276,26 +276,6 @@ fn output_to_a_full_disk() {
     );
 }
 
-/// Makes the disk "full" for `cmd` after `bytes` bytes of any file it writes (a file size
-/// limit, with SIGXFSZ ignored so that the write fails with EFBIG instead of killing it).
-fn limit_file_size(cmd: &mut std::process::Command, bytes: libc::rlim_t) {
-    use std::os::unix::process::CommandExt;
-    // SAFETY: only signal() and setrlimit() in the child before exec.
-    unsafe {
-        cmd.pre_exec(move || {
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            let lim = libc::rlimit {
-                rlim_cur: bytes,
-                rlim_max: bytes,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-}
-
 #[test]
 fn output_file_that_fills_up_ends_with_a_whole_row() {
     // A file size limit makes the disk "full" after 100 kB: the file is cut back to the last
@@ -305,7 +285,7 @@ fn output_file_that_fills_up_ends_with_a_whole_row() {
     let csv = dir.path().join("out.csv");
     let mut cmd = busnoop();
     cmd.arg("sport").arg(&big).arg("-o").arg(&csv);
-    limit_file_size(&mut cmd, 100_000);
+    common::limit_file_size(&mut cmd, 100_000);
     let out = cmd.output().unwrap();
     no_panic(&out);
     assert_eq!(out.status.code(), Some(8));
@@ -365,7 +345,7 @@ fn recording_and_export_that_fill_up_end_with_a_whole_record() {
             .arg(option)
             .arg(&file)
             .args(["-o", "/dev/null"]);
-        limit_file_size(&mut cmd, 100_000);
+        common::limit_file_size(&mut cmd, 100_000);
         let out = cmd.output().unwrap();
         no_panic(&out);
         let err = text(&out.stderr);

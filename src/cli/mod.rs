@@ -422,9 +422,11 @@ pub fn run_capture(
             }
             if out.wide {
                 // CSV or TSV: check_wide refused the others before anything was opened.
+                // Protocols without a poll cycle step by frame.
                 let step = match out.every {
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
-                    None => crate::sink::wide::Step::PollCycle,
+                    None if protocol.vocab.polls => crate::sink::wide::Step::PollCycle,
+                    None => crate::sink::wide::Step::Frame,
                 };
                 if out.raw || out.time == TimeMode::Abs {
                     eprintln!(
@@ -432,7 +434,10 @@ pub fn run_capture(
                          Date and Time columns come with any source that has wall-clock time"
                     );
                 }
-                table.set_wide(step, kind == Kind::Serial);
+                let max = out
+                    .max_columns
+                    .map_or(crate::sink::wide::MAX_COLUMNS, |n| n as usize);
+                table.set_wide(step, kind == Kind::Serial, max);
             }
             Some(table)
         }

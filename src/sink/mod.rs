@@ -229,8 +229,14 @@ impl Table {
 
     /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
     /// checks); `live`: write lines as they come rather than at the end.
-    pub fn set_wide(&mut self, step: wide::Step, live: bool) {
-        self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
+    pub fn set_wide(&mut self, step: wide::Step, live: bool, max_columns: usize) {
+        self.wide = Some(wide::Wide::new(
+            self.opts.format,
+            step,
+            self.opts.utc,
+            live,
+            max_columns,
+        ));
     }
 
     /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
@@ -367,6 +373,13 @@ impl Table {
             if !w.has_columns() {
                 eprintln!(
                     "busnoop: note: --wide: no row carried a number, so the table has no columns"
+                );
+            }
+            if let Some((max, n)) = w.left_out() {
+                eprintln!(
+                    "busnoop: note: --wide: the table keeps the first {max} columns; {n} {} of \
+                     later columns left out (--max-columns N for more)",
+                    if n == 1 { "number" } else { "numbers" }
                 );
             }
         }

@@ -252,3 +252,23 @@ pub fn pcap_packets(file: &[u8]) -> (u32, Vec<(u64, Vec<u8>)>) {
     }
     (u32_at(20), packets)
 }
+
+/// Makes the disk "full" for `cmd` after `bytes` bytes of any file it writes (a file size
+/// limit, with SIGXFSZ ignored so that the write fails with EFBIG instead of killing it).
+pub fn limit_file_size(cmd: &mut std::process::Command, bytes: libc::rlim_t) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: only signal() and setrlimit() in the child before exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let lim = libc::rlimit {
+                rlim_cur: bytes,
+                rlim_max: bytes,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+}
