@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-use common::mkfifo;
+use common::{mkfifo, wait_for_handlers};
 
 /// Generous bound for "stops at once": the old driver took 70-180 s here.
 const STOP_WITHIN: Duration = Duration::from_secs(5);
@@ -29,26 +29,6 @@ impl Drop for Guard {
     fn drop(&mut self) {
         let _ = self.0.kill();
         let _ = self.0.wait();
-    }
-}
-
-/// Waits until the child has its signal handlers in place (so a signal is not fatal by default).
-fn wait_for_handlers(child: &Child) {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let status = format!("/proc/{}/status", child.id());
-    loop {
-        let text = std::fs::read_to_string(&status).unwrap_or_default();
-        let caught = text
-            .lines()
-            .find_map(|l| l.strip_prefix("SigCgt:"))
-            .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
-            .unwrap_or(0);
-        let mask = (1 << (libc::SIGINT - 1)) | (1 << (libc::SIGTERM - 1));
-        if caught & mask == mask {
-            return;
-        }
-        assert!(Instant::now() < deadline, "busnoop installed no handlers");
-        std::thread::sleep(Duration::from_millis(10));
     }
 }
 

@@ -272,3 +272,26 @@ pub fn limit_file_size(cmd: &mut std::process::Command, bytes: libc::rlim_t) {
         });
     }
 }
+
+/// Waits until the child has its signal handlers in place (so a signal is not fatal by default).
+pub fn wait_for_handlers(child: &std::process::Child) {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let status = format!("/proc/{}/status", child.id());
+    loop {
+        let text = std::fs::read_to_string(&status).unwrap_or_default();
+        let caught = text
+            .lines()
+            .find_map(|l| l.strip_prefix("SigCgt:"))
+            .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
+            .unwrap_or(0);
+        let mask = (1 << (libc::SIGINT - 1)) | (1 << (libc::SIGTERM - 1));
+        if caught & mask == mask {
+            return;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "busnoop installed no handlers"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
