@@ -222,3 +222,64 @@ fn h2_wide_spools_only_changes_and_caps_the_columns() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// M6: S.Port frames with non-standard check bits (the header byte, which the CRC does not
+/// cover, is damaged: its physical ID cannot be trusted) still fed `--wide` and `plot`: bogus
+/// columns (`ASpd@11(kts)`) and renamed real ones (`VSpd(m/s)` → `VSpd@0(m/s)`). Such a frame
+/// now carries no number, so it enters neither (nor JSON `parts`); its row still shows the
+/// decoded text and the note.
+#[test]
+fn m6_frames_with_damaged_check_bits_enter_neither_wide_nor_plot() {
+    use busnoop::sport::wire;
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = Vec::new();
+    for i in 0..300u32 {
+        wire::encode_frame(&mut bytes, wire::header_for(0), 0x10, 0x0110, i);
+        if i % 50 == 7 {
+            // Physical ID 11 with the check bits of ID 0: a damaged header.
+            let damaged = wire::header_for(0) ^ 0x0B;
+            assert!(!wire::header_ok(damaged));
+            wire::encode_frame(&mut bytes, damaged, 0x10, 0x0110, 9999);
+        }
+    }
+    let input = dir.path().join("flipped.bin");
+    std::fs::write(&input, bytes).unwrap();
+    let run = |args: &[&str]| {
+        let out = busnoop()
+            .arg("sport")
+            .arg(&input)
+            .args(args)
+            .output()
+            .unwrap();
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        text(&out.stdout)
+    };
+    let wide = run(&["--wide", "-f", "csv"]);
+    assert_eq!(wide.lines().next().unwrap(), "Millis,VSpd(m/s)", "{wide}");
+    assert!(!wide.contains("99.99"), "{wide}");
+    let jsonl = run(&["-f", "jsonl"]);
+    let flagged: Vec<&str> = jsonl
+        .lines()
+        .filter(|l| l.contains("non-standard check bits"))
+        .collect();
+    assert_eq!(flagged.len(), 6);
+    for l in flagged {
+        assert!(!l.contains("\"parts\""), "{l}");
+        assert!(l.contains("\"id\":11") && l.contains("99.99"), "{l}");
+    }
+    let svg = dir.path().join("p.svg");
+    let out = busnoop()
+        .args(["plot", "--protocol", "sport"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        svg.contains(">\nVSpd (m/s)\n<") && !svg.contains("VSpd@"),
+        "one series"
+    );
+}
