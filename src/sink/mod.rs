@@ -3,7 +3,7 @@
 mod line;
 pub mod output;
 mod pretty;
-pub(crate) use output::{check_folder, create_file};
+pub(crate) use output::{check_folder, create_file, protect};
 mod spans;
 mod spool;
 mod tap;

@@ -6,6 +6,7 @@
 
 use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
+use std::os::unix::fs::FileTypeExt as _;
 use std::path::{Path, PathBuf};
 
 use super::line::{self, W};
@@ -37,7 +38,23 @@ const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 pub(crate) fn create_file(path: &Path) -> io::Result<File> {
     use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
     if !std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
-        return File::create(path);
+        // Opened without truncating, compared with the inputs, then emptied: a name that
+        // became the input (a symlink swapped in after the same-file check) is refused
+        // untouched.
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .open(path)?;
+        let m = f.metadata()?;
+        if is_input(&m) {
+            return Err(io::Error::other(
+                "it is the input file (it changed since it was checked); nothing written",
+            ));
+        }
+        if m.is_file() {
+            f.set_len(0)?;
+        }
+        return Ok(f);
     }
     loop {
         match std::fs::OpenOptions::new()
@@ -46,6 +63,9 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
             .open(path)
         {
             Ok(f) => {
+                if is_input(&f.metadata()?) {
+                    return Err(io::Error::other("it is the input; nothing written"));
+                }
                 crate::source::set_blocking(&f)?;
                 return Ok(f);
             }
@@ -62,6 +82,34 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
             Err(e) => return Err(e),
         }
     }
+}
+
+/// The inputs being read, by device and inode ([`protect`]).
+static INPUTS: std::sync::Mutex<Vec<(u64, u64)>> = std::sync::Mutex::new(Vec::new());
+
+/// Marks an open input (a regular file or a FIFO) as never to be written: [`create_file`]
+/// refuses to open it, whatever name leads there by then.
+pub(crate) fn protect(file: impl std::os::fd::AsFd) {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(file) = file.as_fd().try_clone_to_owned().map(File::from) else {
+        return;
+    };
+    if let Ok(m) = file.metadata()
+        && (m.is_file() || m.file_type().is_fifo())
+    {
+        INPUTS
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((m.dev(), m.ino()));
+    }
+}
+
+fn is_input(m: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    INPUTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .contains(&(m.dev(), m.ino()))
 }
 
 /// Refuses an output whose folder does not exist (or is no folder) before any output is
@@ -249,5 +297,38 @@ impl Output {
             Dest::Memory(v) => v,
             _ => &[],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// L5 (issue 32): a symlink swapped between the same-file check and the open of `-o`
+    /// truncated the input (1 in 150 tries). The output is opened first, without truncating,
+    /// and compared by device and inode with the inputs read; then truncated.
+    #[test]
+    fn an_output_that_turned_into_the_input_is_not_truncated() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("capture.bin");
+        std::fs::write(&input, b"precious capture").unwrap();
+        protect(&File::open(&input).unwrap());
+        // The race's outcome: `-o out.tsv` is now a link to the input.
+        let out = dir.path().join("out.tsv");
+        std::os::unix::fs::symlink(&input, &out).unwrap();
+        let e = create_file(&out).unwrap_err();
+        assert!(e.to_string().contains("is the input"), "{e}");
+        assert_eq!(std::fs::read(&input).unwrap(), b"precious capture");
+        // A hard link too.
+        let hard = dir.path().join("hard.tsv");
+        std::fs::hard_link(&input, &hard).unwrap();
+        assert!(create_file(&hard).is_err());
+        assert_eq!(std::fs::read(&input).unwrap(), b"precious capture");
+        // Another file is created, or emptied, as before.
+        let other = dir.path().join("other.tsv");
+        std::fs::write(&other, b"old table").unwrap();
+        create_file(&other).unwrap();
+        assert_eq!(std::fs::read(&other).unwrap(), b"");
+        create_file(&dir.path().join("new.tsv")).unwrap();
     }
 }

@@ -293,19 +293,24 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
     let dup = |fd: std::os::fd::BorrowedFd<'_>| fd.try_clone_to_owned().ok();
     let (reader, name, path, size, fd): (Box<dyn Read + Send>, String, Option<&Path>, _, _) =
         match input {
-            Input::Stdin => (
-                Box::new(io::stdin()),
-                "standard input".into(),
-                None,
-                regular_size(io::stdin().as_fd()),
-                dup(io::stdin().as_fd()),
-            ),
+            Input::Stdin => {
+                crate::sink::protect(io::stdin().as_fd());
+                (
+                    Box::new(io::stdin()),
+                    "standard input".into(),
+                    None,
+                    regular_size(io::stdin().as_fd()),
+                    dup(io::stdin().as_fd()),
+                )
+            }
             Input::File(p) | Input::Device(p) => {
                 let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
                 if meta.is_dir() {
                     return Err(Failure::IsDirectory(p.clone()));
                 }
                 let f = open_file(p, &meta).map_err(|e| Failure::from_input_io(p, &e))?;
+                // No output may be opened onto it, whatever its name by then.
+                crate::sink::protect(&f);
                 let size = meta.is_file().then_some(meta.len());
                 let fd = if meta.is_file() { None } else { dup(f.as_fd()) };
                 (
