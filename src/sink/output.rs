@@ -44,6 +44,8 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
         let f = std::fs::OpenOptions::new()
             .write(true)
             .create(true)
+            // Emptied below, once it is known not to be an input.
+            .truncate(false)
             .open(path)?;
         let m = f.metadata()?;
         if is_input(&m) {
@@ -312,7 +314,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("capture.bin");
         std::fs::write(&input, b"precious capture").unwrap();
-        protect(&File::open(&input).unwrap());
+        protect(File::open(&input).unwrap());
         // The race's outcome: `-o out.tsv` is now a link to the input.
         let out = dir.path().join("out.tsv");
         std::os::unix::fs::symlink(&input, &out).unwrap();
