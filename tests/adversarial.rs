@@ -283,3 +283,35 @@ fn m6_frames_with_damaged_check_bits_enter_neither_wide_nor_plot() {
         "one series"
     );
 }
+
+/// L6: `2>>capture.bin` was not refused: busnoop read its own messages back into the capture it
+/// decoded. Standard error is compared with the input like standard output; the refusal goes
+/// to the terminal when there is one, else nowhere, never into the input.
+#[test]
+fn l6_standard_error_onto_the_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, bytes) = common::capture(dir.path(), "capture");
+    // Garbage in front, so that a run writes messages on stderr.
+    let mut noisy = common::noise(5000, 3);
+    noisy.extend_from_slice(&bytes);
+    std::fs::write(&input, &noisy).unwrap();
+    for extra in [&[][..], &["-o", "/dev/null"][..]] {
+        let err = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&input)
+            .unwrap();
+        let out = busnoop()
+            .arg("sport")
+            .arg(&input)
+            .args(extra)
+            .stdout(std::process::Stdio::null())
+            .stderr(err)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+        assert!(
+            std::fs::read(&input).unwrap() == noisy,
+            "the capture is untouched"
+        );
+    }
+}
