@@ -548,6 +548,7 @@ mod tests {
             data: b"pkt",
             orig_len: 60,
             interface,
+            skipped: 0,
         }
     }
 

@@ -315,3 +315,61 @@ fn l6_standard_error_onto_the_input_is_refused() {
         );
     }
 }
+
+/// L7: one flipped bit in a pcap record header could lose up to 27 % of the telegrams (an
+/// impossible length ended the read; a wrong one misaligned every record after it). busnoop
+/// now resynchronises at the next plausible record: at most the damaged record is lost, and a
+/// row and a warning say how much was skipped.
+#[test]
+fn l7_a_flipped_bit_in_a_pcap_record_header_loses_one_telegram_at_most() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read(fixture("sbus-digimat.pcap")).unwrap();
+    let rows = |bytes: &[u8]| {
+        let p = dir.path().join("c.pcap");
+        std::fs::write(&p, bytes).unwrap();
+        let out = busnoop()
+            .arg("sbus")
+            .arg(&p)
+            .args(["-f", "tsv"])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        (out.status.code(), text(&out.stdout), text(&out.stderr))
+    };
+    let (_, all, _) = rows(&good);
+    let telegrams = |t: &str| {
+        t.lines()
+            .filter(|l| {
+                ["Request", "Response", "ACK", "NAK"]
+                    .iter()
+                    .any(|k| l.contains(&format!("\t{k}\t")))
+            })
+            .count()
+    };
+    let total = telegrams(&all);
+    assert!(total > 40, "{total}");
+    // The 20th record's header: its captured length, bit by bit.
+    let mut at = 24;
+    for _ in 0..20 {
+        let incl = u32::from_le_bytes(good[at + 8..at + 12].try_into().unwrap()) as usize;
+        at += 16 + incl;
+    }
+    for bit in 0..32 {
+        let mut bad = good.clone();
+        bad[at + 8 + bit / 8] ^= 1 << (bit % 8);
+        let (code, table, err) = rows(&bad);
+        assert_eq!(code, Some(0), "bit {bit}: {err}");
+        let kept = telegrams(&table);
+        assert!(
+            kept + 2 >= total,
+            "bit {bit}: {kept} of {total} telegrams\n{err}"
+        );
+        if kept < total {
+            assert!(
+                table.contains("of the capture skipped"),
+                "bit {bit}:\n{table}"
+            );
+            assert!(err.contains("damaged capture"), "bit {bit}: {err}");
+        }
+    }
+}

@@ -70,6 +70,10 @@ pub struct Packet<'a> {
     pub orig_len: u32,
     /// pcapng interface ID within its section (0 for classic pcap).
     pub interface: u32,
+    /// Bytes of the capture skipped right before this packet (0 normally): a damaged record
+    /// header the reader resynchronised after, or a packet it could not place (an interface
+    /// beyond [`MAX_INTERFACES`] or never described).
+    pub skipped: u64,
 }
 
 /// Why a stream cannot be read on.
@@ -89,6 +93,8 @@ pub enum PcapError {
     NoSection { offset: u64 },
     /// The input ended inside a record.
     Truncated { offset: u64, missing: u64 },
+    /// Damaged bytes before the end of the input, skipped, with no record after them.
+    Damaged { offset: u64, skipped: u64 },
 }
 
 impl fmt::Display for PcapError {
@@ -120,6 +126,11 @@ impl fmt::Display for PcapError {
             PcapError::Truncated { offset, missing } => write!(
                 f,
                 "the capture ends inside the record at byte {offset} ({missing} bytes missing)"
+            ),
+            PcapError::Damaged { offset, skipped } => write!(
+                f,
+                "{skipped} damaged bytes before the end at byte {offset} skipped: no valid \
+                 record after them"
             ),
         }
     }
@@ -220,6 +231,7 @@ struct Slot {
     link_type: u32,
     orig_len: u32,
     interface: u32,
+    skipped: u64,
     /// Its bytes end here in the shared buffer.
     end: usize,
 }
@@ -253,6 +265,7 @@ impl Packets {
             link_type: p.link_type,
             orig_len: p.orig_len,
             interface: p.interface,
+            skipped: p.skipped,
             end: self.data.len(),
         });
     }
@@ -269,6 +282,7 @@ impl Packets {
             data: &self.data[start..s.end],
             orig_len: s.orig_len,
             interface: s.interface,
+            skipped: s.skipped,
         })
     }
 
@@ -338,6 +352,7 @@ mod tests {
             data,
             orig_len: 99,
             interface: 3,
+            skipped: ts as u64,
         };
         let want = [p(5, b"ab"), p(6, b""), p(7, b"cde")];
         let mut b = Packets::default();

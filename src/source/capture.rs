@@ -85,6 +85,9 @@ impl ChunkReader for CaptureReader {
                 if let Err(e) = self.stream.finish() {
                     let _ = tx.send(Message::CaptureError(e));
                 }
+                if let Some(w) = super::skipped_warning(&self.name, self.stream.skipped()) {
+                    let _ = tx.send(w);
+                }
                 return Ok(None);
             }
             let mut packets = Packets::for_input(n);
@@ -99,6 +102,17 @@ impl ChunkReader for CaptureReader {
                     if let Some(a) = pcap::anchor(p.ts_micros) {
                         let _ = tx.send(Message::Anchor(a));
                     }
+                }
+                if p.skipped > 0 {
+                    if !packets.is_empty() {
+                        let before = std::mem::replace(&mut packets, Packets::for_input(n));
+                        let _ = tx.send(Message::Packets(Captured {
+                            packets: before,
+                            input: Vec::new(),
+                            link_type,
+                        }));
+                    }
+                    let _ = tx.send(super::skipped_note(p.skipped, Some(p.time)));
                 }
                 if !stamped && !*out_of_range {
                     // The row goes between the packets before and after it.

@@ -159,6 +159,36 @@ pub fn time_out_of_range(ts_micros: i64, micros: Option<u64>) -> Message {
     }
 }
 
+/// The row for bytes of a capture the reader skipped right before a packet
+/// ([`crate::pcap::Packet::skipped`]): a damaged record header, after which it resynchronised
+/// at the next plausible record, or a packet it could not place.
+pub fn skipped_note(bytes: u64, micros: Option<u64>) -> Message {
+    Message::Note {
+        micros,
+        kind: crate::row::kind::GARBAGE,
+        class: crate::row::Class::Error,
+        data: format!(
+            "{} of the capture skipped: a damaged record (or a packet of an interface that \
+             cannot be placed); read on from the next plausible record",
+            crate::exit::count(bytes, "byte", "bytes")
+        ),
+        // What was skipped may have held the rest of an open frame.
+        gap: true,
+    }
+}
+
+/// The warning at the end of a capture the reader had to skip parts of.
+pub fn skipped_warning(name: &str, (bytes, times): (u64, u64)) -> Option<Message> {
+    (bytes > 0).then(|| {
+        Message::Warning(format!(
+            "{name}: damaged capture: {} skipped in {}, each time read on from the next \
+             plausible record",
+            crate::exit::count(bytes, "byte", "bytes"),
+            crate::exit::count(times, "place", "places")
+        ))
+    })
+}
+
 /// Something that yields batches; runs inside the reader thread.
 pub trait ChunkReader: Send {
     /// The next batch, or `None` at the end of the input. Other messages (the anchor, notes,

@@ -71,6 +71,8 @@ pub struct RecordingReader {
     untimed: bool,
     /// The last record was stamped outside the calendar (a `TimeJump` row said so).
     out_of_range: bool,
+    /// The bytes skipped before the current record were told (it may be taken twice).
+    skip_told: bool,
     pending: Option<Message>,
     /// A failure met after some records were read; reported on the next call.
     failure: Option<Failure>,
@@ -135,6 +137,7 @@ impl RecordingReader {
             anchored: false,
             untimed: false,
             out_of_range: false,
+            skip_told: false,
             pending: None,
             failure: None,
             counts: EventCounts::default(),
@@ -195,10 +198,15 @@ impl RecordingReader {
         }
     }
 
-    /// At the end of the input: a warning when it stopped inside a record.
+    /// At the end of the input: a warning when it stopped inside a record, or had to skip
+    /// damaged parts.
     fn end(&mut self, tx: &SyncSender<Message>) {
         let have = self.stream.buffered();
-        let Err(PcapError::Truncated { missing, .. }) = self.stream.finish() else {
+        let finished = self.stream.finish();
+        if let Some(w) = super::skipped_warning(&self.name, self.stream.skipped()) {
+            let _ = tx.send(w);
+        }
+        let Err(PcapError::Truncated { missing, .. }) = finished else {
             return;
         };
         let msg = if have < 16 {
@@ -281,6 +289,15 @@ impl RecordingReader {
                 return Ok(());
             };
             let micros = p.time;
+            if p.skipped > 0 && !self.skip_told {
+                if !batch.bytes.is_empty() {
+                    // The row goes between the bytes before and after: take the record again.
+                    return Ok(());
+                }
+                self.skip_told = true;
+                let time = (!self.untimed).then_some(micros);
+                let _ = tx.send(super::skipped_note(p.skipped, time));
+            }
             let stamped = pcap::in_calendar(p.ts_micros);
             if !stamped && !self.out_of_range {
                 if !batch.bytes.is_empty() {
@@ -314,6 +331,7 @@ impl RecordingReader {
                 let _ = tx.send(note);
             }
             self.next += 1;
+            self.skip_told = false;
             match event {
                 EVENT_TX_START..=EVENT_RX_END => {
                     let time = (!self.untimed).then_some(micros);
