@@ -373,3 +373,45 @@ fn l7_a_flipped_bit_in_a_pcap_record_header_loses_one_telegram_at_most() {
         }
     }
 }
+
+/// L8: "empty input: FILE holds no bytes" was printed for files that do hold bytes (an EdgeTX
+/// log whose lines carry none, a recording without data records). The message names what
+/// the file is and what it lacks.
+#[test]
+fn l8_an_input_without_wire_bytes_is_not_called_empty_of_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("e.log");
+    std::fs::write(&log, "2014-07-11,22:41:01.340:\n2014-07-11,22:41:01.350:\n").unwrap();
+    let rec = dir.path().join("r.pcap");
+    let out = busnoop()
+        .arg("sport")
+        .arg(fixture("sport-sample.bin"))
+        .args(["-o", "/dev/null", "--record"])
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    // The header and the start record only.
+    let bytes = std::fs::read(&rec).unwrap();
+    let start_len = u32::from_le_bytes(bytes[32..36].try_into().unwrap()) as usize;
+    std::fs::write(&rec, &bytes[..24 + 16 + start_len]).unwrap();
+    for (file, want) in [
+        (&log, "is an EdgeTX log whose lines carry no bytes"),
+        (&rec, "is a busnoop recording without data records"),
+    ] {
+        for cmd in ["sport", "detect"] {
+            let out = busnoop().arg(cmd).arg(file).output().unwrap();
+            let err = text(&out.stderr);
+            assert_eq!(out.status.code(), Some(10), "{cmd}: {err}");
+            assert!(
+                err.contains(want) && !err.contains("holds no bytes"),
+                "{cmd}: {err}"
+            );
+        }
+    }
+    // A file of no bytes at all is still said so.
+    let empty = dir.path().join("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    let out = busnoop().arg("sport").arg(&empty).output().unwrap();
+    assert!(text(&out.stderr).contains("holds no bytes"));
+}

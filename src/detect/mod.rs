@@ -520,8 +520,9 @@ pub fn run(args: &Options) -> Result<(), Failure> {
         text.push_str(&evidence(&ranked));
     }
     let result = match v {
-        Verdict::Empty => Err(Failure::NothingDecoded(format!(
-            "empty input: {name} holds no bytes"
+        Verdict::Empty => Err(Failure::NothingDecoded(advise::empty_input(
+            &name.to_string(),
+            kind,
         ))),
         Verdict::Unknown => {
             text.push_str("verdict: no known protocol");
