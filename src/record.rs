@@ -323,8 +323,13 @@ impl Recorder {
             "busnoop: the adapter went away; reconnect gap begins".to_string()
         };
         let anchor = self.anchor.unwrap_or_else(Utc::now);
-        let payload = if up { rtac::LINK_UP } else { rtac::LINK_DOWN };
-        self.write_record(anchor, micros, rtac::EVENT_STATUS, payload, Some(&comment))
+        // The device it is back at, so that a replay names it (not the recording).
+        let mut payload = if up { rtac::LINK_UP } else { rtac::LINK_DOWN }.to_vec();
+        if let (true, Some(device)) = (up, &self.interface.0) {
+            payload.extend_from_slice(rtac::LINK_UP_AT);
+            payload.extend_from_slice(device.as_bytes());
+        }
+        self.write_record(anchor, micros, rtac::EVENT_STATUS, &payload, Some(&comment))
     }
 
     /// Writes one RTAC serial record at `micros` after `anchor` (in pcapng with `comment`).
@@ -533,7 +538,10 @@ mod tests {
                 Some((rtac::EVENT_STATUS, rtac::START.to_vec())),
                 Some((rtac::EVENT_RX_DATA, vec![0x7E, 0x1B])),
                 Some((rtac::EVENT_STATUS, rtac::LINK_DOWN.to_vec())),
-                Some((rtac::EVENT_STATUS, rtac::LINK_UP.to_vec())),
+                Some((
+                    rtac::EVENT_STATUS,
+                    b"busnoop link up at /dev/ttyUSB0".to_vec()
+                )),
             ]
         );
     }

@@ -347,9 +347,9 @@ impl RecordingReader {
                             None
                         }
                         LINK_DOWN => Some(Message::LinkDown { micros }),
-                        LINK_UP => Some(Message::LinkUp {
+                        p if p.starts_with(LINK_UP) => Some(Message::LinkUp {
                             micros,
-                            path: PathBuf::from(&self.name),
+                            path: link_up_device(p).unwrap_or_else(|| PathBuf::from(&self.name)),
                         }),
                         _ => None,
                     };
@@ -391,7 +391,8 @@ impl RecordingReader {
         let (kind, class, data, gap) = match event {
             EVENT_TX_START..=EVENT_RX_END => return None,
             EVENT_STATUS => match payload {
-                START | START_UNTIMED | LINK_DOWN | LINK_UP => return None,
+                START | START_UNTIMED | LINK_DOWN => return None,
+                p if p.starts_with(LINK_UP) => return None,
                 _ => (
                     "Status",
                     Class::Info,
@@ -429,6 +430,15 @@ impl RecordingReader {
             gap,
         })
     }
+}
+
+/// The device a link-up record names (`busnoop link up at /dev/ttyUSB0`), if it names one.
+fn link_up_device(payload: &[u8]) -> Option<PathBuf> {
+    use std::os::unix::ffi::OsStrExt;
+    let device = payload
+        .strip_prefix(LINK_UP)?
+        .strip_prefix(crate::pcap::rtac::LINK_UP_AT)?;
+    (!device.is_empty()).then(|| PathBuf::from(std::ffi::OsStr::from_bytes(device)))
 }
 
 impl EventCounts {
@@ -508,6 +518,30 @@ mod tests {
             ]
         );
         assert_eq!(links, [(false, 20_000, 2), (true, 3_020_000, 2)]);
+    }
+
+    /// L9 (issue 32): a replayed `--reconnect` recording named the recording in its LinkUp row
+    /// (`adapter back at rec.pcap`) instead of the device. The record names the device now.
+    #[test]
+    fn a_replayed_reconnect_names_the_device() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["r.pcap", "r.pcapng"] {
+            let path = dir.path().join(name);
+            let mut rec = Recorder::create(&path, Content::Line { timed: true }).unwrap();
+            rec.describe("/dev/ttyUSB0", "FrSky S.Port, 57600 baud 8N1");
+            rec.data(&[0x7E, 0x00], Some(1_000)).unwrap();
+            rec.link(false, 20_000).unwrap();
+            rec.link(true, 3_020_000).unwrap();
+            rec.flush().unwrap();
+            let ups: Vec<PathBuf> = replay(std::fs::read(&path).unwrap())
+                .into_iter()
+                .filter_map(|m| match m {
+                    Message::LinkUp { path, .. } => Some(path),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(ups, [PathBuf::from("/dev/ttyUSB0")], "{name}");
+        }
     }
 
     #[test]
