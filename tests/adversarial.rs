@@ -415,3 +415,51 @@ fn l8_an_input_without_wire_bytes_is_not_called_empty_of_bytes() {
     let out = busnoop().arg("sport").arg(&empty).output().unwrap();
     assert!(text(&out.stderr).contains("holds no bytes"));
 }
+
+/// L10: filters that contradict each other gave exit 0 and an empty table without a word, and
+/// an empty filter value meant "everything". Contradictions the options alone show are refused;
+/// an empty value is refused; a run whose filters hid every row says so.
+#[test]
+fn l10_contradicting_or_empty_filters_are_said_so() {
+    let sample = fixture("sport-sample.bin");
+    let run = |args: &[&str]| {
+        let out = busnoop()
+            .arg("sport")
+            .arg(&sample)
+            .args(args)
+            .args(["-f", "tsv"])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        (out.status.code(), text(&out.stdout), text(&out.stderr))
+    };
+    for (args, want) in [
+        (
+            &["--id", "5", "--not-id", "5"][..],
+            "--not-id leaves no ID of --id",
+        ),
+        (
+            &["--id", "3-5", "--not-id", "0-9"][..],
+            "--not-id leaves no ID of --id",
+        ),
+        (
+            &["--type", "Data", "--not-type", "Data"][..],
+            "--not-type leaves no type of --type",
+        ),
+        (&["--id", ""][..], "--id \"\": an empty value"),
+        (&["--type", " , "][..], "--type \" , \": an empty value"),
+        (&["--sensor", ""][..], "--sensor \"\": an empty value"),
+    ] {
+        let (code, _, err) = run(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    // Allowed on their own, but together nothing passes: said at the end.
+    let (code, out, err) = run(&["--type", "Null", "--errors"]);
+    assert_eq!(code, Some(0));
+    assert_eq!(out.lines().count(), 1);
+    assert!(err.contains("the filters hid all 30 rows"), "{err}");
+    // A filter that keeps something is quiet.
+    let (_, _, err) = run(&["--id", "5", "--not-id", "6"]);
+    assert!(!err.contains("hid all"), "{err}");
+}

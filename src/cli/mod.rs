@@ -736,6 +736,10 @@ fn report(
         }
         eprintln!("{}", decoder.stats());
     }
+    // Filters that are each fine but together keep nothing (`--type Null --errors`).
+    if rows > 0 && hidden == rows && result.is_ok() {
+        eprintln!("busnoop: note: the filters hid all {rows} rows");
+    }
     // When the output failed, the one line that matters is the write error (printed last).
     let problems = decoder.problems().line();
     if !matches!(result, Err(Failure::Output(_)))
