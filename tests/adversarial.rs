@@ -463,3 +463,67 @@ fn l10_contradicting_or_empty_filters_are_said_so() {
     let (_, _, err) = run(&["--id", "5", "--not-id", "6"]);
     assert!(!err.contains("hid all"), "{err}");
 }
+
+/// L11: SAB command names could be a column name (`Millis`: two Millis columns in the wide
+/// table), a code (`0x20` naming command 0x10, next to the column `0x20` of command 0x20), a
+/// request column (`x.req`) or one name for two commands. They are refused.
+#[test]
+fn l11_sab_command_names_cannot_clash_with_columns_or_codes() {
+    let session = fixture("sab2-session.bin");
+    for args in [
+        &["--command", "Millis=0x10"][..],
+        &["--command", "time=0x10"][..],
+        &["--command", "0x20=0x10"][..],
+        &["--command", "32=0x10"][..],
+        &["--command", "distance.req=0x10"][..],
+        &["--command", "dist@5=0x10"][..],
+        &["--command", "a,b=0x10"][..],
+        &["--command", "speed=2", "--command", "speed=0x10"][..],
+    ] {
+        let out = busnoop()
+            .arg("sab2")
+            .arg(&session)
+            .args(args)
+            .args(["--wide", "-f", "csv"])
+            .output()
+            .unwrap();
+        no_panic(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+    // The same name for one command twice is no clash; a fine name is fine.
+    let out = busnoop()
+        .arg("sab2")
+        .arg(&session)
+        .args([
+            "--command",
+            "distance=0x10",
+            "--command",
+            "distance=16",
+            "--wide",
+            "-f",
+            "csv",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    // From the project file: exit 12, naming the file.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("busnoop.toml"),
+        "[sab2.commands]\nMillis = 0x10\n",
+    )
+    .unwrap();
+    let out = busnoop()
+        .current_dir(dir.path())
+        .arg("sab2")
+        .arg(&session)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(12), "{}", text(&out.stderr));
+}

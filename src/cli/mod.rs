@@ -188,6 +188,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             }
             commands.append(&mut args.command);
             args.command = commands;
+            crate::sab::check_commands(&args.command).map_err(Failure::Usage)?;
             let sensors: Vec<String> = args.command.iter().map(|(n, _)| n.clone()).collect();
             let sel = project::selection(&args.capture.select, protocol, section, &[], &sensors)?;
             prepare(&mut args.capture, section);
