@@ -527,3 +527,55 @@ fn l11_sab_command_names_cannot_clash_with_columns_or_codes() {
         .unwrap();
     assert_eq!(out.status.code(), Some(12), "{}", text(&out.stderr));
 }
+
+/// Runs busnoop with its standard output closed (`>&-`).
+fn with_stdout_closed(args: &[&str]) -> Output {
+    use std::os::unix::process::CommandExt;
+    let mut cmd = busnoop();
+    cmd.args(args).stdout(std::process::Stdio::null());
+    // SAFETY: only close() in the child before exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::close(1);
+            Ok(())
+        });
+    }
+    cmd.output().unwrap()
+}
+
+/// L12: with standard output closed (`>&-`) the table and `--record -` were dropped with exit 0
+/// (Rust puts /dev/null there). busnoop refuses before reading, exit 8; a `>/dev/null` is still
+/// fine.
+#[test]
+fn l12_a_closed_standard_output_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = fixture("sport-sample.bin");
+    let sample = sample.to_str().unwrap();
+    let table = dir.path().join("t.tsv");
+    for args in [
+        vec!["sport", sample],
+        vec![
+            "sport",
+            sample,
+            "-o",
+            table.to_str().unwrap(),
+            "--record",
+            "-",
+        ],
+    ] {
+        let out = with_stdout_closed(&args);
+        no_panic(&out);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{args:?}: {err}");
+        assert!(err.contains("standard output is closed"), "{err}");
+    }
+    // Not needed: fine.
+    let out = with_stdout_closed(&["sport", sample, "-o", table.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let out = busnoop()
+        .args(["sport", sample])
+        .stdout(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+}

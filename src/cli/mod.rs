@@ -298,6 +298,16 @@ pub fn run_capture(
         args.live.export.as_deref(),
         project::File::path(&args.select).as_deref(),
     )?;
+    // `>&-`: the table or the recording on standard output would vanish with exit 0.
+    if ((table_file.is_none() && !args.output.top) || record_to_stdout)
+        && crate::sink::stdout_was_closed()
+    {
+        return Err(Failure::Output(
+            "standard output is closed (>&-): what goes there would be lost; give -o FILE, or \
+             send it somewhere (>FILE, >/dev/null)"
+                .into(),
+        ));
+    }
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }

@@ -3,7 +3,7 @@
 mod line;
 pub mod output;
 mod pretty;
-pub(crate) use output::{check_folder, create_file, protect};
+pub(crate) use output::{check_folder, create_file, protect, stdout_was_closed};
 mod spans;
 mod spool;
 mod tap;

@@ -86,6 +86,25 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
     }
 }
 
+/// Whether standard output was closed when busnoop started (`>&-`): the Rust runtime then puts
+/// /dev/null there, opened for reading and writing, where a shell's `>/dev/null` opens it for
+/// writing only. Whatever went there would vanish with exit 0.
+pub(crate) fn stdout_was_closed() -> bool {
+    use std::os::unix::fs::MetadataExt;
+    // SAFETY: F_GETFL on descriptor 1 only reads its flags.
+    let flags = unsafe { libc::fcntl(1, libc::F_GETFL) };
+    if flags < 0 || flags & libc::O_ACCMODE != libc::O_RDWR {
+        return false;
+    }
+    let null = std::fs::metadata("/dev/null").map(|m| m.rdev());
+    let out = std::io::stdout();
+    let fd = std::os::fd::AsFd::as_fd(&out).try_clone_to_owned();
+    match (null, fd.map(File::from).and_then(|f| f.metadata())) {
+        (Ok(null), Ok(m)) => m.file_type().is_char_device() && m.rdev() == null,
+        _ => false,
+    }
+}
+
 /// The inputs being read, by device and inode ([`protect`]).
 static INPUTS: std::sync::Mutex<Vec<(u64, u64)>> = std::sync::Mutex::new(Vec::new());
 
