@@ -43,6 +43,11 @@ const UNIT: usize = 4096;
 /// After this long without a single byte from a live port, the user gets a hint once.
 const SILENT_AFTER: Duration = Duration::from_secs(5);
 
+/// A capture Wireshark runs through the extcap: no notices on stderr, which it shows as errors.
+fn quiet() -> bool {
+    crate::cli::QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// What the driver needs besides the decoder and the table.
 pub struct Context<'a> {
     pub stop: &'a Stop,
@@ -392,7 +397,10 @@ impl Driver<'_> {
         );
         self.info_row(micros, "LinkDown", &data)?;
         self.flush()?;
-        eprintln!("busnoop: {data} (--reconnect)");
+        // Wireshark shows an extcap's stderr as an error: the row and the capture say it.
+        if !quiet() {
+            eprintln!("busnoop: {data} (--reconnect)");
+        }
         Ok(())
     }
 
@@ -407,7 +415,9 @@ impl Driver<'_> {
         let data = format!("adapter back at {} after {gap:.1} s", path.display());
         self.info_row(micros, "LinkUp", &data)?;
         self.flush()?;
-        eprintln!("busnoop: {data}");
+        if !quiet() {
+            eprintln!("busnoop: {data}");
+        }
         Ok(())
     }
 
