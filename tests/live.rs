@@ -473,3 +473,89 @@ fn extcap_with_reconnect_keeps_stderr_empty_through_an_unplug() {
     let capture = reader.join().unwrap();
     assert!(capture.len() > 100, "{} bytes captured", capture.len());
 }
+
+/// Bytes process `pid` has read so far (`rchar` of /proc/PID/io).
+fn bytes_read(pid: u32) -> u64 {
+    std::fs::read_to_string(format!("/proc/{pid}/io"))
+        .unwrap_or_default()
+        .lines()
+        .find_map(|l| l.strip_prefix("rchar: "))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(0)
+}
+
+/// Starts `busnoop detect DEVICE` at two rates and waits until it has read S.Port traffic
+/// at the first one.
+fn detect_hearing_sport(b: &mut Bus) -> std::process::Child {
+    use std::io::BufRead;
+    let mut child = Command::new(bin())
+        .args(["detect", "--listen-ms", "4000", "--baud", "57600,115200"])
+        .arg(&b.path)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    err.read_line(&mut line).unwrap();
+    assert!(line.contains("listening to"), "{line}");
+    child.stderr = Some(err.into_inner());
+    let before = bytes_read(child.id());
+    let traffic = slots(30).concat();
+    b.master.write_all(&traffic).unwrap();
+    b.master.flush().unwrap();
+    let pid = child.id();
+    until("detect read the traffic", || {
+        bytes_read(pid) >= before + traffic.len() as u64
+    });
+    child
+}
+
+/// L14 (issue 32): `detect` on a serial port lost all its evidence on Ctrl-C, SIGTERM, SIGHUP
+/// or an unplug, and suggested `--reconnect`, which detect does not have. What was heard is
+/// judged and shown, and the message says what ended the listening.
+#[test]
+fn detect_on_a_port_keeps_its_evidence_when_stopped_or_unplugged() {
+    let _g = lock();
+    for (sig, code) in [
+        (libc::SIGINT, 130),
+        (libc::SIGTERM, 143),
+        (libc::SIGHUP, 129),
+    ] {
+        let mut b = bus();
+        let mut child = detect_hearing_sport(&mut b);
+        unsafe { libc::kill(child.id() as i32, sig) };
+        let status = wait_exit(&mut child);
+        let out = {
+            let mut s = String::new();
+            std::io::Read::read_to_string(child.stdout.as_mut().unwrap(), &mut s).unwrap();
+            s
+        };
+        let err = stderr_of(&mut child);
+        assert_eq!(status.code(), Some(code), "signal {sig}: {err}");
+        assert!(
+            out.contains("57600 baud") && out.contains("verdict: S.Port"),
+            "{out}"
+        );
+        assert!(
+            err.contains("interrupted") && err.contains("the verdict is on what was heard"),
+            "{err}"
+        );
+    }
+    // Unplugged while listening.
+    let mut b = bus();
+    let mut child = detect_hearing_sport(&mut b);
+    let Bus { master, slave, .. } = b;
+    drop(master);
+    drop(slave);
+    let status = wait_exit(&mut child);
+    let mut out = String::new();
+    std::io::Read::read_to_string(child.stdout.as_mut().unwrap(), &mut out).unwrap();
+    let err = stderr_of(&mut child);
+    assert_eq!(status.code(), Some(7), "{err}");
+    assert!(out.contains("verdict: S.Port"), "out: {out}\nerr: {err}");
+    assert!(
+        err.contains("went away") && !err.contains("--reconnect"),
+        "{err}"
+    );
+}
