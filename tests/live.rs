@@ -57,6 +57,7 @@ fn rows_stream_live_and_unplug_ends_cleanly_and_the_recording_replays() {
 
     // Write 40 slots at the bus's pace (12 ms per slot).
     let traffic = slots(40);
+    let read_before = bytes_read(child.id());
     let mut first_row_at = None;
     let mut live = vec![header];
     let mut all = Vec::new();
@@ -77,8 +78,11 @@ fn rows_stream_live_and_unplug_ends_cleanly_and_the_recording_replays() {
     let first_row_at = first_row_at.expect("no row appeared while the writer was writing");
     assert!(first_row_at < writer_done);
 
-    // Unplug: close the bus side.
-    std::thread::sleep(Duration::from_millis(100));
+    // Unplug (close the bus side) once busnoop has read every byte.
+    let pid = child.id();
+    common::until("busnoop read the traffic", || {
+        bytes_read(pid) >= read_before + all.len() as u64
+    });
     drop(b.master);
     let status = wait_exit(&mut child);
     assert_eq!(status.code(), Some(7), "adapter disconnected");
@@ -88,7 +92,7 @@ fn rows_stream_live_and_unplug_ends_cleanly_and_the_recording_replays() {
         "stderr: {err}"
     );
     assert!(err.contains("S.Port statistics (40 rows)"), "{err}");
-    while let Ok((_, l)) = rx.recv_timeout(Duration::from_secs(2)) {
+    while let Ok((_, l)) = rx.recv_timeout(common::PATIENCE) {
         live.push(l);
     }
     assert_eq!(live.len(), 41, "every slot is a row: {live:?}");
@@ -149,7 +153,7 @@ fn sigterm_flushes_the_output_file() {
         b.master.write_all(&s).unwrap();
     }
     b.master.flush().unwrap();
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + common::PATIENCE;
     while std::fs::read_to_string(&csv)
         .unwrap_or_default()
         .lines()
@@ -308,19 +312,38 @@ fn a_silent_line_with_noise_gets_the_wiring_hint() {
     let mut b = bus();
     let (mut child, rx) = spawn(&["sport", "-f", "tsv"], &b.path);
     next_line(&rx);
-    // What a non-inverted S.Port line looks like: bytes, but never a frame.
+    // Its stderr, line by line as it comes.
+    let err_lines = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let reader = {
+        let stderr = child.stderr.take().unwrap();
+        let lines = err_lines.clone();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            for l in std::io::BufReader::new(stderr)
+                .lines()
+                .map_while(Result::ok)
+            {
+                let mut s = lines.lock().unwrap();
+                s.push_str(&l);
+                s.push('\n');
+            }
+        })
+    };
+    // What a non-inverted S.Port line looks like: bytes, but never a frame, until the hint.
     let start = Instant::now();
-    while start.elapsed() < Duration::from_millis(3500) {
+    while !err_lines.lock().unwrap().contains("no valid S.Port frame") {
+        assert!(start.elapsed() < common::PATIENCE, "no wiring hint");
         b.master
             .write_all(&[0xA0, 0xA0, 0xE6, 0x57, 0x7F, 0x81])
             .unwrap();
         b.master.flush().unwrap();
         std::thread::sleep(Duration::from_millis(20));
     }
-    std::thread::sleep(Duration::from_millis(200));
+    assert!(start.elapsed() >= Duration::from_secs(3), "not before 3 s");
     drop(b.master);
     wait_exit(&mut child);
-    let err = stderr_of(&mut child);
+    reader.join().unwrap();
+    let err = err_lines.lock().unwrap().clone();
     let hints: Vec<&str> = err
         .lines()
         .filter(|l| l.contains("no valid S.Port frame"))
@@ -399,15 +422,6 @@ fn has_open(pid: u32, path: &std::path::Path) -> bool {
         .unwrap_or(false)
 }
 
-/// Waits up to 10 s for `what`.
-fn until(what: &str, f: impl Fn() -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while !f() {
-        assert!(Instant::now() < deadline, "{what}");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 /// L13 (issue 32): a Wireshark capture through the extcap with `--reconnect` wrote the unplug
 /// notices on stderr, which Wireshark shows as an error when the capture stops. The extcap's
 /// stderr stays empty; the gap is in the capture (the export) and its rows.
@@ -442,7 +456,7 @@ fn extcap_with_reconnect_keeps_stderr_empty_through_an_unplug() {
     };
     let pid = child.id();
     let first = b.path.clone();
-    until("the port is open", || has_open(pid, &first));
+    common::until("the port is open", || has_open(pid, &first));
     let Bus {
         mut master, slave, ..
     } = b;
@@ -451,14 +465,14 @@ fn extcap_with_reconnect_keeps_stderr_empty_through_an_unplug() {
     // Unplug, and wait until busnoop let go of the device.
     drop(master);
     drop(slave);
-    until("the unplugged port is closed", || !has_open(pid, &first));
+    common::until("the unplugged port is closed", || !has_open(pid, &first));
     // Plug in again under the same stable name.
     let mut b2 = bus();
     let tmp = dir.path().join("adapter.new");
     std::os::unix::fs::symlink(&b2.path, &tmp).unwrap();
     std::fs::rename(&tmp, &link).unwrap();
     let second = b2.path.clone();
-    until("the port is open again", || has_open(pid, &second));
+    common::until("the port is open again", || has_open(pid, &second));
     b2.master.write_all(&slots(3).concat()).unwrap();
     b2.master.flush().unwrap();
     unsafe { libc::kill(pid as i32, libc::SIGTERM) };
@@ -505,7 +519,7 @@ fn detect_hearing_sport(b: &mut Bus) -> std::process::Child {
     b.master.write_all(&traffic).unwrap();
     b.master.flush().unwrap();
     let pid = child.id();
-    until("detect read the traffic", || {
+    common::until("detect read the traffic", || {
         bytes_read(pid) >= before + traffic.len() as u64
     });
     child

@@ -231,7 +231,7 @@ fn a_pipe_needs_the_protocol_named() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let deadline = std::time::Instant::now() + common::PATIENCE;
     while child.try_wait().unwrap().is_none() {
         if std::time::Instant::now() > deadline {
             let _ = child.kill();
@@ -258,17 +258,14 @@ impl Drop for Guard {
     }
 }
 
-/// Waits for the child's exit, failing after `secs` seconds.
-fn exit_within(child: &mut std::process::Child, secs: u64) -> std::process::ExitStatus {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+/// Waits for the child's exit, failing after [`common::PATIENCE`].
+fn exit_within(child: &mut std::process::Child) -> std::process::ExitStatus {
+    let deadline = std::time::Instant::now() + common::PATIENCE;
     loop {
         if let Some(s) = child.try_wait().unwrap() {
             return s;
         }
-        assert!(
-            std::time::Instant::now() < deadline,
-            "busnoop did not exit within {secs} s"
-        );
+        assert!(std::time::Instant::now() < deadline, "busnoop did not exit");
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
 }
@@ -294,7 +291,7 @@ fn a_fifo_image_without_a_reader_ends_on_a_signal() {
         let mut g = Guard(child);
         common::wait_for_handlers(&g.0);
         unsafe { libc::kill(g.0.id() as i32, sig) };
-        let status = exit_within(&mut g.0, 10);
+        let status = exit_within(&mut g.0);
         assert_eq!(status.code(), Some(code));
     }
     // A reader that comes gets the whole image.
@@ -310,7 +307,7 @@ fn a_fifo_image_without_a_reader_ends_on_a_signal() {
         .unwrap();
     let mut g = Guard(child);
     let svg = std::fs::read_to_string(&fifo).unwrap();
-    assert_eq!(exit_within(&mut g.0, 10).code(), Some(0));
+    assert_eq!(exit_within(&mut g.0).code(), Some(0));
     assert!(
         svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
         "{svg}"
@@ -388,7 +385,7 @@ fn an_unwritable_image_folder_is_refused_before_the_input_is_read() {
         .spawn()
         .unwrap();
     let mut g = Guard(child);
-    let status = exit_within(&mut g.0, 10);
+    let status = exit_within(&mut g.0);
     let mut err = String::new();
     std::io::Read::read_to_string(g.0.stderr.as_mut().unwrap(), &mut err).unwrap();
     assert_eq!(status.code(), Some(8), "{err}");

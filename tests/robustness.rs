@@ -757,20 +757,29 @@ fn dev_urandom_is_read_as_a_file() {
         "2 MiB examined: {}",
         text(&out.stdout)
     );
-    // The decoders read it until Ctrl-C.
-    let child = busnoop()
-        .args(["sport", "/dev/urandom", "-f", "tsv"])
-        .stdout(Stdio::piped())
+    // The decoders read it until Ctrl-C: sent once its handlers are in place and 100 rows are
+    // written (into a file, to count them while it runs).
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("t.tsv");
+    let mut child = busnoop()
+        .args(["sport", "/dev/urandom", "-f", "tsv", "-o"])
+        .arg(&table)
+        .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
+    common::wait_for_handlers(&child);
+    common::until("100 rows", || {
+        std::fs::read(&table).is_ok_and(|t| t.iter().filter(|&&b| b == b'\n').count() > 100)
+    });
     // SAFETY: kill() sends a signal to our own child; no memory is involved.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let out = child.wait_with_output().unwrap();
-    no_panic(&out);
-    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).lines().count() > 100);
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(std::fs::read_to_string(&table).unwrap().lines().count() > 100);
 }
 
 /// `busnoop detect /dev/zero` reads it as a file: stderr does not claim that busnoop listens to

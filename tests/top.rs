@@ -124,7 +124,7 @@ fn collect(master: &TTYPort) -> Arc<Mutex<Vec<u8>>> {
 
 /// Waits up to 10 s for `text` in what was drawn after byte `from`; returns where it ends.
 fn wait_for(screen: &Mutex<Vec<u8>>, from: usize, text: &str) -> usize {
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + common::PATIENCE;
     loop {
         {
             let s = screen.lock().unwrap();
@@ -243,9 +243,7 @@ fn a_silent_port_gets_the_wiring_hint_in_the_table_mode() {
         }
     });
     let line = loop {
-        let l = rx
-            .recv_timeout(Duration::from_secs(10))
-            .expect("no hint within 10 s");
+        let l = rx.recv_timeout(common::PATIENCE).expect("no hint");
         if l.contains("no bytes") {
             break l;
         }
@@ -366,8 +364,11 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
         &"sport", &"--top", &"--speed", &"0", &"-f", &"tsv", &"-o", &fifo, &long,
     ]);
     let at = wait_for(&screen, 0, "\x1b[?1049h");
-    // Time to fill the FIFO and block.
-    std::thread::sleep(Duration::from_millis(1500));
+    // Once the FIFO is full the table's write blocks.
+    let pid = child.id();
+    common::until("the table's write blocks", || {
+        common::waits_in(pid, "pipe_write")
+    });
     assert_ne!(term.lflag(), before, "raw mode while the view runs");
     unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
     std::thread::sleep(Duration::from_millis(300));
@@ -453,15 +454,6 @@ fn state(pid: u32) -> char {
         .unwrap_or('?')
 }
 
-/// Waits up to 10 s for `what` to hold.
-fn until(what: &str, mut f: impl FnMut() -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while !f() {
-        assert!(Instant::now() < deadline, "{what}");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 /// The long table of `file` as busnoop writes it without the view.
 fn full_table(file: &std::path::Path) -> String {
     let out = Command::new(bin())
@@ -543,13 +535,13 @@ fn stop_continue_and_quit_signals_give_the_terminal_back() {
     assert_ne!(term.lflag(), before);
     let pid = child.id();
     unsafe { libc::kill(pid as i32, libc::SIGTSTP) };
-    until("busnoop stops on SIGTSTP", || state(pid) == 'T');
+    common::until("busnoop stops on SIGTSTP", || state(pid) == 'T');
     assert_eq!(term.lflag(), before, "cooked while stopped");
     let at = wait_for(&screen, at, "\x1b[?1049l");
     unsafe { libc::kill(pid as i32, libc::SIGCONT) };
     let at = wait_for(&screen, at, "\x1b[?1049h");
     let at = wait_for(&screen, at, "END OF INPUT");
-    until("raw again after SIGCONT", || term.lflag() != before);
+    common::until("raw again after SIGCONT", || term.lflag() != before);
     unsafe { libc::kill(pid as i32, libc::SIGQUIT) };
     let status = wait_exit(&mut child);
     use std::os::unix::process::ExitStatusExt;
@@ -580,7 +572,7 @@ fn a_terminal_that_goes_away_ends_the_view_and_the_table_goes_on() {
     let mut reader = master.try_clone_native().unwrap();
     reader.set_timeout(Duration::from_millis(50)).unwrap();
     let mut seen = Vec::new();
-    until("the view opens", || {
+    common::until("the view opens", || {
         let mut buf = [0u8; 4096];
         if let Ok(n) = reader.read(&mut buf) {
             seen.extend_from_slice(&buf[..n]);

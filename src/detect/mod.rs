@@ -439,6 +439,10 @@ fn read_prefix(input: &Input) -> Result<(Kind, Vec<Batch>, Option<i32>), Failure
     let mut bytes = 0;
     let signal = loop {
         if let Some(sig) = stop.signal() {
+            // What arrived before the signal is judged too.
+            while let Ok(Message::Data(b)) = feed.rx.try_recv() {
+                batches.push(b);
+            }
             break Some(sig);
         }
         match feed.rx.recv_timeout(Duration::from_millis(50)) {

@@ -5,6 +5,11 @@ use std::path::PathBuf;
 
 pub mod pty;
 
+/// How long a test waits for an event (a line, a file, an exit) before it fails: far more than
+/// any of them takes, so that a loaded machine (two busy loops on two cores, parallel test
+/// binaries) never fails a test that would pass alone.
+pub const PATIENCE: std::time::Duration = std::time::Duration::from_secs(30);
+
 use busnoop::protocol::Decoder;
 use busnoop::row::{Collected, OwnedRow};
 
@@ -163,9 +168,9 @@ pub fn capture(dir: &std::path::Path, name: &str) -> (PathBuf, Vec<u8>) {
 }
 
 /// Runs `cmd` (standard input from `stdin`, written and closed by a thread; standard output to
-/// `stdout`) and returns its output; kills it and fails when it has not exited within 10 s (a
-/// run that writes into its own input pipe never ends).
-pub fn output_within_10s(
+/// `stdout`) and returns its output; kills it and fails when it has not exited within
+/// [`PATIENCE`] (a run that writes into its own input pipe never ends).
+pub fn output_within(
     cmd: &mut std::process::Command,
     stdin: Option<Vec<u8>>,
     stdout: std::process::Stdio,
@@ -188,12 +193,12 @@ pub fn output_within_10s(
         // busnoop may refuse before reading anything: a broken pipe is fine.
         std::thread::spawn(move || pipe.write_all(&bytes));
     }
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + PATIENCE;
     while child.try_wait().unwrap().is_none() {
         if Instant::now() > deadline {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("busnoop did not exit within 10 s: {cmd:?}");
+            panic!("busnoop did not exit within {PATIENCE:?}: {cmd:?}");
         }
         std::thread::sleep(Duration::from_millis(10));
     }
@@ -275,7 +280,7 @@ pub fn limit_file_size(cmd: &mut std::process::Command, bytes: libc::rlim_t) {
 
 /// Waits until the child has its signal handlers in place (so a signal is not fatal by default).
 pub fn wait_for_handlers(child: &std::process::Child) {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let deadline = std::time::Instant::now() + PATIENCE;
     let status = format!("/proc/{}/status", child.id());
     loop {
         let text = std::fs::read_to_string(&status).unwrap_or_default();
@@ -292,6 +297,41 @@ pub fn wait_for_handlers(child: &std::process::Child) {
             std::time::Instant::now() < deadline,
             "busnoop installed no handlers"
         );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// Unread bytes in the pipe or FIFO whose end `fd` is (`FIONREAD`; either end).
+pub fn pipe_unread(fd: &impl std::os::fd::AsRawFd) -> i32 {
+    let mut n: libc::c_int = 0;
+    // SAFETY: FIONREAD into our own int.
+    unsafe { libc::ioctl(fd.as_raw_fd(), libc::FIONREAD, &mut n) };
+    n
+}
+
+/// Whether a thread of process `pid` waits in a kernel function whose name holds `what`
+/// (`/proc/PID/task/*/wchan`: `pipe_write`, `pipe_read`, `poll`).
+pub fn waits_in(pid: u32, what: &str) -> bool {
+    std::fs::read_dir(format!("/proc/{pid}/task"))
+        .map(|d| {
+            d.flatten().any(|t| {
+                std::fs::read_to_string(t.path().join("wchan")).is_ok_and(|w| w.contains(what))
+            })
+        })
+        .unwrap_or(false)
+}
+
+/// Whether a thread of process `pid` waits for input (blocked in a pipe read or in poll):
+/// with its input pipe empty, it has taken in everything written so far.
+pub fn waits_for_input(pid: u32) -> bool {
+    waits_in(pid, "pipe_read") || waits_in(pid, "poll")
+}
+
+/// Waits up to [`PATIENCE`] for `what` to hold.
+pub fn until(what: &str, mut f: impl FnMut() -> bool) {
+    let deadline = std::time::Instant::now() + PATIENCE;
+    while !f() {
+        assert!(std::time::Instant::now() < deadline, "{what}");
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
 }
