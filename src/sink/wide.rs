@@ -452,7 +452,7 @@ impl Wide {
         self.record.clear();
         put_text(&mut self.record, self.line.as_bytes());
         for &i in &self.changed {
-            self.record.extend_from_slice(&i.to_le_bytes());
+            put_varint(&mut self.record, i as usize);
             put_text(&mut self.record, self.held[i as usize].as_bytes());
             self.is_changed[i as usize] = false;
         }
@@ -461,9 +461,33 @@ impl Wide {
     }
 }
 
-/// Appends `text` with its length (`u32`, little-endian) before it.
+/// Appends `n` in 7-bit groups, the lowest first, the high bit set on all but the last
+/// (LEB128): a column below 128 or a value's length take one byte.
+fn put_varint(out: &mut Vec<u8>, mut n: usize) {
+    while n >= 0x80 {
+        out.push(n as u8 | 0x80);
+        n >>= 7;
+    }
+    out.push(n as u8);
+}
+
+/// Reads what [`put_varint`] wrote.
+fn take_varint(rest: &mut &[u8]) -> Option<usize> {
+    let mut n = 0usize;
+    for shift in (0..64).step_by(7) {
+        let (&b, tail) = rest.split_first()?;
+        *rest = tail;
+        n |= ((b & 0x7F) as usize).checked_shl(shift)?;
+        if b & 0x80 == 0 {
+            return Some(n);
+        }
+    }
+    None
+}
+
+/// Appends `text` with its length ([`put_varint`]) before it.
 fn put_text(out: &mut Vec<u8>, text: &[u8]) {
-    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    put_varint(out, text.len());
     out.extend_from_slice(text);
 }
 
@@ -475,15 +499,12 @@ fn replay<'r>(record: &'r [u8], values: &mut [String]) -> Option<&'r [u8]> {
         *rest = b;
         Some(a)
     }
-    fn u32_of(rest: &mut &[u8]) -> Option<usize> {
-        Some(u32::from_le_bytes(take(rest, 4)?.try_into().ok()?) as usize)
-    }
     let mut rest = record;
-    let n = u32_of(&mut rest)?;
+    let n = take_varint(&mut rest)?;
     let time = take(&mut rest, n)?;
     while !rest.is_empty() {
-        let col = u32_of(&mut rest)?;
-        let n = u32_of(&mut rest)?;
+        let col = take_varint(&mut rest)?;
+        let n = take_varint(&mut rest)?;
         let text = std::str::from_utf8(take(&mut rest, n)?).ok()?;
         let v = values.get_mut(col)?;
         v.clear();
@@ -641,7 +662,7 @@ mod tests {
                 .unwrap();
         }
         let per_line = (w.spool.total() - first) / 20_000;
-        assert!(per_line <= 24, "{per_line} bytes per line");
+        assert!(per_line <= 16, "{per_line} bytes per line");
         finish(&mut w, &mut buf, 1000);
         let table = String::from_utf8(buf).unwrap();
         let lines: Vec<&str> = table.lines().collect();
