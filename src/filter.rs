@@ -170,6 +170,26 @@ impl Filter {
         sensors: &[String],
         protocol: &str,
     ) -> Result<Filter, Error> {
+        // An empty value would keep every row: `--id ""` from a script whose variable was
+        // empty is a mistake to say, not a filter to drop.
+        for (values, option) in [
+            (&spec.id, "--id"),
+            (&spec.not_id, "--not-id"),
+            (&spec.types, "--type"),
+            (&spec.not_types, "--not-type"),
+            (&spec.sensor, "--sensor"),
+            (&spec.device, "--device"),
+        ] {
+            if let Some(v) = values
+                .iter()
+                .find(|v| v.split(',').all(|s| s.trim().is_empty()))
+            {
+                return Err(format!(
+                    "{option} {v:?}: an empty value; give one or more, comma-separated, or leave \
+                     {option} out"
+                ));
+            }
+        }
         let mut f = Filter {
             ids: id_list(&spec.id, "--id", vocab)?,
             not_ids: id_list(&spec.not_id, "--not-id", vocab)?,
@@ -241,6 +261,32 @@ impl Filter {
                 }
             }
             f.devices.push(v.into());
+        }
+        // Options that contradict each other would show nothing at all.
+        let has = |list: &[RangeInclusive<u32>], id: u32| list.iter().any(|r| r.contains(&id));
+        if !f.ids.is_empty()
+            && !f.not_ids.is_empty()
+            && vocab
+                .ids
+                .clone()
+                .is_some_and(|mut ids| ids.all(|id| !has(&f.ids, id) || has(&f.not_ids, id)))
+        {
+            return Err(format!(
+                "--not-id leaves no ID of --id ({} minus {}): no row could be shown",
+                spec.id.join(","),
+                spec.not_id.join(",")
+            ));
+        }
+        if !f.types.is_empty()
+            && f.types
+                .iter()
+                .all(|t| f.not_types.iter().any(|n| n.eq_ignore_ascii_case(t)))
+        {
+            return Err(format!(
+                "--not-type leaves no type of --type ({} minus {}): no row could be shown",
+                spec.types.join(","),
+                spec.not_types.join(",")
+            ));
         }
         f.active = !(f.ids.is_empty()
             && f.not_ids.is_empty()
