@@ -203,9 +203,19 @@ impl Filter {
             active: false,
         };
         if spec.hide_polls && !vocab.polls {
+            // Said in the protocol's own words: requests with answers, or a stream of frames.
+            let (what, example) = if vocab.types.contains(&"Request") {
+                ("every request is shown with its answer", "Request")
+            } else {
+                let rc = vocab.types.iter().find(|t| **t == "RC");
+                (
+                    "its frames come unasked",
+                    rc.or(vocab.types.first()).copied().unwrap_or("TYPE"),
+                )
+            };
             return Err(format!(
-                "--hide-polls: {protocol} has no polls (every request is shown with its answer); \
-                 to hide a type use --not-type, e.g. --not-type Request"
+                "--hide-polls: {protocol} has no polls ({what}); to hide a type use --not-type, \
+                 e.g. --not-type {example}"
             ));
         }
         if spec.hide_null && !vocab.keepalives {
@@ -920,6 +930,20 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.contains("S-Bus has no polls"), "{e}");
+        // A stream of frames is not told about requests and answers.
+        let stream = Vocab {
+            types: &["GPS", "RC", "Link"],
+            polls: false,
+            ..VOCAB
+        };
+        let e =
+            Filter::new(&spec(|s| s.hide_polls = true), &stream, &names, &[], "CRSF").unwrap_err();
+        assert!(
+            e.contains("frames come unasked")
+                && e.contains("--not-type RC")
+                && !e.contains("request"),
+            "{e}"
+        );
         let e = Filter::new(
             &spec(|s| s.hide_null = true),
             &no_polls,
