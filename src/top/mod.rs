@@ -244,8 +244,8 @@ impl<'a> Top<'a> {
         match k.code {
             KeyCode::Char('q') | KeyCode::Char('Q') | KeyCode::Esc => {
                 if self.table.is_some() && !self.info.live && !self.ui.ended {
-                    // A replay into a table: the table is written whole (it used to lose the
-                    // rows still to come, the last one included).
+                    // A replay into a table: the view closes and the rest of the replay still
+                    // goes into the table, so that it is whole.
                     self.close_view(Closed::Quit);
                 } else {
                     self.quit = true;

@@ -64,7 +64,7 @@ fn suspend_at_signal() {
 }
 
 /// SIGTSTP (an external `kill -TSTP`, or Ctrl-Z typed in the view) and SIGQUIT put the
-/// terminal back first: they used to leave it raw. A stop then stops the process as the
+/// terminal back first, so that the shell gets a cooked terminal. A stop then stops the process as the
 /// default action would, and marks the view to be set up again when it continues; SIGQUIT
 /// ends it as SIGQUIT does.
 fn install_stop_and_quit() -> io::Result<()> {
