@@ -150,7 +150,10 @@ fn overlap(bytes: &[u8], end: usize, eof: bool) -> Option<Option<usize>> {
                         _ => Some(false),
                     }
                 };
-                if frame_at(end)? {
+                // (A stray 0x54 right at its end and a valid frame after it count as a valid
+                // frame at its end: a lost byte's signature has the next frame's LENGTH there,
+                // which is never 0x54.)
+                if frame_at(end)? || (bytes.get(end) == Some(&SYNC) && frame_at(end + 1)?) {
                     return Some(None);
                 }
                 // Its 0x54 in the frame's CRC byte: the signature of a byte lost from the frame
