@@ -14,6 +14,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::futaba::PROTOCOL,
     &crate::ibus::PROTOCOL,
     &crate::logs::PROTOCOL,
+    &crate::modbus::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.
@@ -27,19 +28,27 @@ mod tests {
     use super::*;
     use crate::protocol::InputKind;
 
-    /// Two protocols' exports in one link type would be read by the wrong dissector.
+    /// Two protocols' exports in one link type would be read by the wrong dissector, unless
+    /// both wrap their frames in datagrams (raw IPv4/UDP) whose port picks the dissector
+    /// (serial S-Bus as Ether-S-Bus on 5050, Modbus as Modbus/UDP on 502).
     #[test]
     fn every_export_has_its_own_link_type() {
-        let mut seen: Vec<(u32, &str)> = Vec::new();
+        let mut seen: Vec<(crate::protocol::Export, &str)> = Vec::new();
         for p in PROTOCOLS {
             if let Some(e) = p.export {
-                if let Some((_, other)) = seen.iter().find(|(l, _)| *l == e.linktype) {
-                    panic!(
-                        "{} and {other} both export as link type {}",
-                        p.command, e.linktype
-                    );
+                for (other, name) in &seen {
+                    if other.linktype == e.linktype {
+                        assert!(
+                            e.wrap.is_some()
+                                && other.wrap.is_some()
+                                && other.dissector != e.dissector,
+                            "{} and {name} both export as link type {}",
+                            p.command,
+                            e.linktype
+                        );
+                    }
                 }
-                seen.push((e.linktype, p.command));
+                seen.push((e, p.command));
             }
         }
     }

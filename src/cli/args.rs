@@ -534,6 +534,13 @@ pub struct LiveArgs {
     #[arg(long, value_name = "FORMAT")]
     pub line: Option<String>,
 
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level; see
+    /// docs/logic.md). Several (`--channel RX,TX` or repeated): each channel is a port of its
+    /// own, merged by time with a Port column.
+    #[arg(long, value_name = "NAME|N", value_delimiter = ',')]
+    pub channel: Vec<String>,
+
     /// Wait for the adapter: when it is not plugged in yet, until it appears; when it is
     /// unplugged, until it is back (by its /dev/serial/by-id name or USB serial number), and
     /// mark the gap with rows.
@@ -657,6 +664,12 @@ pub struct OutputArgs {
           value_parser = |s: &str| crate::protocol::front::whole_in(s, 1, 3_600_000))]
     pub every: Option<u64>,
 
+    /// With --wide: at most N columns, the first N numbers to appear; the numbers of later
+    /// columns are left out, counted in a note [default: 2000].
+    #[arg(long, value_name = "N", requires = "wide",
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub max_columns: Option<u32>,
+
     /// `busnoop plot`: rows go to a plot instead.
     #[arg(skip)]
     pub plot: Option<crate::plot::PlotSpec>,
@@ -760,8 +773,8 @@ pub fn parse_baud(s: &str) -> Result<u32, String> {
 #[derive(Args, Debug)]
 pub struct DetectArgs {
     /// What to examine: a capture file (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap
-    /// recording, a pcap/pcapng capture), `-` for standard input, or a serial device, which is
-    /// listened to (passively, read-only) at each baud rate in turn.
+    /// recording, a pcap/pcapng capture, a logic-analyzer trace), `-` for standard input, or a
+    /// serial device, which is listened to (passively, read-only) at each baud rate in turn.
     pub source: PathBuf,
 
     /// Serial devices: how long to listen at each baud rate.
@@ -778,6 +791,11 @@ pub struct DetectArgs {
     /// Serial devices: DTR and RTS, as for the protocol commands.
     #[arg(long, value_enum, value_name = "MODE", default_value_t)]
     pub dtr_rts: crate::source::serial::ModemLines,
+
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level).
+    #[arg(long, value_name = "NAME|N")]
+    pub channel: Option<String>,
 }
 
 impl DetectArgs {
@@ -787,6 +805,7 @@ impl DetectArgs {
             listen_ms: self.listen_ms,
             bauds: self.bauds.clone(),
             dtr_rts: self.dtr_rts,
+            channel: self.channel.clone(),
         }
     }
 }

@@ -80,13 +80,14 @@ pub(super) fn run(
     args: &CaptureArgs,
     protocol: &Protocol,
     serial: &SerialConfig,
+    trace: &crate::source::logic::Options,
     selection: &Selection,
     decoder_for: &DecoderFor<'_>,
     stop: &Stop,
 ) -> Result<(), Failure> {
     check(args)?;
     let clock = Instant::now();
-    let opened = open_all(args, protocol, serial, clock)?;
+    let opened = open_all(args, protocol, serial, trace, clock)?;
     let live = opened[0].kind == InputKind::Serial;
     if let Some(o) = opened
         .iter()
@@ -216,7 +217,14 @@ pub(super) fn run(
     let mut extra = vec![PORT_COLUMN];
     extra.extend_from_slice(ports[0].decoder.columns());
     let widths = pretty_widths(protocol.pretty_widths, &ports);
-    let mut table = open_table(out, args.run.quiet, &extra, &widths, live)?;
+    let mut table = open_table(
+        out,
+        args.run.quiet,
+        &extra,
+        &widths,
+        live,
+        protocol.vocab.polls,
+    )?;
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
     }
@@ -229,6 +237,7 @@ pub(super) fn run(
         anchor: if live { None } else { anchor },
         clock: live.then_some(clock),
         selection,
+        quiet: QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed),
     };
     let merged = if out.top {
         let names: Vec<&str> = ports.iter().map(|p| p.name.as_str()).collect();
@@ -383,6 +392,7 @@ fn open_all(
     args: &CaptureArgs,
     protocol: &Protocol,
     serial: &SerialConfig,
+    trace: &crate::source::logic::Options,
     clock: Instant,
 ) -> Result<Vec<Opening>, Failure> {
     let mut opened: Vec<Opening> = Vec::new();
@@ -410,19 +420,53 @@ fn open_all(
             Input::Device(_) => 0,
             _ => crate::detect::ADVICE_BYTES as u64,
         };
-        let (kind, reader, progress) =
-            open_source(input, serial, args.live.reconnect, keep, Some(clock))?;
-        tracing::info!("{}: {:?}", source.display(), kind);
-        if !protocol.reads(kind) {
-            return Err(in_source(source, unusable(kind, protocol)));
+        // A trace read once per channel asked for: each channel a port (`trace.sr:RX`).
+        let channels: Vec<Option<&String>> = if args.live.channel.len() > 1 {
+            args.live.channel.iter().map(Some).collect()
+        } else {
+            vec![args.live.channel.first()]
+        };
+        if channels.len() > 1 && !matches!(input, Input::File(_)) {
+            return Err(Failure::Usage(format!(
+                "several --channel values read the trace once per channel: {} must be a file",
+                source.display()
+            )));
         }
-        opened.push(Opening {
-            name: source.display().to_string(),
-            source: source.clone(),
-            kind,
-            reader,
-            progress,
-        });
+        for channel in channels {
+            let trace = crate::source::logic::Options {
+                channel: channel.cloned(),
+                ..trace.clone()
+            };
+            let (kind, reader, progress) = open_source(
+                input.clone(),
+                serial,
+                &trace,
+                args.live.reconnect,
+                keep,
+                Some(clock),
+            )?;
+            tracing::info!("{}: {:?}", source.display(), kind);
+            if !protocol.reads(kind) {
+                return Err(in_source(source, unusable(kind, protocol)));
+            }
+            if channel.is_some() && kind != InputKind::Trace {
+                return Err(Failure::Usage(format!(
+                    "--channel picks a wire of a logic-analyzer trace; {} is not one",
+                    source.display()
+                )));
+            }
+            let name = match channel {
+                Some(c) if args.live.channel.len() > 1 => format!("{}:{c}", source.display()),
+                _ => source.display().to_string(),
+            };
+            opened.push(Opening {
+                name,
+                source: source.clone(),
+                kind,
+                reader,
+                progress,
+            });
+        }
     }
     // Two ports of one name (two recordings of the same device) are told apart.
     for i in 1..opened.len() {

@@ -230,6 +230,7 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         let empty = toml::Table::new();
         options.configure(&f.own_keys(protocol, &empty))?;
     }
+    options.check()?;
     let section = file
         .as_ref()
         .and_then(|f| Some((f.section(protocol)?, f.name())));
@@ -276,7 +277,7 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
 /// `--stats-json FILE`: its folder exists, and it is not the input (it is written at the end,
 /// when the input was read).
 fn check_stats_file(path: &Path, source: &Path) -> Result<(), Failure> {
-    crate::sink::check_folder(path)?;
+    crate::files::check_folder(path)?;
     let same = std::fs::canonicalize(path)
         .ok()
         .is_some_and(|p| std::fs::canonicalize(source).is_ok_and(|s| s == p));
@@ -308,6 +309,7 @@ fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
         InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
         InputKind::Recording => "a busnoop recording",
         InputKind::Raw | InputKind::Serial => "raw serial data",
+        InputKind::Trace => "a logic-analyzer trace",
     };
     // The subcommands that do read it (`busnoop sbus` for an Ether-S-Bus pcap).
     let readers: Vec<String> = crate::protocols::PROTOCOLS
@@ -364,6 +366,16 @@ pub fn run_capture(
             project::File::path(&args.select).as_deref(),
         )?;
     }
+    // `>&-`: the table or the recording on standard output would vanish with exit 0.
+    if ((table_file.is_none() && !args.output.top) || record_to_stdout)
+        && crate::files::stdout_was_closed()
+    {
+        return Err(Failure::Output(
+            "standard output is closed (>&-): what goes there would be lost; give -o FILE, or \
+             send it somewhere (>FILE, >/dev/null)"
+                .into(),
+        ));
+    }
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
@@ -386,7 +398,7 @@ pub fn run_capture(
     .flatten()
     .filter(|p| !is_dash(p))
     {
-        crate::sink::check_folder(p)?;
+        crate::files::check_folder(p)?;
     }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
@@ -404,6 +416,8 @@ pub fn run_capture(
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut line = default_line;
+    // A trace's rate is measured unless it is given (--baud, or a speed in --line).
+    let mut fixed_baud = args.live.baud;
     if let Some(l) = &args.live.line {
         line = line
             .parse_over(l)
@@ -413,6 +427,9 @@ pub fn run_capture(
                 "--line {l}: the speed is out of range: from 50 to 12000000 baud"
             )));
         }
+        if line.baud != default_line.baud {
+            fixed_baud = fixed_baud.or(Some(line.baud));
+        }
     }
     if let Some(b) = args.live.baud {
         line.baud = b;
@@ -421,8 +438,21 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
-    if !args.more.is_empty() || many::several_ports(&input) {
-        return many::run(args, protocol, &serial, selection, &decoder_for, &stop);
+    let trace = source::logic::Options {
+        line,
+        baud: fixed_baud,
+        channel: args.live.channel.first().cloned(),
+    };
+    if !args.more.is_empty() || args.live.channel.len() > 1 || many::several_ports(&input) {
+        return many::run(
+            args,
+            protocol,
+            &serial,
+            &trace,
+            selection,
+            &decoder_for,
+            &stop,
+        );
     }
     let input = match args.live.reconnect {
         true => wait_for_adapter(&args.source)?.unwrap_or(input),
@@ -439,8 +469,20 @@ pub fn run_capture(
     } else {
         crate::detect::ADVICE_BYTES as u64
     };
-    let (kind, reader, progress) =
-        open_source(input, &serial, args.live.reconnect, keep_input, None)?;
+    let (kind, reader, progress) = open_source(
+        input,
+        &serial,
+        &trace,
+        args.live.reconnect,
+        keep_input,
+        None,
+    )?;
+    if !args.live.channel.is_empty() && kind != InputKind::Trace {
+        return Err(Failure::Usage(format!(
+            "--channel picks a wire of a logic-analyzer trace; {} is not one",
+            args.source.display()
+        )));
+    }
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -456,7 +498,7 @@ pub fn run_capture(
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
         InputKind::Pcap | InputKind::Pcapng => Content::Packets,
-        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording | InputKind::Trace => {
             Content::Line { timed: true }
         }
         InputKind::Raw => Content::Line { timed: false },
@@ -505,6 +547,7 @@ pub fn run_capture(
         decoder.columns(),
         protocol.pretty_widths,
         kind == InputKind::Serial,
+        protocol.vocab.polls,
     )?;
     let live = kind == InputKind::Serial;
     let stops = Stops {
@@ -523,6 +566,7 @@ pub fn run_capture(
         live,
         source: &source_name,
         selection,
+        quiet: QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed),
     };
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
@@ -668,6 +712,7 @@ fn open_table(
     extra: &[&'static str],
     widths: &[usize],
     live: bool,
+    polls: bool,
 ) -> Result<Option<Table>, Failure> {
     // With --top and no -o, the view is the only output.
     Ok(match (out.top, out.output_file()) {
@@ -695,9 +740,11 @@ fn open_table(
             }
             if out.wide {
                 // CSV or TSV: check_wide refused the others before anything was opened.
+                // Protocols without a poll cycle step by frame.
                 let step = match out.every {
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
-                    None => crate::sink::wide::Step::PollCycle,
+                    None if polls => crate::sink::wide::Step::PollCycle,
+                    None => crate::sink::wide::Step::Frame,
                 };
                 if out.raw || out.time == TimeMode::Abs {
                     eprintln!(
@@ -705,7 +752,10 @@ fn open_table(
                          Date and Time columns come with any source that has wall-clock time"
                     );
                 }
-                table.set_wide(step, live);
+                let max = out
+                    .max_columns
+                    .map_or(crate::sink::wide::MAX_COLUMNS, |n| n as usize);
+                table.set_wide(step, live, max);
             }
             Some(table)
         }
@@ -721,6 +771,13 @@ fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
         notes.push(
             "--time abs: raw wire bytes carry no wall-clock time, so the Time column stays \
              empty (a recording made with --record FILE.pcap keeps the times)"
+                .to_string(),
+        );
+    }
+    if out.time == TimeMode::Abs && kind == InputKind::Trace {
+        notes.push(
+            "--time abs: a logic-analyzer trace carries no wall-clock time busnoop can trust, so \
+             the Time column stays empty; Millis counts from the start of the trace"
                 .to_string(),
         );
     }
@@ -864,6 +921,7 @@ fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
+    trace: &source::logic::Options,
     reconnect: bool,
     keep_input: u64,
     clock: Option<std::time::Instant>,
@@ -894,6 +952,7 @@ fn open_source(
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
         InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Trace => source::logic::reader(opened, trace)?,
     };
     Ok((kind, reader, Some(progress)))
 }
@@ -968,6 +1027,10 @@ fn report(
             eprintln!("{protocol} statistics ({rows} rows)");
         }
         eprintln!("{}", decoder.stats());
+    }
+    // Filters that are each fine but together keep nothing (`--type Null --errors`).
+    if rows > 0 && hidden == rows && result.is_ok() {
+        eprintln!("busnoop: note: the filters hid all {rows} rows");
     }
     // When the output failed, the one line that matters is the write error (printed last).
     let problems = decoder.problems();
