@@ -822,8 +822,9 @@ fn source_notes(args: &CaptureArgs, kind: InputKind) -> Vec<String> {
         InputKind::EdgeTxLog => "an EdgeTX log",
         _ => "a file or pipe",
     };
-    // Raw bytes carry no times: --baud and --line set the bits per byte they are given.
-    let timed = kind != InputKind::Raw;
+    // Raw bytes carry no times: --baud and --line set the bits per byte they are given; a
+    // logic-analyzer trace is read through a UART they set.
+    let timed = !matches!(kind, InputKind::Raw | InputKind::Trace);
     if timed && live.baud.is_some() {
         notes.push(format!(
             "--baud has no effect on {what}: its times are its own (only a serial port and raw \
