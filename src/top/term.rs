@@ -327,11 +327,9 @@ impl Screen {
             Terminal::with_options(backend, TerminalOptions { viewport })
         })();
         match opened {
-            Ok(terminal) => {
-                let mut screen = Screen { terminal, capture };
-                screen.fit()?;
-                Ok(screen)
-            }
+            // (Sized at each draw: a terminal that goes away meanwhile then closes the view
+            // like one that gives no more input, instead of failing the run here.)
+            Ok(terminal) => Ok(Screen { terminal, capture }),
             Err(e) => {
                 restore();
                 if let Some(c) = capture {
