@@ -39,6 +39,49 @@ pub struct Spec {
 /// A usage error: the message names the option and the valid values.
 pub type Error = String;
 
+/// The options a word of [`Filter::from_words`] may name (without `--`), the ones that take a
+/// value first.
+const WORD_OPTIONS: [&str; 9] = [
+    "id",
+    "not-id",
+    "type",
+    "not-type",
+    "sensor",
+    "device",
+    "hide-polls",
+    "hide-null",
+    "errors",
+];
+
+impl Spec {
+    /// Adds `value` to the list option `name` (`id`, `not-id`, `type`, `not-type`, `sensor`,
+    /// `device`), or sets the switch `name` (`hide-polls`, `hide-null`, `errors`; a value of
+    /// `false`/`no`/`0` clears it). `false` when there is no such option.
+    fn set(&mut self, name: &str, value: Option<&str>) -> bool {
+        let list = match name {
+            "id" => &mut self.id,
+            "not-id" => &mut self.not_id,
+            "type" => &mut self.types,
+            "not-type" => &mut self.not_types,
+            "sensor" => &mut self.sensor,
+            "device" => &mut self.device,
+            _ => {
+                let on = !matches!(value, Some("false" | "no" | "0" | "off"));
+                let flag = match name {
+                    "hide-polls" => &mut self.hide_polls,
+                    "hide-null" => &mut self.hide_null,
+                    "errors" => &mut self.errors,
+                    _ => return false,
+                };
+                *flag = on;
+                return true;
+            }
+        };
+        list.push(value.unwrap_or("").to_owned());
+        true
+    }
+}
+
 /// Names for IDs, shown in the Device column.
 #[derive(Clone, Debug, Default)]
 pub struct Names {
@@ -211,6 +254,75 @@ impl Filter {
         Ok(f)
     }
 
+    /// A filter written as words, as the live view's `f` key takes it: the command line's
+    /// filter options without `--` and with `=` or a blank before the value (`id=1`,
+    /// `sensor=RSSI,RxBt type=Data`, `not-id 0-9`, `errors`; `--id=1` reads too), checked
+    /// against the protocol as on the command line. A bare number is an ID, any other bare
+    /// word a sensor (either of its names) or else a device (`1` is ID 1, not every ID with a
+    /// 1 in it).
+    pub fn from_words(
+        text: &str,
+        vocab: &Vocab,
+        names: &Names,
+        sensors: &[String],
+        protocol: &str,
+    ) -> Result<Filter, Error> {
+        let mut spec = Spec::default();
+        let mut bare = Vec::new();
+        let mut words = text.split_whitespace().peekable();
+        while let Some(word) = words.next() {
+            let w = word.trim_start_matches('-');
+            let (name, value) = match w.split_once(['=', ':']) {
+                Some((n, v)) => (n.to_ascii_lowercase(), Some(v.to_owned())),
+                None => (w.to_ascii_lowercase(), None),
+            };
+            let takes_value = WORD_OPTIONS[..6].contains(&name.as_str());
+            let value = match value {
+                None if takes_value => match words.next() {
+                    Some(v) => Some(v.to_owned()),
+                    None => return Err(format!("{name}: give a value, e.g. {name}=…")),
+                },
+                v => v,
+            };
+            if !WORD_OPTIONS.contains(&name.as_str()) {
+                if word.starts_with('-') || value.is_some() {
+                    return Err(format!(
+                        "{word}: not a filter; filters: {}",
+                        WORD_OPTIONS.join(", ")
+                    ));
+                }
+                bare.push(word);
+                continue;
+            }
+            spec.set(&name, value.as_deref());
+        }
+        for word in bare {
+            if parse_number(word).is_some() {
+                spec.id.push(word.to_owned());
+                continue;
+            }
+            let mut as_sensor = spec.clone();
+            as_sensor.sensor.push(word.to_owned());
+            if Filter::new(&as_sensor, vocab, names, sensors, protocol).is_ok() {
+                spec = as_sensor;
+                continue;
+            }
+            let mut as_device = spec.clone();
+            as_device.device.push(word.to_owned());
+            match Filter::new(&as_device, vocab, names, sensors, protocol) {
+                Ok(_) => spec = as_device,
+                Err(_) => {
+                    return Err(format!(
+                        "{word}: no {protocol} sensor or device has this name; filters: \
+                         id=, sensor=, type=, device=, not-id=, not-type=, errors"
+                    ));
+                }
+            }
+        }
+        Filter::new(&spec, vocab, names, sensors, protocol)
+            .map_err(|e| e.trim_start_matches("--").to_owned())
+    }
+
     /// Whether any rule is set.
     #[cfg(test)]
     pub fn is_active(&self) -> bool {
@@ -310,6 +422,9 @@ fn is_poll(row: &Row<'_>) -> bool {
 pub struct Selection {
     pub filter: Filter,
     pub names: Names,
+    /// Names the Sensor column gets from the protocol's options (SAB's `--command`), which
+    /// filters written later (the live view's `f`) may name.
+    pub sensors: Vec<String>,
 }
 
 impl Selection {
@@ -607,6 +722,60 @@ mod tests {
         }
     }
 
+    /// The live view's `f` filter: the command line's options as words, checked as there; a
+    /// bare number is an ID (it used to be a substring: `1` also kept ID 24).
+    #[test]
+    fn words_are_the_command_lines_filters() {
+        let words = |t: &str| Filter::from_words(t, &VOCAB, &Names::default(), &[], "S.Port");
+        let at = |id: u32| Row {
+            id: Some(id),
+            ..row(None, "Data", Class::Plain)
+        };
+        for text in ["id=1", "1", "--id 1", "--id=1", "ID:1"] {
+            let f = words(text).unwrap();
+            assert!(f.keep(&at(1)), "{text}");
+            assert!(!f.keep(&at(24)) && !f.keep(&at(11)), "{text}");
+        }
+        let f = words("sensor=VFAS not-id=2 type=Data").unwrap();
+        let volts = Row {
+            sensor: "Volts",
+            ..at(1)
+        };
+        assert!(
+            f.keep(&volts)
+                && !f.keep(&at(1))
+                && !f.keep(&Row {
+                    id: Some(2),
+                    ..volts
+                })
+        );
+        // A bare word: a sensor by either name, else a device.
+        assert!(words("volts").unwrap().keep(&volts));
+        let f = words("vario").unwrap();
+        assert!(
+            f.keep(&Row {
+                device: "Vario",
+                ..at(0)
+            }) && !f.keep(&at(0))
+        );
+        assert!(
+            words("errors")
+                .unwrap()
+                .keep(&row(Some(1), "BadCRC", Class::Error))
+        );
+        assert!(!words("errors").unwrap().keep(&at(1)));
+        // Refused with the reason, as on the command line.
+        assert!(words("id=40").unwrap_err().contains("outside"));
+        assert!(words("type=Pol").unwrap_err().contains("types:"));
+        assert!(words("colour=red").unwrap_err().contains("not a filter"));
+        assert!(
+            words("nosuchthing")
+                .unwrap_err()
+                .contains("no S.Port sensor or device")
+        );
+        assert!(words("id").unwrap_err().contains("give a value"));
+    }
+
     #[test]
     fn no_rule_keeps_everything() {
         let f = filter(&Spec::default()).unwrap();
@@ -775,7 +944,11 @@ mod tests {
         let names = Names::parse(&s.names, "--name", &VOCAB).unwrap();
         assert_eq!(names.get(1), Some("Pack"));
         let mut t = memory_table();
-        let sel = Selection { filter: f, names };
+        let sel = Selection {
+            filter: f,
+            names,
+            sensors: Vec::new(),
+        };
         let mut out = Select {
             table: &mut t,
             selection: &sel,
@@ -850,6 +1023,7 @@ mod tests {
             let sel = Selection {
                 filter: filter(s).unwrap(),
                 names: Names::parse(&s.names, "--name", &VOCAB).unwrap(),
+                sensors: Vec::new(),
             };
             assert_eq!(sel.passes_all(), i == 0, "spec {i}");
             let direct = through(&rows, |table, r| {

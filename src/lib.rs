@@ -57,6 +57,8 @@ pub mod fport;
 pub mod futaba;
 pub mod ghst;
 pub mod ibus;
+mod merge;
+pub mod modbus;
 mod numbers;
 mod pace;
 mod pairing;

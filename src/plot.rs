@@ -1,21 +1,80 @@
-//! `busnoop plot`: the numbers of a capture as time series, one panel per unit, with the moments
-//! of broken frames (bad CRC, truncated, garbage) marked, as SVG or PNG (plotters, pure Rust).
+//! `busnoop plot`: the numbers of a capture as time series, as SVG or PNG (plotters, pure
+//! Rust): panels by unit and by size (flags and counters apart from large values, at most
+//! [`PER_PANEL`] series in one), each value drawn as a step held until the next sample with a
+//! marker at every sample, the legend beside the data, the wall-clock time on the x axis where
+//! the source has it, and the moments of broken frames (bad CRC, truncated, garbage) marked.
 //!
 //! The series are the rows' [`Part`](crate::row::Part)s, the same numbers as the wide table's
 //! columns (`Cell1@8` when two IDs send the same name). A frame whose check failed carries no
 //! number; its moment is a red vertical line in every panel.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
 use crate::exit::Failure;
 use crate::row::{Class, Row};
+use crate::time::Anchor;
 
 /// The DejaVu Sans font (Bitstream Vera licence, assets/DejaVuSans-LICENSE.txt) for the PNG's
 /// text: the bitmap backend draws with it, without any font of the system.
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// A moment of `--from`/`--to`: seconds since the capture's start, or a wall-clock time of day
+/// (for sources that have one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum When {
+    Seconds(f64),
+    Clock(chrono::NaiveTime),
+}
+
+impl When {
+    /// `90`, `1.5` (seconds since the start), `12:34:56` or `12:34:56.5` (time of day).
+    pub fn parse(s: &str) -> Result<When, String> {
+        let t = s.trim();
+        if let Ok(v) = t.parse::<f64>()
+            && v.is_finite()
+            && v >= 0.0
+        {
+            return Ok(When::Seconds(v));
+        }
+        for f in ["%H:%M:%S%.f", "%H:%M"] {
+            if let Ok(c) = chrono::NaiveTime::parse_from_str(t, f) {
+                return Ok(When::Clock(c));
+            }
+        }
+        Err(format!(
+            "{s:?}: expected seconds since the capture's start (90, 1.5) or a time of day \
+             (12:34:56)"
+        ))
+    }
+
+    /// Seconds since the capture's start; a time of day needs the wall-clock time of the start
+    /// (the first such moment after it).
+    fn seconds(self, anchor: Option<Anchor>) -> Option<f64> {
+        match self {
+            When::Seconds(s) => Some(s),
+            When::Clock(c) => {
+                let start = local_start(anchor?);
+                let mut at = start.date().and_time(c);
+                if at < start {
+                    at += chrono::Duration::days(1);
+                }
+                Some((at - start).num_microseconds()? as f64 / 1e6)
+            }
+        }
+    }
+}
+
+/// The wall-clock time of the capture's start as shown: a radio's naive local time as logged,
+/// an instant in local time.
+fn local_start(anchor: Anchor) -> chrono::NaiveDateTime {
+    match anchor {
+        Anchor::Naive(n) => n,
+        Anchor::Instant(t) => t.with_timezone(&chrono::Local).naive_local(),
+    }
+}
 
 /// What to plot and where.
 #[derive(Clone, Debug, Default)]
@@ -28,6 +87,9 @@ pub struct PlotSpec {
     pub wanted: Vec<String>,
     pub path: PathBuf,
     pub title: String,
+    /// The time range to draw (`--from`, `--to`).
+    pub from: Option<When>,
+    pub to: Option<When>,
 }
 
 /// The image formats `busnoop plot` writes, by the file's extension (any case).
@@ -155,16 +217,63 @@ impl Thinned {
 #[derive(Debug, Default)]
 struct Series {
     id: Option<u32>,
+    /// The row's port (several sources), or "".
+    port: String,
     name: String,
     unit: String,
     points: Thinned,
 }
 
+impl Series {
+    /// The largest magnitude of its values (at least 1: values below one are one size).
+    fn size(&self) -> f64 {
+        self.points.iter().map(|p| p.1.abs()).fold(1.0f64, f64::max)
+    }
+
+    /// Only 0 and 1: a flag (a coil, an input, a status bit).
+    fn is_flag(&self) -> bool {
+        self.points.iter().all(|p| p.1 == 0.0 || p.1 == 1.0)
+    }
+}
+
+/// At most this many series share a panel (a legend of more is not read).
+pub const PER_PANEL: usize = 6;
+
+/// The colours of a panel's series: strong and told apart (each panel starts again).
+const COLORS: [RGBColor; PER_PANEL] = [
+    RGBColor(0x1F, 0x77, 0xB4),
+    RGBColor(0xD6, 0x27, 0x28),
+    RGBColor(0x2C, 0xA0, 0x2C),
+    RGBColor(0xFF, 0x7F, 0x0E),
+    RGBColor(0x94, 0x67, 0xBD),
+    RGBColor(0x3B, 0x3B, 0x3B),
+];
+
+/// Series in one panel differ in size by at most this factor: flags and counters (0, 1, 99)
+/// do not share a panel with a register of 3.7e9, where they would be a flat line at zero.
+const SIZE_SPREAD: f64 = 50.0;
+
+/// The image's width, the width of the legend beside the panels, and a panel's height.
+const WIDTH: u32 = 1200;
+const LEGEND: u32 = 240;
+const PANEL_HEIGHT: u32 = 280;
+/// Font sizes of labels and of the title.
+const LABEL_FONT: u32 = 14;
+const TITLE_FONT: u32 = 22;
+/// Markers are drawn at every sample when a series has at most this many points (more would be
+/// a band of dots hiding the line).
+const MARKERS_MAX: usize = 400;
+
 /// Collects the rows of a capture, then draws them.
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
+    /// Where each series is, by (ID, name, unit, port).
+    index: HashMap<(Option<u32>, String, String, String), usize>,
     errors: Thinned,
+    anchor: Option<Anchor>,
+    /// Which extra cell of a row names its port (several sources).
+    port_column: Option<usize>,
 }
 
 impl Plot {
@@ -172,33 +281,73 @@ impl Plot {
         Plot {
             spec,
             series: Vec::new(),
+            index: HashMap::new(),
             errors: Thinned::default(),
+            anchor: None,
+            port_column: None,
         }
     }
 
+    /// Rows name their port in extra cell `column` ([`crate::row::PORT_COLUMN`]): each port's
+    /// numbers are series of their own.
+    pub fn port_column(&mut self, column: Option<usize>) {
+        self.port_column = column;
+    }
+
+    /// The wall-clock time of the capture's start (the x axis shows times of day).
+    pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
+        self.anchor = anchor;
+    }
+
+    /// The time range in seconds since the start, as far as it is known.
+    fn range(&self) -> (f64, f64) {
+        let from = self.spec.from.and_then(|w| w.seconds(self.anchor));
+        let to = self.spec.to.and_then(|w| w.seconds(self.anchor));
+        (
+            from.unwrap_or(f64::NEG_INFINITY),
+            to.unwrap_or(f64::INFINITY),
+        )
+    }
+
+    /// Takes one row in. Not inlined into the table's `write`, whose long-table path stays as
+    /// lean as without it.
+    #[inline(never)]
     pub fn row(&mut self, row: &Row<'_>) {
         let Some(us) = row.micros else { return };
         let t = us as f64 / 1e6;
+        let (from, to) = self.range();
+        if t < from || t > to {
+            return;
+        }
         if row.class == Class::Error {
             self.errors.push(t, 0.0);
         }
+        let port = self
+            .port_column
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("");
         for p in row.parts {
             if !p.value.is_finite() {
                 continue;
             }
-            let i = match self
-                .series
-                .iter()
-                .position(|s| s.id == row.id && s.name == p.name && s.unit == p.unit)
-            {
-                Some(i) => i,
+            let key = (
+                row.id,
+                p.name.to_owned(),
+                p.unit.to_owned(),
+                port.to_owned(),
+            );
+            let i = match self.index.get(&key) {
+                Some(&i) => i,
                 None => {
                     self.series.push(Series {
                         id: row.id,
+                        port: port.to_owned(),
                         name: p.name.to_owned(),
                         unit: p.unit.to_owned(),
                         points: Thinned::default(),
                     });
+                    self.index.insert(key, self.series.len() - 1);
                     self.series.len() - 1
                 }
             };
@@ -206,25 +355,32 @@ impl Plot {
         }
     }
 
-    /// `Name`, or `Name@ID` when another ID has a series of that name and unit.
+    /// `Name`, or `Name@ID` when another ID of its port has a series of that name and unit,
+    /// `Name@PORT` (or `Name@ID@PORT`) when another port has.
     fn label(&self, s: &Series) -> String {
-        let shared = self
-            .series
-            .iter()
-            .any(|o| o.name == s.name && o.unit == s.unit && o.id != s.id);
-        match (shared, s.id) {
-            (true, Some(id)) => format!("{}@{id}", s.name),
-            _ => s.name.clone(),
+        let same = || {
+            self.series
+                .iter()
+                .filter(|o| o.name == s.name && o.unit == s.unit)
+        };
+        let by_id = same().any(|o| o.id != s.id && o.port == s.port);
+        let by_port = same().any(|o| o.port != s.port);
+        let mut label = s.name.clone();
+        if by_id && let Some(id) = s.id {
+            label.push_str(&format!("@{id}"));
         }
+        if by_port {
+            label.push('@');
+            label.push_str(&s.port);
+        }
+        label
     }
 
-    /// Draws the plot into the spec's file (`.svg` or `.png`). Nothing to draw is no failed
-    /// write: a capture without numbers is [`Failure::NothingDecoded`] (exit 10), sensor names it
-    /// does not have a usage error (exit 2, with the names it has); a drawing that cannot be
-    /// written is [`Failure::Output`] (exit 8).
-    pub fn draw(&self) -> Result<(), Failure> {
-        let chosen: Vec<(String, &Series)> = self
-            .series
+    /// The series to draw, with their labels, in order of first appearance; a series without
+    /// a point in a range given late (a time of day, known only once the anchor came) is left
+    /// out.
+    fn chosen(&self) -> Vec<(String, &Series)> {
+        self.series
             .iter()
             .map(|s| (self.label(s), s))
             .filter(|(l, s)| {
@@ -235,12 +391,30 @@ impl Plot {
                         .iter()
                         .any(|w| w.eq_ignore_ascii_case(l) || w.eq_ignore_ascii_case(&s.name))
             })
-            .collect();
-        if chosen.is_empty() {
+            .collect()
+    }
+
+    /// Draws the plot into the spec's file (`.svg` or `.png`). Nothing to draw is no failed
+    /// write: a capture without numbers is [`Failure::NothingDecoded`] (exit 10), sensor names it
+    /// does not have a usage error (exit 2, with the names it has); a drawing that cannot be
+    /// written is [`Failure::Output`] (exit 8).
+    pub fn draw(&mut self) -> Result<(), Failure> {
+        // A time of day given as the range: the points outside it, now that the start is known.
+        let (from, to) = self.range();
+        for s in &mut self.series {
+            s.points.kept.retain(|p| p.0 >= from && p.0 <= to);
+        }
+        self.errors.kept.retain(|p| p.0 >= from && p.0 <= to);
+        let chosen = self.chosen();
+        if chosen.iter().all(|(_, s)| s.points.is_empty()) {
             let mut seen: Vec<String> = self.series.iter().map(|s| self.label(s)).collect();
             seen.dedup();
             return Err(if seen.is_empty() {
                 Failure::NothingDecoded("no row of this capture carries a number to plot".into())
+            } else if !chosen.is_empty() || self.spec.sensors.is_empty() {
+                Failure::NothingDecoded(
+                    "no number of this capture lies in the time range of --from/--to".into(),
+                )
             } else {
                 let near = self.spec.sensors.iter().find_map(|w| {
                     crate::protocol::vocab::did_you_mean(w, seen.iter().map(String::as_str))
@@ -253,21 +427,26 @@ impl Plot {
                 ))
             });
         }
+        let chosen: Vec<(String, &Series)> = chosen
+            .into_iter()
+            .filter(|(_, s)| !s.points.is_empty())
+            .collect();
         let format = ImageFormat::of(&self.spec.path).ok_or_else(|| {
             Failure::Usage(format!("-o {}: {IMAGE_NAMES}", self.spec.path.display()))
         })?;
         // Both backends measure text with this font (the SVG names it, a viewer draws it).
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
             .map_err(|_| Failure::Internal("cannot load the embedded font".into()))?;
-        let size = (1000, 300 * panels(&chosen).len() as u32 + 60);
+        let groups = panels(&chosen);
+        let size = (WIDTH, PANEL_HEIGHT * groups.len() as u32 + 40);
         let r = match format {
             ImageFormat::Svg => {
                 let root = SVGBackend::new(&self.spec.path, size).into_drawing_area();
-                self.render(root, &chosen)
+                self.render(root, &groups)
             }
             ImageFormat::Png => {
                 let root = BitMapBackend::new(&self.spec.path, size).into_drawing_area();
-                self.render(root, &chosen)
+                self.render(root, &groups)
             }
         };
         r.map_err(|e| Failure::Output(format!("cannot draw {}: {e}", self.spec.path.display())))
@@ -276,87 +455,211 @@ impl Plot {
     fn render<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
-        chosen: &[(String, &Series)],
+        groups: &[Panel<'_>],
     ) -> Result<(), Box<dyn std::error::Error + 'static>>
     where
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
-        let root = root.titled(&self.spec.title, ("sans-serif", 22))?;
-        let groups = panels(chosen);
+        let title = fit(&self.spec.title, WIDTH as usize - 20, TITLE_FONT);
+        let root = root.titled(&title, ("sans-serif", TITLE_FONT))?;
         let areas = root.split_evenly((groups.len(), 1));
-        let t_end = chosen
-            .iter()
+        let all = groups.iter().flat_map(|g| g.members.iter());
+        let (t0, t1) = all
             .flat_map(|(_, s)| s.points.iter().map(|p| p.0))
             .chain(self.errors.iter().map(|p| p.0))
-            .fold(0.0f64, f64::max)
-            .max(1e-3);
-        for ((unit, members), area) in groups.iter().zip(areas.iter()) {
-            let (lo, hi) = members
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(t), b.max(t))
+            });
+        let (from, to) = self.range();
+        let t0 = if from.is_finite() { from } else { t0.min(0.0) };
+        let t1 = if to.is_finite() { to } else { t1 };
+        let t1 = if t1 > t0 { t1 } else { t0 + 1e-3 };
+        let anchor = self.anchor.map(local_start);
+        let x_desc = match anchor {
+            Some(a) => format!("time of day ({})", a.format("%Y-%m-%d")),
+            None => "time since the capture's start (s)".to_string(),
+        };
+        let x_label = |t: &f64| match anchor {
+            Some(a) => {
+                let at = a + chrono::Duration::microseconds((*t * 1e6) as i64);
+                if t1 - t0 < 10.0 {
+                    at.format("%H:%M:%S%.3f").to_string()
+                } else {
+                    at.format("%H:%M:%S").to_string()
+                }
+            }
+            None => number(*t, (t1 - t0) / 10.0),
+        };
+        for (panel, area) in groups.iter().zip(areas.iter()) {
+            let (plot_area, legend) = area.split_horizontally(WIDTH - LEGEND);
+            let (lo, hi) = panel
+                .members
                 .iter()
                 .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
                     (a.min(v), b.max(v))
                 });
-            let pad = ((hi - lo) * 0.05).max(hi.abs().max(1.0) * 1e-3);
+            let pad = ((hi - lo) * 0.08).max(hi.abs().max(1.0) * 0.02);
             let (lo, hi) = (lo - pad, hi + pad);
-            let mut chart = ChartBuilder::on(area)
+            let step = (hi - lo) / 8.0;
+            // The y labels as they will be written, to size their room.
+            let widest = (0..=10)
+                .map(|k| number(lo + (hi - lo) * k as f64 / 10.0, step).len())
+                .max()
+                .unwrap_or(4);
+            let y_room = text_width(widest, LABEL_FONT) + 12;
+            let mut chart = ChartBuilder::on(&plot_area)
                 .margin(10)
-                .x_label_area_size(40)
-                .y_label_area_size(70)
-                .build_cartesian_2d(0.0..t_end, lo..hi)?;
-            let y_desc = if unit.is_empty() {
-                members
-                    .iter()
-                    .map(|(l, _)| l.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                .x_label_area_size(42)
+                .y_label_area_size(y_room as u32 + 24)
+                .build_cartesian_2d(t0..t1, lo..hi)?;
+            let y_desc = if panel.unit.is_empty() {
+                "value".to_string()
             } else {
-                format!("({unit})")
+                format!("({})", panel.unit)
             };
             chart
                 .configure_mesh()
-                .x_desc("time since the capture's start (s)")
+                .x_desc(x_desc.as_str())
                 .y_desc(y_desc)
-                .label_style(("sans-serif", 14))
+                .x_labels(8)
+                .y_labels(8)
+                .x_label_formatter(&x_label)
+                .y_label_formatter(&|v: &f64| number(*v, step))
+                .label_style(("sans-serif", LABEL_FONT))
+                .axis_desc_style(("sans-serif", LABEL_FONT))
                 .draw()?;
-            for (k, (label, s)) in members.iter().enumerate() {
-                let color = Palette99::pick(k).to_rgba();
-                let name = if unit.is_empty() {
+            if !self.errors.is_empty() {
+                chart.draw_series(self.errors.iter().map(|&(t, _)| {
+                    PathElement::new(vec![(t, lo), (t, hi)], RED.mix(0.6).stroke_width(1))
+                }))?;
+            }
+            let mut entries = Vec::new();
+            for (color_at, (label, s)) in panel.members.iter().enumerate() {
+                let color = COLORS[color_at % COLORS.len()].to_rgba();
+                // A step: each value held until the next sample.
+                let mut steps = Vec::with_capacity(s.points.kept.len() * 2);
+                for (k, &(t, v)) in s.points.iter().enumerate() {
+                    if k > 0 {
+                        let prev = steps.last().map_or(v, |p: &(f64, f64)| p.1);
+                        steps.push((t, prev));
+                    }
+                    steps.push((t, v));
+                }
+                chart.draw_series(LineSeries::new(steps, color.stroke_width(2)))?;
+                if s.points.kept.len() <= MARKERS_MAX {
+                    chart
+                        .draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+                }
+                let name = if panel.unit.is_empty() {
                     label.clone()
                 } else {
-                    format!("{label} ({unit})")
+                    format!("{label} ({})", panel.unit)
                 };
-                chart
-                    .draw_series(LineSeries::new(
-                        s.points.iter().copied(),
-                        color.stroke_width(2),
-                    ))?
-                    .label(name)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                entries.push((name, color));
+            }
+            // The legend beside the data, never on it.
+            let line_h = 22;
+            for (k, (name, color)) in entries.iter().enumerate() {
+                let y = 30 + k as i32 * line_h;
+                legend.draw(&PathElement::new(
+                    vec![(8, y), (32, y)],
+                    color.stroke_width(2),
+                ))?;
+                legend.draw(&Circle::new((20, y), 3, color.filled()))?;
+                let text = fit(&short_port(name), (LEGEND - 50) as usize, LABEL_FONT);
+                legend.draw(&Text::new(
+                    text,
+                    (40, y - 8),
+                    ("sans-serif", LABEL_FONT).into_font(),
+                ))?;
             }
             if !self.errors.is_empty() {
-                chart
-                    .draw_series(self.errors.iter().map(|&(t, _)| {
-                        PathElement::new(vec![(t, lo), (t, hi)], RED.mix(0.6).stroke_width(1))
-                    }))?
-                    .label("broken frame (bad CRC, truncated)")
-                    .legend(|(x, y)| PathElement::new(vec![(x, y - 6), (x, y + 6)], RED));
+                let y = 30 + entries.len() as i32 * line_h;
+                legend.draw(&PathElement::new(
+                    vec![(20, y - 7), (20, y + 7)],
+                    RED.stroke_width(1),
+                ))?;
+                legend.draw(&Text::new(
+                    "broken frame",
+                    (40, y - 8),
+                    ("sans-serif", LABEL_FONT).into_font(),
+                ))?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()?;
         }
         root.present()?;
         Ok(())
     }
 }
 
-/// The chosen series grouped by unit, in order of first appearance.
-fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<(String, Vec<&'a (String, &'a Series)>)> {
+/// The width in pixels of `chars` characters of the label font (DejaVu Sans: at most 0.62 of
+/// the size for digits and most letters).
+fn text_width(chars: usize, font: u32) -> usize {
+    (chars as f64 * font as f64 * 0.62).ceil() as usize
+}
+
+/// A series name with its port shown by the port's file name (`Alt@/dev/serial/by-id/usb-…`
+/// → `Alt@usb-…`): a legend has little room, and `--sensor` takes the full name.
+fn short_port(name: &str) -> String {
+    match name.rsplit_once("@/") {
+        Some((head, path)) => {
+            let (path, unit) = match path.rsplit_once(" (") {
+                Some((p, u)) => (p, format!(" ({u}")),
+                None => (path, String::new()),
+            };
+            let file = path.rsplit('/').next().unwrap_or(path);
+            format!("{head}@{file}{unit}")
+        }
+        None => name.to_owned(),
+    }
+}
+
+/// `text` cut with `…` in its middle to fit `pixels` at font size `font`: the start (the
+/// number's name) and the end (a port's file name, `Alt@/tmp/…/odd.pcap`) stay.
+fn fit(text: &str, pixels: usize, font: u32) -> String {
+    let n = text.chars().count();
+    let room = (pixels as f64 / (font as f64 * 0.62)) as usize;
+    if n <= room {
+        return text.to_owned();
+    }
+    let keep = room.saturating_sub(1);
+    let head = keep - keep / 2;
+    let mut s: String = text.chars().take(head).collect();
+    s.push('…');
+    s.extend(text.chars().skip(n - keep / 2));
+    s
+}
+
+/// A tick label of `v` with as many decimals as ticks `step` apart need (`3735928559`, `4.12`,
+/// `0.042`), never more than 6.
+fn number(v: f64, step: f64) -> String {
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10().floor()).clamp(0.0, 6.0) as usize
+    } else {
+        2
+    };
+    let s = format!("{v:.decimals$}");
+    // No "-0".
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        return s.trim_start_matches('-').to_owned();
+    }
+    s
+}
+
+/// One panel: its unit and its series.
+struct Panel<'a> {
+    unit: String,
+    members: Vec<&'a (String, &'a Series)>,
+}
+
+/// The chosen series grouped into panels: by unit (in order of first appearance), flags (only
+/// 0 and 1) apart, then by size (series within [`SIZE_SPREAD`] of each other), at most
+/// [`PER_PANEL`] to a panel.
+fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<Panel<'a>> {
     let mut order: Vec<String> = Vec::new();
     let mut by: BTreeMap<String, Vec<&(String, &Series)>> = BTreeMap::new();
     for c in chosen {
@@ -365,18 +668,68 @@ fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<(String, Vec<&'a (Strin
         }
         by.entry(c.1.unit.clone()).or_default().push(c);
     }
-    order
-        .into_iter()
-        .map(|u| {
-            let v = by.remove(&u).unwrap_or_default();
-            (u, v)
-        })
-        .collect()
+    let mut out = Vec::new();
+    for unit in order {
+        let members = by.remove(&unit).unwrap_or_default();
+        let (flags, values): (Vec<_>, Vec<_>) = members.into_iter().partition(|c| c.1.is_flag());
+        let mut bands: Vec<Vec<&(String, &Series)>> = Vec::new();
+        if !flags.is_empty() {
+            bands.push(flags);
+        }
+        // Sizes: the series sorted by size, a new band where one is too far above the band's
+        // smallest; each band in the series' own order.
+        let mut sized: Vec<(f64, usize)> = values
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.1.size(), i))
+            .collect();
+        sized.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut band: Vec<usize> = Vec::new();
+        let mut smallest = 0.0;
+        for (size, i) in sized {
+            if !band.is_empty() && size > smallest * SIZE_SPREAD {
+                band.sort_unstable();
+                bands.push(band.iter().map(|&k| values[k]).collect());
+                band.clear();
+            }
+            if band.is_empty() {
+                smallest = size;
+            }
+            band.push(i);
+        }
+        if !band.is_empty() {
+            band.sort_unstable();
+            bands.push(band.iter().map(|&k| values[k]).collect());
+        }
+        for b in bands {
+            for chunk in b.chunks(PER_PANEL) {
+                out.push(Panel {
+                    unit: unit.clone(),
+                    members: chunk.to_vec(),
+                });
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn legend_names_keep_their_start_and_end() {
+        assert_eq!(
+            short_port("Alt@/dev/serial/by-id/usb-FTDI-if00 (m)"),
+            "Alt@usb-FTDI-if00 (m)"
+        );
+        assert_eq!(short_port("Cell1@8 (V)"), "Cell1@8 (V)");
+        let cut = fit("Cell1@/a/very/long/path/to/rx.pcap", 100, 10);
+        assert!(
+            cut.starts_with("Cell1@") && cut.ends_with("rx.pcap") && cut.contains('…'),
+            "{cut}"
+        );
+    }
     use crate::row::Part;
 
     fn row(us: u64, class: Class, parts: &'static [Part<'static>]) -> Row<'static> {
@@ -498,15 +851,17 @@ mod tests {
             wanted: vec!["Alt".into()],
             path: path.clone(),
             title: "t".into(),
+            ..PlotSpec::default()
         });
         p.row(&row(0, Class::Plain, ALT1));
         p.row(&row(1_000_000, Class::Error, &[]));
         p.row(&row(2_000_000, Class::Plain, ALT2));
         p.draw().unwrap();
         let svg = std::fs::read_to_string(path).unwrap();
+        // The series' line (the legend's sample is right of the data).
         let series: Vec<&str> = svg
             .split("<polyline")
-            .filter(|l| l.contains("stroke-width=\"2\""))
+            .filter(|l| l.contains("stroke-width=\"2\"") && !l.contains("points=\"968,"))
             .collect();
         assert_eq!(series.len(), 1);
         let xs: Vec<f64> = series[0]
@@ -519,7 +874,9 @@ mod tests {
             .split_whitespace()
             .map(|xy| xy.split(',').next().unwrap().parse().unwrap())
             .collect();
-        let mid = (xs[0] + xs[1]) / 2.0;
+        // A step: (0, 10), (2, 10), (2, 20).
+        assert_eq!(xs.len(), 3);
+        let mid = (xs[0] + xs[2]) / 2.0;
         let red: Vec<&str> = svg
             .split("<polyline")
             .filter(|l| l.contains("stroke=\"#FF0000\""))
@@ -541,5 +898,72 @@ mod tests {
             }),
             "a red vertical line at t = 1 s: {red:?}"
         );
+    }
+
+    fn series(name: &str, unit: &str, values: &[f64]) -> Series {
+        let mut points = Thinned::default();
+        for (i, &v) in values.iter().enumerate() {
+            points.push(i as f64, v);
+        }
+        Series {
+            id: Some(1),
+            port: String::new(),
+            name: name.into(),
+            unit: unit.into(),
+            points,
+        }
+    }
+
+    /// Panels by unit, then flags apart, then by size, at most six to a panel: a flag next to
+    /// 3.7e9 was a flat line at zero, and twenty series in one panel an unreadable legend.
+    #[test]
+    fn panels_by_unit_flags_size_and_at_most_six() {
+        let mut all = vec![
+            series("big", "", &[3.7e9, 1.0]),
+            series("flag", "", &[0.0, 1.0, 1.0]),
+            series("count", "", &[3.0, 99.0]),
+            series("volts", "V", &[4.1, 4.2]),
+            series("small", "", &[0.5, 2.0]),
+        ];
+        for i in 0..8 {
+            all.push(series(&format!("F{i}"), "", &[1.0, 0.0]));
+        }
+        let chosen: Vec<(String, &Series)> = all.iter().map(|s| (s.name.clone(), s)).collect();
+        let got: Vec<(String, Vec<&str>)> = panels(&chosen)
+            .iter()
+            .map(|p| {
+                (
+                    p.unit.clone(),
+                    p.members.iter().map(|m| m.0.as_str()).collect(),
+                )
+            })
+            .collect();
+        let want: Vec<(String, Vec<&str>)> = vec![
+            ("".into(), vec!["flag", "F0", "F1", "F2", "F3", "F4"]),
+            ("".into(), vec!["F5", "F6", "F7"]),
+            ("".into(), vec!["count", "small"]),
+            ("".into(), vec!["big"]),
+            ("V".into(), vec!["volts"]),
+        ];
+        assert_eq!(got, want);
+    }
+
+    /// A series of one sample is a marker; labels of large values are written whole.
+    #[test]
+    fn one_sample_is_a_marker_and_labels_are_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.svg");
+        let mut p = Plot::new(PlotSpec {
+            path: path.clone(),
+            title: "t".into(),
+            ..PlotSpec::default()
+        });
+        p.row(&row(500_000, Class::Plain, ALT1));
+        p.draw().unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(svg.contains("<circle"), "a marker");
+        assert_eq!(number(3_735_928_559.0, 5e8), "3735928559");
+        assert_eq!(number(4.1234, 0.05), "4.12");
+        assert_eq!(number(-0.0001, 0.5), "0.0");
     }
 }

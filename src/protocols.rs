@@ -13,6 +13,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::ghst::PROTOCOL,
     &crate::futaba::PROTOCOL,
     &crate::ibus::PROTOCOL,
+    &crate::modbus::PROTOCOL,
 ];
 
 /// The protocols' subcommands for a message: `sport|sbus|sab2`.
@@ -26,19 +27,27 @@ mod tests {
     use super::*;
     use crate::protocol::InputKind;
 
-    /// Two protocols' exports in one link type would be read by the wrong dissector.
+    /// Two protocols' exports in one link type would be read by the wrong dissector, unless
+    /// both wrap their frames in datagrams (raw IPv4/UDP) whose port picks the dissector
+    /// (serial S-Bus as Ether-S-Bus on 5050, Modbus as Modbus/UDP on 502).
     #[test]
     fn every_export_has_its_own_link_type() {
-        let mut seen: Vec<(u32, &str)> = Vec::new();
+        let mut seen: Vec<(crate::protocol::Export, &str)> = Vec::new();
         for p in PROTOCOLS {
             if let Some(e) = p.export {
-                if let Some((_, other)) = seen.iter().find(|(l, _)| *l == e.linktype) {
-                    panic!(
-                        "{} and {other} both export as link type {}",
-                        p.command, e.linktype
-                    );
+                for (other, name) in &seen {
+                    if other.linktype == e.linktype {
+                        assert!(
+                            e.wrap.is_some()
+                                && other.wrap.is_some()
+                                && other.dissector != e.dissector,
+                            "{} and {name} both export as link type {}",
+                            p.command,
+                            e.linktype
+                        );
+                    }
                 }
-                seen.push((e.linktype, p.command));
+                seen.push((e, p.command));
             }
         }
     }
@@ -55,6 +64,30 @@ mod tests {
                 "{}",
                 p.name
             );
+        }
+    }
+
+    /// With several sources the table's first extra column is `Port`: no decoder (of any input
+    /// it reads, any variant) names one of its own so.
+    #[test]
+    fn no_protocol_has_a_column_named_port() {
+        use crate::protocol::Probe;
+        for p in PROTOCOLS {
+            for &input in p.accepts {
+                let probe = Probe {
+                    input,
+                    line: p.line,
+                };
+                for v in (p.variants)(&probe) {
+                    let columns = v.decoder.columns();
+                    assert!(
+                        !columns.contains(&crate::row::PORT_COLUMN),
+                        "{} ({}): {columns:?}",
+                        p.name,
+                        v.label
+                    );
+                }
+            }
         }
     }
 }

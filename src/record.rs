@@ -12,7 +12,10 @@
 //!   `if_description` names the protocol and baud rate, and one enhanced packet block per read
 //!   chunk with its arrival time. Adapter unplug/replug records carry a comment (`opt_comment`)
 //!   that Wireshark shows on the packet: where a reconnect gap starts and how long it lasted. It
-//!   replays to the same rows as the `.pcap`.
+//!   replays to the same rows as the `.pcap`. A run with several sources (`busnoop PROTO SRC1
+//!   SRC2`) records one interface per port, named by its source, each with its own start record;
+//!   its records go on the interface of their port ([`Recorder::describe_port`],
+//!   [`Recorder::port_data`]), and a replay reads each interface as a port again.
 //! * `FILE.bin` or `FILE.raw`: the raw bytes exactly as received, the same format as a raw
 //!   capture (no times). So does a name without an extension that is a device or a FIFO
 //!   (`/dev/null`); any other name is refused ([`RecordFormat::for_path`]), so that a typo never
@@ -64,10 +67,12 @@ pub struct Recorder {
     anchor: Option<DateTime<Utc>>,
     /// The pcap record being written.
     scratch: Vec<u8>,
-    /// The device (or input) and its description, for the pcapng interface block.
-    interface: (Option<String>, Option<String>),
-    /// When the adapter went away (µs of the capture), for the gap's comment.
-    down_since: Option<u64>,
+    /// The lines recorded: the device (or input) and its description, for the pcapng interface
+    /// block, and whether its bytes have times; one per port, in port order (none: one
+    /// unnamed line).
+    lines: Vec<Described>,
+    /// When each port's adapter went away (µs of the capture), for the gap's comment.
+    down_since: Vec<Option<u64>>,
     /// Packets: the interfaces described so far (a pcapng's interface ID is the position here;
     /// a classic pcap has the one of its header). Empty until the first packet.
     links: Vec<Link>,
@@ -79,6 +84,15 @@ pub struct Recorder {
     left_out: bool,
     /// A warning for the user, once (see [`Recorder::take_warning`]).
     warning: Option<String>,
+}
+
+/// A line of a recording: its pcapng `if_name` and `if_description`, and whether its bytes
+/// have arrival times.
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Described {
+    name: Option<String>,
+    description: Option<String>,
+    timed: bool,
 }
 
 /// What a recording holds.
@@ -211,8 +225,8 @@ impl Recorder {
             content,
             anchor: None,
             scratch: Vec::new(),
-            interface: (None, None),
-            down_since: None,
+            lines: Vec::new(),
+            down_since: Vec::new(),
             links: Vec::new(),
             link_type: None,
             left_out: false,
@@ -223,7 +237,21 @@ impl Recorder {
     /// Names the interface in a pcapng recording: `name` (the device path) becomes `if_name`,
     /// `description` (protocol and baud rate) `if_description`. Call before the first bytes.
     pub fn describe(&mut self, name: &str, description: &str) {
-        self.interface = (Some(name.to_string()), Some(description.to_string()));
+        let timed = self.content != Content::Line { timed: false };
+        self.lines.clear();
+        self.describe_port(name, description, timed);
+    }
+
+    /// Adds a port (several sources): the next interface of a pcapng recording, named `name`
+    /// (its source) and `description`, whose bytes have times when `timed`. Its records go on
+    /// that interface ([`Recorder::port_data`], [`Recorder::port_link`]). Call for every port,
+    /// in port order, before the first bytes.
+    pub fn describe_port(&mut self, name: &str, description: &str, timed: bool) {
+        self.lines.push(Described {
+            name: Some(name.to_string()),
+            description: Some(description.to_string()),
+            timed,
+        });
     }
 
     /// The recording's format.
@@ -257,11 +285,13 @@ impl Recorder {
         }
         let t = anchor.map_or_else(Utc::now, Anchor::as_utc);
         self.anchor = Some(t);
-        let start = if timed {
-            rtac::START
-        } else {
-            rtac::START_UNTIMED
-        };
+        if self.lines.is_empty() {
+            self.lines.push(Described {
+                name: None,
+                description: None,
+                timed,
+            });
+        }
         let mut header = Vec::with_capacity(256);
         match self.format {
             RecordFormat::Raw => return Ok(()),
@@ -270,21 +300,41 @@ impl Recorder {
             }
             RecordFormat::Pcapng => {
                 pcap::write_ng::section_header(&mut header);
-                pcap::write_ng::interface(
-                    &mut header,
-                    linktype::RTAC_SERIAL as u16,
-                    self.interface.0.as_deref(),
-                    self.interface.1.as_deref(),
-                );
+                for line in &self.lines {
+                    pcap::write_ng::interface(
+                        &mut header,
+                        linktype::RTAC_SERIAL as u16,
+                        line.name.as_deref(),
+                        line.description.as_deref(),
+                    );
+                }
             }
         }
         self.out.record(&header).map_err(|e| self.fail(e))?;
-        self.write_record(t, 0, rtac::EVENT_STATUS, start, None)?;
+        // Each line's start: time 0 of the capture, and whether its bytes have times.
+        for port in 0..self.lines.len() {
+            let start = if self.lines[port].timed {
+                rtac::START
+            } else {
+                rtac::START_UNTIMED
+            };
+            self.write_record(port as u32, t, 0, rtac::EVENT_STATUS, start, None)?;
+        }
         Ok(())
     }
 
     /// Bytes that arrived at `micros`.
     pub fn data(&mut self, bytes: &[u8], micros: Option<u64>) -> Result<(), Failure> {
+        self.port_data(0, bytes, micros)
+    }
+
+    /// Bytes of `port` (see [`Recorder::describe_port`]) that arrived at `micros`.
+    pub fn port_data(
+        &mut self,
+        port: u32,
+        bytes: &[u8],
+        micros: Option<u64>,
+    ) -> Result<(), Failure> {
         if self.content == Content::Packets {
             // Network captures come as packets only (`source::capture`).
             return Err(Failure::Internal("bytes for a recording of packets".into()));
@@ -295,7 +345,7 @@ impl Recorder {
             RecordFormat::Pcap | RecordFormat::Pcapng => {
                 let anchor = self.anchor.unwrap_or_else(Utc::now);
                 let micros = micros.unwrap_or(0);
-                return self.write_record(anchor, micros, rtac::EVENT_RX_DATA, bytes, None);
+                return self.write_record(port, anchor, micros, rtac::EVENT_RX_DATA, bytes, None);
             }
         };
         r.map_err(|e| self.fail(e))
@@ -303,12 +353,21 @@ impl Recorder {
 
     /// The adapter went away (`up = false`) or came back.
     pub fn link(&mut self, up: bool, micros: u64) -> Result<(), Failure> {
+        self.port_link(0, up, micros)
+    }
+
+    /// The adapter of `port` went away (`up = false`) or came back.
+    pub fn port_link(&mut self, port: u32, up: bool, micros: u64) -> Result<(), Failure> {
         if self.format == RecordFormat::Raw || self.content == Content::Packets {
             return Ok(());
         }
         self.start(None)?;
+        let at = port as usize;
+        if self.down_since.len() <= at {
+            self.down_since.resize(at + 1, None);
+        }
         let comment = if up {
-            let gap = self.down_since.take().map(|d| micros.saturating_sub(d));
+            let gap = self.down_since[at].take().map(|d| micros.saturating_sub(d));
             match gap {
                 Some(g) => format!(
                     "busnoop: the adapter is back; reconnect gap of {}.{:06} s ends (bytes sent \
@@ -319,17 +378,20 @@ impl Recorder {
                 None => "busnoop: the adapter is back; reconnect gap ends".to_string(),
             }
         } else {
-            self.down_since = Some(micros);
+            self.down_since[at] = Some(micros);
             "busnoop: the adapter went away; reconnect gap begins".to_string()
         };
         let anchor = self.anchor.unwrap_or_else(Utc::now);
         let payload = if up { rtac::LINK_UP } else { rtac::LINK_DOWN };
-        self.write_record(anchor, micros, rtac::EVENT_STATUS, payload, Some(&comment))
+        let comment = Some(comment.as_str());
+        self.write_record(port, anchor, micros, rtac::EVENT_STATUS, payload, comment)
     }
 
-    /// Writes one RTAC serial record at `micros` after `anchor` (in pcapng with `comment`).
+    /// Writes one RTAC serial record at `micros` after `anchor` (in pcapng on the interface of
+    /// `port`, with `comment`).
     fn write_record(
         &mut self,
+        port: u32,
         anchor: DateTime<Utc>,
         micros: u64,
         event: u8,
@@ -342,7 +404,7 @@ impl Recorder {
         if self.format == RecordFormat::Pcapng {
             let mut body = Vec::with_capacity(rtac::HEADER_LEN + data.len());
             rtac::payload(&mut body, ts, event, data);
-            pcap::write_ng::packet(&mut self.scratch, 0, ts, &body, comment);
+            pcap::write_ng::packet(&mut self.scratch, port, ts, &body, comment);
         } else {
             rtac::record(&mut self.scratch, ts, event, data);
         }
@@ -459,6 +521,55 @@ impl Recorder {
             r.map_err(|e| self.fail(e))?;
         }
         self.flush()
+    }
+}
+
+/// What the driver records through ([`crate::run::Context::recorder`]): a [`Recorder`], or one
+/// port's share of one when several sources are decoded at once (`merge::PortRecorder`, which
+/// puts the port's bytes on its own interface).
+pub trait Keep: Send {
+    /// See [`Recorder::start`].
+    fn start(&mut self, anchor: Option<Anchor>) -> Result<(), Failure>;
+    /// See [`Recorder::data`].
+    fn data(&mut self, bytes: &[u8], micros: Option<u64>) -> Result<(), Failure>;
+    /// See [`Recorder::link`].
+    fn link(&mut self, up: bool, micros: u64) -> Result<(), Failure>;
+    /// See [`Recorder::capture_link_type`].
+    fn capture_link_type(&mut self, link_type: Option<u32>);
+    /// See [`Recorder::packet`].
+    fn packet(&mut self, p: &Packet<'_>) -> Result<(), Failure>;
+    /// See [`Recorder::take_warning`].
+    fn take_warning(&mut self) -> Option<String>;
+    /// See [`Recorder::flush`].
+    fn flush(&mut self) -> Result<(), Failure>;
+    /// See [`Recorder::finish`].
+    fn finish(&mut self) -> Result<(), Failure>;
+}
+
+impl Keep for Recorder {
+    fn start(&mut self, anchor: Option<Anchor>) -> Result<(), Failure> {
+        Recorder::start(self, anchor)
+    }
+    fn data(&mut self, bytes: &[u8], micros: Option<u64>) -> Result<(), Failure> {
+        Recorder::data(self, bytes, micros)
+    }
+    fn link(&mut self, up: bool, micros: u64) -> Result<(), Failure> {
+        Recorder::link(self, up, micros)
+    }
+    fn capture_link_type(&mut self, link_type: Option<u32>) {
+        Recorder::capture_link_type(self, link_type)
+    }
+    fn packet(&mut self, p: &Packet<'_>) -> Result<(), Failure> {
+        Recorder::packet(self, p)
+    }
+    fn take_warning(&mut self) -> Option<String> {
+        Recorder::take_warning(self)
+    }
+    fn flush(&mut self) -> Result<(), Failure> {
+        Recorder::flush(self)
+    }
+    fn finish(&mut self) -> Result<(), Failure> {
+        Recorder::finish(self)
     }
 }
 

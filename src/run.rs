@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use crate::exit::{Failure, Interrupt};
 use crate::filter::{Select, Selection};
 use crate::protocol::Decoder;
-use crate::record::Recorder;
+use crate::record::Keep;
 use crate::row::{Class, Row};
 use crate::signal::Stop;
 use crate::sink::Sink;
@@ -47,7 +47,7 @@ const SILENT_AFTER: Duration = Duration::from_secs(5);
 pub struct Context<'a> {
     pub stop: &'a Stop,
     /// Keep what came off the wire.
-    pub recorder: Option<&'a mut Recorder>,
+    pub recorder: Option<&'a mut (dyn Keep + 'static)>,
     /// Protocol name for messages ("S.Port").
     pub protocol: &'a str,
     /// The source is a live serial device: decoders get `idle` calls with the current time.
@@ -132,7 +132,7 @@ pub fn drive(
 struct Driver<'a> {
     decoder: &'a mut dyn Decoder,
     table: &'a mut dyn Sink,
-    recorder: Option<&'a mut Recorder>,
+    recorder: Option<&'a mut (dyn Keep + 'static)>,
     protocol: &'a str,
     live: bool,
     source: &'a str,
@@ -177,14 +177,14 @@ impl Driver<'_> {
             if self.table.quit() {
                 return Ok(());
             }
-            match feed.rx.recv_timeout(TICK) {
+            match feed.recv_timeout(TICK) {
                 Ok(Message::Data(b)) => {
                     let fed = self.feed(&b, stop)?;
                     self.input_decoded += fed as u64;
                     self.flush()?;
                     if fed < b.bytes.len() {
                         // Stopped inside the batch: where it ended in the input bounds the count.
-                        if let Ok(Message::ReadUpTo(n)) = feed.rx.try_recv() {
+                        if let Ok(Message::ReadUpTo(n)) = feed.try_recv() {
                             self.input_decoded = self.input_decoded.min(n);
                         }
                         let sig = stop.signal().unwrap_or(libc::SIGINT);
@@ -319,11 +319,7 @@ impl Driver<'_> {
                 .packet(&p, select!(self))
                 .map_err(Failure::from)?;
         }
-        if let Some(w) = self
-            .recorder
-            .as_deref_mut()
-            .and_then(Recorder::take_warning)
-        {
+        if let Some(w) = self.recorder.as_deref_mut().and_then(|r| r.take_warning()) {
             self.table.flush()?;
             eprintln!("busnoop: warning: {w}");
         }

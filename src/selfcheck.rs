@@ -182,6 +182,66 @@ pub fn recording(data: &[u8]) {
     d.finish(&mut out).unwrap();
 }
 
+/// Writers of logic-analyzer traces from known characters (sigrok sessions, VCD, Saleae CSV),
+/// for the tests.
+pub use crate::source::logic::write as trace_writer;
+
+/// A reader that fails at once (a trace whose header is unusable).
+struct Refused(Option<crate::exit::Failure>);
+
+impl ChunkReader for Refused {
+    fn next_batch(
+        &mut self,
+        _tx: &std::sync::mpsc::SyncSender<Message>,
+    ) -> Result<Option<crate::source::Chunk>, crate::exit::Failure> {
+        self.0.take().map_or(Ok(None), Err)
+    }
+}
+
+/// Opens a logic-analyzer trace as `source::open` does: its first bytes read for detection.
+fn open_trace(mut o: Opened) -> Box<dyn ChunkReader> {
+    use crate::source::logic::{self, Options};
+    let mut buf = [0u8; crate::source::DETECT_LEN];
+    let mut n = 0;
+    while n < buf.len() {
+        match o.reader.read(&mut buf[n..]) {
+            Ok(0) | Err(_) => break,
+            Ok(k) => n += k,
+        }
+    }
+    o.prefix = buf[..n].to_vec();
+    // A line whose rate the pulses will usually contradict: measuring is exercised too.
+    let line = crate::protocol::Line {
+        parity: crate::protocol::Parity::Even,
+        ..crate::protocol::Line::n81(57_600)
+    };
+    match logic::reader(o, &Options::new(line)) {
+        Ok(r) => r,
+        Err(f) => Box::new(Refused(Some(f))),
+    }
+}
+
+/// Logic-analyzer trace readers (sigrok sessions, VCD, Saleae CSV exports, through the software
+/// UART): never panic, read sizes do not matter, every character's time is at or after the
+/// one before, and the S.Port decoder accepts whatever they yield.
+pub fn logic_trace(data: &[u8]) {
+    let (bytes, _) = read_all(open_trace, InputKind::Trace, data);
+    let times: Vec<u64> = bytes
+        .iter()
+        .map(|b| b.1.expect("a trace's characters have times"))
+        .collect();
+    assert!(
+        times.windows(2).all(|w| w[0] <= w[1]),
+        "a character's time goes back"
+    );
+    let mut d = crate::sport::SportDecoder::new();
+    let mut out = Collected::default();
+    for (b, t) in bytes {
+        d.push(&[b], t, &mut out).unwrap();
+    }
+    d.finish(&mut out).unwrap();
+}
+
 /// S-Bus serial decoder in every mode: chunking invariance, and every input byte in exactly one
 /// row (Timeout rows carry none); an accepted telegram passes its CRC under the reading the rows
 /// were made with (the mode given, or the one auto mode settled on), and in data mode starts
@@ -538,6 +598,119 @@ fn naive_frames(addrs: &[bool; 256], data: &[u8]) -> Vec<(&'static str, std::ops
     out
 }
 
+/// Futaba SBUS: chunking invariance, every byte in exactly one row, every channel row a `0F`
+/// frame of 25 bytes with an end byte, every slot row three bytes starting with a slot id.
+pub fn futaba(data: &[u8]) {
+    use crate::futaba::{self, wire};
+    let rows = same_rows_however_chunked(&|| futaba::decoder(futaba::Options::default()), data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert_eq!(total, data.len(), "bytes lost or duplicated");
+    for r in &rows {
+        match r.kind.as_str() {
+            futaba::CHANNELS_TYPE => {
+                assert_eq!(r.raw.len(), wire::FRAME_LEN, "{r:?}");
+                assert_eq!(r.raw[0], wire::START, "{r:?}");
+                assert!(wire::end_ok(r.raw[24]), "wrong end byte accepted: {r:?}");
+                assert_eq!(r.parts.len(), wire::CHANNELS + 4, "{r:?}");
+            }
+            futaba::SLOT_TYPE => {
+                assert_eq!(r.raw.len(), wire::SLOT_LEN, "{r:?}");
+                assert_eq!(wire::slot_number(r.raw[0]).map(u32::from), r.id, "{r:?}");
+            }
+            _ => assert_eq!(r.class, Class::Error, "{r:?}"),
+        }
+    }
+}
+
+/// FlySky iBUS: chunking invariance, every byte in exactly one row, and every row that is not
+/// flagged holds whole frames (a poll and its answer, or one frame) whose checksums pass.
+pub fn ibus(data: &[u8]) {
+    use crate::ibus::{self, wire};
+    let rows = same_rows_however_chunked(&|| ibus::decoder(ibus::Options::default()), data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert_eq!(total, data.len(), "bytes lost or duplicated");
+    for r in &rows {
+        if r.class == Class::Error {
+            continue;
+        }
+        let mut rest = &r.raw[..];
+        let mut frames = 0;
+        while !rest.is_empty() {
+            let n = usize::from(rest[0]);
+            assert!(n >= wire::MIN_LEN && n <= rest.len(), "{r:?}");
+            assert!(wire::check_ok(&rest[..n]), "bad checksum accepted: {r:?}");
+            rest = &rest[n..];
+            frames += 1;
+        }
+        assert!((1..=2).contains(&frames), "{r:?}");
+        if r.kind.is_empty() {
+            assert!(r.id.is_some() && wire::is_poll(&r.raw), "poll row: {r:?}");
+        }
+    }
+}
+
+/// Modbus, RTU and ASCII framing: chunking invariance (untimed, and timed with the data's own
+/// split points as read times), every byte in exactly one row, every frame shown as a request,
+/// response or exception passes its check, and every `BadCRC` row fails it.
+pub fn modbus(data: &[u8]) {
+    use crate::modbus::{self, Framing, Options, ascii, wire};
+    for framing in [Framing::Rtu, Framing::Ascii] {
+        let o = Options {
+            framing,
+            ..Options::default()
+        };
+        let rows = same_rows_however_chunked(&|| modbus::decoder(o.clone()), data);
+        let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+        assert_eq!(total, data.len(), "Modbus bytes lost or duplicated");
+        let ok = |raw: &[u8]| match framing {
+            Framing::Rtu => wire::crc_ok(raw),
+            Framing::Ascii => {
+                let body = raw.strip_suffix(b"\n").unwrap_or(raw);
+                let body = body.strip_suffix(b"\r").unwrap_or(body);
+                let hex = body.get(1..).unwrap_or_default();
+                if hex.len() % 2 != 0 {
+                    return false;
+                }
+                let bytes: Option<Vec<u8>> = hex
+                    .chunks(2)
+                    .map(|p| u8::from_str_radix(std::str::from_utf8(p).ok()?, 16).ok())
+                    .collect();
+                bytes.is_some_and(|b| b.len() >= 3 && ascii::lrc(&b) == 0)
+            }
+        };
+        for r in &rows {
+            match r.kind.as_str() {
+                "Request" | "Response" | "Exception" | "Unknown" => {
+                    assert!(ok(&r.raw), "frame with a bad check accepted: {r:?}")
+                }
+                "BadCRC" => assert!(!ok(&r.raw), "good frame shown as BadCRC: {r:?}"),
+                _ => {}
+            }
+        }
+        // timed: each data-driven piece read at its own time
+        let timed = |d: &[u8]| {
+            let mut dec = modbus::decoder(o.clone());
+            let mut out = Collected::default();
+            let mut at = 0;
+            let mut t = 0u64;
+            for n in chunk_lengths(d) {
+                if at >= d.len() {
+                    break;
+                }
+                let n = n.min(d.len() - at);
+                t += d[at] as u64 * 10_000;
+                dec.push(&d[at..at + n], Some(t), &mut out).unwrap();
+                at += n;
+            }
+            dec.finish(&mut out).unwrap();
+            out.rows
+        };
+        let rows = timed(data);
+        let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+        assert_eq!(total, data.len(), "Modbus bytes lost or duplicated (timed)");
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -587,55 +760,5 @@ pub(crate) mod tests {
                 .iter()
                 .any(|(k, _)| *k == "BadCRC")
         );
-    }
-}
-/// Futaba SBUS: chunking invariance, every byte in exactly one row, every channel row a `0F`
-/// frame of 25 bytes with an end byte, every slot row three bytes starting with a slot id.
-pub fn futaba(data: &[u8]) {
-    use crate::futaba::{self, wire};
-    let rows = same_rows_however_chunked(&|| futaba::decoder(futaba::Options::default()), data);
-    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
-    assert_eq!(total, data.len(), "bytes lost or duplicated");
-    for r in &rows {
-        match r.kind.as_str() {
-            futaba::CHANNELS_TYPE => {
-                assert_eq!(r.raw.len(), wire::FRAME_LEN, "{r:?}");
-                assert_eq!(r.raw[0], wire::START, "{r:?}");
-                assert!(wire::end_ok(r.raw[24]), "wrong end byte accepted: {r:?}");
-                assert_eq!(r.parts.len(), wire::CHANNELS + 4, "{r:?}");
-            }
-            futaba::SLOT_TYPE => {
-                assert_eq!(r.raw.len(), wire::SLOT_LEN, "{r:?}");
-                assert_eq!(wire::slot_number(r.raw[0]).map(u32::from), r.id, "{r:?}");
-            }
-            _ => assert_eq!(r.class, Class::Error, "{r:?}"),
-        }
-    }
-}
-
-/// FlySky iBUS: chunking invariance, every byte in exactly one row, and every row that is not
-/// flagged holds whole frames (a poll and its answer, or one frame) whose checksums pass.
-pub fn ibus(data: &[u8]) {
-    use crate::ibus::{self, wire};
-    let rows = same_rows_however_chunked(&|| ibus::decoder(ibus::Options::default()), data);
-    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
-    assert_eq!(total, data.len(), "bytes lost or duplicated");
-    for r in &rows {
-        if r.class == Class::Error {
-            continue;
-        }
-        let mut rest = &r.raw[..];
-        let mut frames = 0;
-        while !rest.is_empty() {
-            let n = usize::from(rest[0]);
-            assert!(n >= wire::MIN_LEN && n <= rest.len(), "{r:?}");
-            assert!(wire::check_ok(&rest[..n]), "bad checksum accepted: {r:?}");
-            rest = &rest[n..];
-            frames += 1;
-        }
-        assert!((1..=2).contains(&frames), "{r:?}");
-        if r.kind.is_empty() {
-            assert!(r.id.is_some() && wire::is_poll(&r.raw), "poll row: {r:?}");
-        }
     }
 }

@@ -26,6 +26,11 @@ pub struct Column {
     pub width: usize,
     pub align: Align,
     pub gap: usize,
+    /// The key of its cells in the JSON statistics; empty: the name in snake case
+    /// ([`Column::json_key`]).
+    pub key: &'static str,
+    /// Right-aligned, but its cells are text (a hex value), not numbers.
+    pub text: bool,
 }
 
 impl Column {
@@ -36,6 +41,8 @@ impl Column {
             width,
             align: Align::Right,
             gap: 1,
+            key: "",
+            text: false,
         }
     }
 
@@ -46,6 +53,8 @@ impl Column {
             width,
             align: Align::Left,
             gap: 1,
+            key: "",
+            text: false,
         }
     }
 
@@ -53,6 +62,58 @@ impl Column {
     pub const fn gap(self, gap: usize) -> Self {
         Column { gap, ..self }
     }
+
+    /// The same column with its own JSON key (when the name in snake case would not say it:
+    /// SAB's `median` is `resp_median_ms`).
+    pub const fn key(self, key: &'static str) -> Self {
+        Column { key, ..self }
+    }
+
+    /// The same column holding text, though right-aligned (`0x800F`).
+    pub const fn text(self) -> Self {
+        Column { text: true, ..self }
+    }
+
+    /// Whether its cells are numbers (right-aligned columns are counts and times, unless marked
+    /// [`Column::text`]) rather than text (names, lists of codes).
+    pub fn numeric(&self) -> bool {
+        self.align == Align::Right && !self.text
+    }
+
+    /// The key of its cells in the JSON statistics: its own, or the name in snake case
+    /// (`Mean ms` → `mean_ms`, `BadCRC` → `bad_crc`, `SeqGap` → `seq_gap`).
+    pub fn json_key(&self) -> String {
+        if self.key.is_empty() {
+            snake_case(self.name)
+        } else {
+            self.key.to_owned()
+        }
+    }
+}
+
+/// `Mean ms` → `mean_ms`, `BadCRC` → `bad_crc`, `NACK codes` → `nack_codes`: words split at
+/// blanks and where a capital follows a small letter, lower case, joined by `_`.
+pub fn snake_case(name: &str) -> String {
+    let mut out = String::new();
+    let mut prev_lower = false;
+    for c in name.chars() {
+        if !c.is_ascii_alphanumeric() {
+            if !out.is_empty() && !out.ends_with('_') {
+                out.push('_');
+            }
+            prev_lower = false;
+            continue;
+        }
+        if c.is_ascii_uppercase() && prev_lower && !out.ends_with('_') {
+            out.push('_');
+        }
+        prev_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
+        out.push(c.to_ascii_lowercase());
+    }
+    while out.ends_with('_') {
+        out.pop();
+    }
+    out
 }
 
 /// A row of a [`Report`] table.
@@ -63,6 +124,8 @@ pub enum ReportRow {
     Cells(Vec<String>),
     /// Text about the row above it, indented to the second column.
     Detail(String),
+    /// The sum of the rows above it (`all`): shown as a row, kept apart in the JSON (`all`).
+    Total(Vec<String>),
 }
 
 /// The `--stats` report of a decoder.
@@ -74,6 +137,8 @@ pub struct Report {
     pub rows: Vec<ReportRow>,
     /// Lines after the table (counters of the whole input).
     pub totals: Vec<String>,
+    /// The same counters by name (snake case), for the JSON statistics' `totals` object.
+    pub counts: Vec<(&'static str, u64)>,
 }
 
 impl Report {
@@ -88,6 +153,22 @@ impl Report {
     /// Adds a table row.
     pub fn row(&mut self, cells: Vec<String>) {
         self.rows.push(ReportRow::Cells(cells));
+    }
+
+    /// Adds the row of sums (`all`) under the rows.
+    pub fn total_row(&mut self, cells: Vec<String>) {
+        self.rows.push(ReportRow::Total(cells));
+    }
+
+    /// Names the counters of the total lines for the JSON statistics (each key once; a
+    /// later value of a key replaces the earlier).
+    pub fn counts(&mut self, counts: &[(&'static str, u64)]) {
+        for &(k, n) in counts {
+            match self.counts.iter_mut().find(|(key, _)| *key == k) {
+                Some(c) => c.1 = n,
+                None => self.counts.push((k, n)),
+            }
+        }
     }
 
     /// Adds a detail line under the last row.
@@ -129,7 +210,7 @@ impl fmt::Display for Report {
         for line in &self.rows {
             writeln!(f)?;
             match line {
-                ReportRow::Cells(cells) => self.cells(f, cells)?,
+                ReportRow::Cells(cells) | ReportRow::Total(cells) => self.cells(f, cells)?,
                 ReportRow::Detail(text) => write!(f, "{:indent$}{text}", "")?,
             }
         }
@@ -140,13 +221,17 @@ impl fmt::Display for Report {
     }
 }
 
-/// What went wrong in a run, as one line: `<subject>: <items> in <valid frames><tail>`.
+/// What went wrong in a run, as one line: `<subject>: <items> in <valid frames><tail>`, and
+/// the same as values for the JSON statistics: every counter asked about by its key (zero
+/// included), and the items without a count as notes.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Problems {
     subject: &'static str,
     items: Vec<String>,
     valid: String,
     tail: String,
+    counts: Vec<(&'static str, u64)>,
+    notes: Vec<String>,
 }
 
 impl Problems {
@@ -157,32 +242,63 @@ impl Problems {
             items: Vec::new(),
             valid: String::new(),
             tail: String::new(),
+            counts: Vec::new(),
+            notes: Vec::new(),
         }
     }
 
-    /// `n one` or `n many` when `n` is not zero.
-    pub fn count(&mut self, n: u64, one: &str, many: &str) -> &mut Self {
-        self.count_then(n, one, many, "")
+    /// `n one` or `n many` when `n` is not zero; `key` names the counter in the JSON
+    /// statistics (snake case).
+    pub fn count(&mut self, key: &'static str, n: u64, one: &str, many: &str) -> &mut Self {
+        self.count_then(key, n, one, many, "")
     }
 
     /// Like [`Self::count`] with more words after it (`4 requests` + ` given up`).
-    pub fn count_then(&mut self, n: u64, one: &str, many: &str, then: &str) -> &mut Self {
+    pub fn count_then(
+        &mut self,
+        key: &'static str,
+        n: u64,
+        one: &str,
+        many: &str,
+        then: &str,
+    ) -> &mut Self {
+        self.counts.push((key, n));
         if n > 0 {
             self.items.push(count(n, one, many) + then);
         }
         self
     }
 
-    /// `N garbage bytes skipped (M runs)` when `bytes` is not zero.
+    /// `N garbage bytes skipped (M runs)` when `bytes` is not zero (`garbage_bytes`,
+    /// `garbage_runs`).
     pub fn garbage(&mut self, bytes: u64, runs: u64) -> &mut Self {
+        self.counts.push(("garbage_runs", runs));
         let then = format!(" skipped ({})", count(runs, "run", "runs"));
-        self.count_then(bytes, "garbage byte", "garbage bytes", &then)
+        self.count_then(
+            "garbage_bytes",
+            bytes,
+            "garbage byte",
+            "garbage bytes",
+            &then,
+        )
     }
 
-    /// An item of its own words.
+    /// An item of its own words (a note in the JSON statistics).
     pub fn item(&mut self, text: impl Into<String>) -> &mut Self {
-        self.items.push(text.into());
+        let text = text.into();
+        self.notes.push(text.clone());
+        self.items.push(text);
         self
+    }
+
+    /// Every counter asked about, by key, in order (zero included).
+    pub fn counts(&self) -> &[(&'static str, u64)] {
+        &self.counts
+    }
+
+    /// The items without a count.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// The frames that did decode: ` in n one|many` at the end of the line.
@@ -273,14 +389,14 @@ mod tests {
     #[test]
     fn problems_line() {
         let mut p = Problems::new("X");
-        p.count(0, "CRC error", "CRC errors");
+        p.count("crc_errors", 0, "CRC error", "CRC errors");
         p.in_valid(3, "valid frame", "valid frames");
         assert!(p.is_empty());
         assert_eq!(p.line(), None);
-        p.count(2, "CRC error", "CRC errors")
-            .count(1, "timeout", "timeouts")
+        p.count("crc_errors", 2, "CRC error", "CRC errors")
+            .count("timeouts", 1, "timeout", "timeouts")
             .garbage(5, 1)
-            .count_then(1, "request", "requests", " given up")
+            .count_then("requests_given_up", 1, "request", "requests", " given up")
             .item("capture error: short file")
             .tail(" (v2)");
         assert_eq!(
@@ -290,5 +406,35 @@ mod tests {
         );
         p.in_valid(1, "valid frame", "valid frames");
         assert!(p.line().unwrap().ends_with(" in 1 valid frame (v2)"));
+        assert_eq!(
+            p.counts(),
+            [
+                ("crc_errors", 0),
+                ("crc_errors", 2),
+                ("timeouts", 1),
+                ("garbage_runs", 1),
+                ("garbage_bytes", 5),
+                ("requests_given_up", 1)
+            ]
+        );
+        assert_eq!(p.notes(), ["capture error: short file"]);
+    }
+
+    #[test]
+    fn json_keys_are_snake_case() {
+        for (name, key) in [
+            ("Mean ms", "mean_ms"),
+            ("BadCRC", "bad_crc"),
+            ("SeqGap", "seq_gap"),
+            ("NACK codes", "nack_codes"),
+            ("ID", "id"),
+            ("Resp min", "resp_min"),
+        ] {
+            assert_eq!(Column::right(name, 1).json_key(), key);
+        }
+        assert_eq!(
+            Column::right("median", 1).key("resp_median_ms").json_key(),
+            "resp_median_ms"
+        );
     }
 }

@@ -503,11 +503,11 @@ fn stats_as_json_count_hidden_rows() {
         .as_array()
         .unwrap()
         .iter()
-        .find(|row| row["ID"] == 24)
+        .find(|row| row["id"] == 24)
         .unwrap();
-    assert_eq!(receiver["Device"], "Receiver");
-    assert_eq!(receiver["Answers"], 47);
-    assert!(receiver["Mean ms"].is_f64());
+    assert_eq!(receiver["device"], "Receiver");
+    assert_eq!(receiver["answers"], 47);
+    assert!(receiver["mean_ms"].is_f64());
     assert!(v["head"][0].as_str().unwrap().contains("poll interval"));
     // The text form says how many rows the filters hid.
     let r = run(&[

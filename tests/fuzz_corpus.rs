@@ -87,3 +87,13 @@ fn ibus_corpus() {
 fn fport_corpus() {
     replay("fport", busnoop::fport::selfcheck::check);
 }
+
+#[test]
+fn modbus_corpus() {
+    replay("modbus", busnoop::selfcheck::modbus);
+}
+
+#[test]
+fn logic_trace_corpus() {
+    replay("logic_trace", busnoop::selfcheck::logic_trace);
+}

@@ -5,28 +5,139 @@ mod common;
 use assert_cmd::Command;
 use common::fixture;
 
-/// The `points` of every `<polyline>` drawn with `stroke-width="2"` (the series; axes, grid
-/// and error marks are thinner).
-fn series_lines(svg: &str) -> Vec<Vec<(f64, f64)>> {
+/// Where the legend starts: the data are left of it (src/plot.rs, `WIDTH - LEGEND`).
+const LEGEND_X: f64 = 960.0;
+
+/// The value of attribute `name` in the tag `tag`.
+fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+    Some(&tag[at..at + tag[at..].find('"')?])
+}
+
+/// Every `<polyline>` drawn with `stroke-width="2"` in the data area (the series' steps; axes,
+/// grid and error marks are thinner, the legend's samples right of [`LEGEND_X`]): its colour and
+/// points.
+fn series_lines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
     svg.split("<polyline")
         .skip(1)
-        .filter(|p| p.split('>').next().unwrap().contains("stroke-width=\"2\""))
-        .map(|p| {
-            let pts = p
-                .split("points=\"")
-                .nth(1)
+        .map(|p| p.split('>').next().unwrap())
+        .filter(|tag| attr(tag, "stroke-width") == Some("2"))
+        .map(|tag| {
+            let pts = attr(tag, "points")
                 .unwrap()
-                .split('"')
-                .next()
-                .unwrap();
-            pts.split_whitespace()
+                .split_whitespace()
                 .map(|xy| {
                     let (x, y) = xy.split_once(',').unwrap();
                     (x.parse().unwrap(), y.parse().unwrap())
                 })
-                .collect()
+                .collect::<Vec<(f64, f64)>>();
+            (attr(tag, "stroke").unwrap().to_owned(), pts)
+        })
+        .filter(|(_, pts)| pts.iter().all(|p| p.0 < LEGEND_X))
+        .collect()
+}
+
+/// The markers of a series' line: the circles of its colour on its points (each panel's
+/// colours start again), in drawing order.
+fn markers_on(svg: &str, line: &(String, Vec<(f64, f64)>)) -> Vec<(f64, f64)> {
+    markers(svg, &line.0)
+        .into_iter()
+        .filter(|m| line.1.contains(m))
+        .collect()
+}
+
+/// The markers (`<circle>`) of colour `color` in the data area, in drawing order.
+fn markers(svg: &str, color: &str) -> Vec<(f64, f64)> {
+    svg.split("<circle")
+        .skip(1)
+        .map(|p| p.split('>').next().unwrap())
+        .filter(|tag| attr(tag, "fill") == Some(color))
+        .map(|tag| {
+            (
+                attr(tag, "cx").unwrap().parse().unwrap(),
+                attr(tag, "cy").unwrap().parse().unwrap(),
+            )
+        })
+        .filter(|p: &(f64, f64)| p.0 < LEGEND_X)
+        .collect()
+}
+
+/// The labels of the legend (texts right of [`LEGEND_X`]).
+fn legend(svg: &str) -> Vec<String> {
+    texts(svg)
+        .into_iter()
+        .filter(|t| t.x >= LEGEND_X)
+        .map(|t| t.text)
+        .collect()
+}
+
+/// A `<text>`: where it is anchored, how, its size and its text.
+#[derive(Debug)]
+struct Text {
+    x: f64,
+    y: f64,
+    anchor: String,
+    dy: String,
+    size: f64,
+    rotated: bool,
+    text: String,
+}
+
+fn texts(svg: &str) -> Vec<Text> {
+    svg.split("<text")
+        .skip(1)
+        .map(|p| {
+            let (tag, rest) = p.split_once('>').unwrap();
+            let text = rest.split("</text>").next().unwrap().trim().to_owned();
+            Text {
+                x: attr(tag, "x").unwrap().parse().unwrap(),
+                y: attr(tag, "y").unwrap().parse().unwrap(),
+                anchor: attr(tag, "text-anchor").unwrap_or("start").to_owned(),
+                dy: attr(tag, "dy").unwrap_or("").to_owned(),
+                size: attr(tag, "font-size").unwrap().parse().unwrap(),
+                rotated: attr(tag, "transform").is_some(),
+                text,
+            }
         })
         .collect()
+}
+
+/// The image's width and height.
+fn size(svg: &str) -> (f64, f64) {
+    let tag = svg.split("<svg").nth(1).unwrap().split('>').next().unwrap();
+    (
+        attr(tag, "width").unwrap().parse().unwrap(),
+        attr(tag, "height").unwrap().parse().unwrap(),
+    )
+}
+
+/// Every text lies inside the image (its width taken as 0.62 of the font size per character,
+/// DejaVu Sans' widest digits and most letters).
+fn assert_labels_inside(svg: &str, what: &str) {
+    let (w, h) = size(svg);
+    for t in texts(svg) {
+        let len = t.text.chars().count() as f64 * t.size * 0.62;
+        let (along, across, limit_along, limit_across) = if t.rotated {
+            (t.y, t.x, h, w)
+        } else {
+            (t.x, t.y, w, h)
+        };
+        // Across the text: from its top to its baseline, as `dy` places it.
+        let (top, bottom) = match t.dy.as_str() {
+            d if d.starts_with('-') => (across - t.size, across),
+            "0.76em" => (across, across + t.size),
+            _ => (across - t.size / 2.0, across + t.size / 2.0),
+        };
+        let (a, b) = match t.anchor.as_str() {
+            "middle" => (along - len / 2.0, along + len / 2.0),
+            "end" => (along - len, along),
+            _ => (along, along + len),
+        };
+        assert!(
+            a >= 0.0 && b <= limit_along && top >= -1.0 && bottom <= limit_across + 1.0,
+            "{what}: {t:?} is not inside the image of {w}x{h}"
+        );
+    }
 }
 
 /// (seconds, value) of every row of the long table whose Sensor is `sensor`.
@@ -99,14 +210,29 @@ fn svg_lines_are_the_values() {
     assert_eq!(lines.len(), 2, "one line per sensor");
     // One panel per unit, each with its axis title.
     assert!(svg.contains("(dB)") && svg.contains("(V)"));
-    assert!(svg.contains("time since the capture"));
     let file = "edgetx-MODELE24-2014-07-11-sport.log";
     let rssi = values(file, "RSSI");
     let rxbt = values(file, "RxBt");
     assert!(rssi.len() > 10 && rxbt.len() > 10);
     assert!(rssi.iter().any(|r| r.1 != rssi[0].1), "RSSI varies");
-    assert_linear(&lines[0], &rssi);
-    assert_linear(&lines[1], &rxbt);
+    // A marker at every sample, at a linear map of (time, value).
+    assert_linear(&markers_on(&svg, &lines[0]), &rssi);
+    assert_linear(&markers_on(&svg, &lines[1]), &rxbt);
+    // Between samples the value is held: the line is a staircase through the markers, each
+    // step level until the next sample (never a ramp that did not happen).
+    for line in &lines {
+        let (pts, m) = (&line.1, markers_on(&svg, line));
+        assert_eq!(pts.len(), 2 * m.len() - 1, "two points per step");
+        for (k, w) in m.windows(2).enumerate() {
+            assert_eq!(pts[2 * k], w[0]);
+            assert_eq!(
+                pts[2 * k + 1],
+                (w[1].0, w[0].1),
+                "held until the next sample"
+            );
+            assert_eq!(pts[2 * k + 2], w[1]);
+        }
+    }
 }
 
 #[test]
@@ -246,4 +372,251 @@ fn a_pipe_needs_the_protocol_named() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// The default plot of every fixture, by every subcommand that reads it: every series has its
+/// points (a marker for each sample: a series of one sample is visible), every text lies inside
+/// the image (title, axis labels, legend), and the legend lists every number of the capture,
+/// beside the data and not on it. The README's own example drew two empty panels (a series of
+/// one sample had no marker), S-Bus and SAB put every unitless series in one panel with the y
+/// labels cut (`00000000.0`) and a legend running off the image.
+#[test]
+fn every_fixtures_default_plot_has_every_series_and_every_label_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut seen = 0;
+    for (protocol, file, extra) in [
+        ("sport", "sport-sample.bin", &["--sensor", "Alt,VFAS"][..]),
+        ("sport", "sport-sample.bin", &[][..]),
+        ("sport", "edgetx-MODELE24-2014-07-11-sport.log", &[][..]),
+        ("sbus", "sbus-digimat.pcap", &[][..]),
+        ("sbus", "sbus_seeds_ether.pcap", &[][..]),
+        ("sab2", "sab1-session.bin", &[][..]),
+        ("sab2", "sab2-session.bin", &[][..]),
+    ] {
+        let svg_path = dir.path().join("p.svg");
+        let out = Command::cargo_bin("busnoop")
+            .unwrap()
+            .args(["plot", "--protocol", protocol])
+            .arg(fixture(file))
+            .args(extra)
+            .arg("-o")
+            .arg(&svg_path)
+            .output()
+            .unwrap();
+        let what = format!("{file} {extra:?}");
+        if out.status.code() == Some(10) {
+            // No number at all (S-Bus seeds): nothing to draw.
+            assert!(String::from_utf8_lossy(&out.stderr).contains("carries a number"));
+            continue;
+        }
+        assert!(
+            out.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let svg = std::fs::read_to_string(&svg_path).unwrap();
+        let lines = series_lines(&svg);
+        let names = legend(&svg);
+        // The numbers of the capture (JSON Lines parts), by ID and name.
+        let rows = Command::cargo_bin("busnoop")
+            .unwrap()
+            .arg(protocol)
+            .arg(fixture(file))
+            .args(["-f", "jsonl"])
+            .output()
+            .unwrap();
+        let mut numbers = std::collections::BTreeSet::new();
+        for l in String::from_utf8_lossy(&rows.stdout).lines() {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            if let Some(p) = v["parts"].as_object() {
+                for k in p.keys() {
+                    numbers.insert((v["id"].to_string(), k.clone()));
+                }
+            }
+        }
+        let wanted = if extra.is_empty() { numbers.len() } else { 2 };
+        let series: Vec<&String> = names.iter().filter(|n| *n != "broken frame").collect();
+        assert_eq!(series.len(), wanted, "{what}: legend {names:?}");
+        assert_eq!(lines.len(), wanted, "{what}: one line per series");
+        for line in &lines {
+            assert!(!line.1.is_empty(), "{what}: a series without points");
+            assert!(
+                !markers_on(&svg, line).is_empty(),
+                "{what}: no marker on {line:?}"
+            );
+        }
+        assert_labels_inside(&svg, &what);
+        seen += 1;
+    }
+    assert!(seen >= 6);
+}
+
+/// Panels by size: S-Bus flags (0/1) and counters are not drawn in the panel of a register of
+/// 305419896, where they were a flat line at zero; no panel has more than six series.
+#[test]
+fn flags_and_large_values_get_panels_of_their_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg_path = dir.path().join("p.svg");
+    Command::cargo_bin("busnoop")
+        .unwrap()
+        .args(["plot", "--protocol", "sbus"])
+        .arg(fixture("sbus-digimat.pcap"))
+        .arg("-o")
+        .arg(&svg_path)
+        .assert()
+        .success();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    // The legend's entries by panel: a panel's entries are 22 pixels apart, panels further.
+    let mut entries: Vec<(f64, String)> = texts(&svg)
+        .into_iter()
+        .filter(|t| t.x >= LEGEND_X)
+        .map(|t| (t.y, t.text))
+        .collect();
+    entries.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut panels: Vec<Vec<String>> = Vec::new();
+    let mut last = f64::NEG_INFINITY;
+    for (y, name) in entries {
+        if y - last > 30.0 {
+            panels.push(Vec::new());
+        }
+        last = y;
+        panels.last_mut().unwrap().push(name);
+    }
+    assert!(panels.len() >= 3, "{panels:?}");
+    for p in &panels {
+        assert!(p.len() <= 6, "{p:?}");
+        if p.iter().any(|n| n == "R0") {
+            assert!(
+                !p.iter().any(|n| n.starts_with('F') || n == "C5"),
+                "flags and counters with R0: {p:?}"
+            );
+        }
+    }
+}
+
+/// Where the source has wall-clock time (an EdgeTX log), the x axis shows the time of day.
+#[test]
+fn the_x_axis_shows_the_time_of_day_when_the_source_has_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg_path = dir.path().join("p.svg");
+    Command::cargo_bin("busnoop")
+        .unwrap()
+        .arg("plot")
+        .arg(fixture("edgetx-MODELE24-2014-07-11-sport.log"))
+        .args(["--sensor", "RSSI", "-o"])
+        .arg(&svg_path)
+        .assert()
+        .success();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    assert!(svg.contains("time of day (2014-07-11)"), "x axis title");
+    assert!(
+        texts(&svg).iter().any(|t| t.text.starts_with("22:41:0")),
+        "times of day on the x axis"
+    );
+    // A raw file has no wall-clock time: seconds since the start.
+    Command::cargo_bin("busnoop")
+        .unwrap()
+        .arg("plot")
+        .arg(fixture("sport-sample.bin"))
+        .args(["--sensor", "Alt", "-o"])
+        .arg(&svg_path)
+        .assert()
+        .success();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    assert!(svg.contains("time since the capture"));
+}
+
+/// `plot` takes the table's selection (--id, --type, --device …), the project file switches,
+/// the protocol's own options after `--`, and a time range (--from/--to).
+#[test]
+fn plot_takes_the_tables_options_the_protocols_and_a_time_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg_path = dir.path().join("p.svg");
+    let log = fixture("edgetx-MODELE24-2014-07-11-sport.log");
+    let plot = |args: &[&str]| {
+        let out = Command::cargo_bin("busnoop")
+            .unwrap()
+            .current_dir(dir.path())
+            .arg("plot")
+            .arg("-o")
+            .arg(&svg_path)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        let svg = std::fs::read_to_string(&svg_path).unwrap_or_default();
+        let _ = std::fs::remove_file(&svg_path);
+        (out.status.code(), legend(&svg), err)
+    };
+    let l = log.to_str().unwrap();
+    // --id: only ID 8's numbers (named without @, no other ID has them now).
+    let (code, names, err) = plot(&[l, "--id", "8"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(names, ["Cell1 (V)", "Cell2 (V)", "Cell3 (V)"], "{err}");
+    // --device by name, --name naming an ID.
+    let (_, names, _) = plot(&[
+        l, "--name", "Pack=8", "--device", "Pack", "--sensor", "Cell1",
+    ]);
+    assert_eq!(names, ["Cell1 (V)"]);
+    // --type, and a filter the protocol cannot match is refused as by the table.
+    let (code, _, err) = plot(&[l, "--type", "Nope"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("types:"), "{err}");
+    // The project file: read from ./busnoop.toml, ignored with --no-config.
+    std::fs::write(dir.path().join("busnoop.toml"), "[sport.filter]\nid = 24\n").unwrap();
+    let (_, names, _) = plot(&[l]);
+    assert_eq!(names, ["SWR", "RSSI (dB)", "RxBt (V)"]);
+    let (_, names, _) = plot(&[l, "--no-config"]);
+    assert!(names.len() > 3, "{names:?}");
+    std::fs::remove_file(dir.path().join("busnoop.toml")).unwrap();
+    // The protocol's options after --: SAB's declared types.
+    let sab = fixture("sab2-session.bin");
+    let (code, names, err) = plot(&[
+        sab.to_str().unwrap(),
+        "--protocol",
+        "sab2",
+        "--sensor",
+        "0x10",
+        "--",
+        "--value",
+        "0x10=u16*0.01:m",
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(names, ["0x10 (m)", "broken frame"], "{err}");
+    let (code, _, err) = plot(&[l, "--", "--no-such-option"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("after --"), "{err}");
+    // A time range: seconds since the start, or a time of day.
+    for range in [
+        ["--from", "3", "--to", "5"],
+        ["--from", "22:41:04", "--to", "22:41:06"],
+    ] {
+        let mut args = vec![l, "--sensor", "RSSI"];
+        args.extend(range);
+        let out = Command::cargo_bin("busnoop")
+            .unwrap()
+            .arg("plot")
+            .args(&args)
+            .arg("-o")
+            .arg(&svg_path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let svg = std::fs::read_to_string(&svg_path).unwrap();
+        let lines = series_lines(&svg);
+        let m = markers_on(&svg, &lines[0]);
+        let all = values("edgetx-MODELE24-2014-07-11-sport.log", "RSSI");
+        assert!(
+            m.len() < all.len() / 2 && m.len() >= 3,
+            "{range:?}: {} of {}",
+            m.len(),
+            all.len()
+        );
+    }
+    let (code, _, err) = plot(&[l, "--from", "soon"]);
+    assert_eq!(code, Some(2), "{err}");
 }

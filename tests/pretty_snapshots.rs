@@ -199,3 +199,19 @@ fn fport_pretty() {
         snapshot(&format!("{name}.pretty"), &text);
     }
 }
+
+#[test]
+fn modbus_pretty() {
+    for (name, args) in [
+        ("modbus-brainchild", &["modbus", "--no-config"][..]),
+        (
+            "modbus-wizmodbus-bus",
+            &["modbus", "--no-config", "--line", "9600-8N1"][..],
+        ),
+    ] {
+        let f = fixture(&format!("{name}.bin"));
+        let text = pretty(args, &f);
+        assert_aligned(name, args, &f, &text);
+        snapshot(&format!("{name}.pretty"), &text);
+    }
+}

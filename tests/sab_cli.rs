@@ -565,21 +565,38 @@ fn plot_of_the_demo_session() {
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.contains("heading"), "no label");
     assert!(text.contains("deg"), "no unit");
-    // One series line with the two valid answers (the corrupted one is a red mark).
-    let lines: Vec<&str> = text
+    // One series line (the legend's sample, right of x = 960, aside) with the two valid
+    // answers, a step and a marker each (the corrupted one is a red mark).
+    let points_of = |p: &str| -> Vec<String> {
+        p.split("points=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .map(str::to_owned)
+            .collect()
+    };
+    let x = |xy: &str| xy.split(',').next().unwrap().parse::<f64>().unwrap();
+    let lines: Vec<Vec<String>> = text
         .split("<polyline")
         .skip(1)
         .filter(|p| p.split('>').next().unwrap().contains("stroke-width=\"2\""))
+        .map(points_of)
+        .filter(|pts| pts.iter().all(|xy| x(xy) < 960.0))
         .collect();
     assert_eq!(lines.len(), 1);
-    let points = lines[0]
-        .split("points=\"")
-        .nth(1)
-        .unwrap()
-        .split('"')
-        .next()
-        .unwrap();
-    assert_eq!(points.split_whitespace().count(), 2, "{points}");
+    assert_eq!(lines[0].len(), 3, "a step: {:?}", lines[0]);
+    let markers = text
+        .split("<circle")
+        .skip(1)
+        .filter(|c| {
+            let cx = c.split("cx=\"").nth(1).unwrap().split('"').next().unwrap();
+            cx.parse::<f64>().unwrap() < 960.0
+        })
+        .count();
+    assert_eq!(markers, 2, "a marker at each answer");
     // Without names or types: the codes.
     busnoop()
         .args(["plot"])

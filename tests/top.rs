@@ -173,8 +173,8 @@ fn top_on_a_live_port_shows_the_sensors_and_gives_the_terminal_back() {
         .unwrap();
     let at = wait_for(&screen, at, "sort rate");
     let mut keys = term.master.try_clone_native().unwrap();
-    keys.write_all(b"fal\r").unwrap();
-    let at = wait_for(&screen, at, "filter \"al\"");
+    keys.write_all(b"fsensor=Alt\r").unwrap();
+    let at = wait_for(&screen, at, "filter \"sensor=Alt\"");
     keys.write_all(b"p").unwrap();
     let at = wait_for(&screen, at, "PAUSED");
     keys.write_all(b"q").unwrap();
@@ -355,6 +355,215 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
     drop(reader);
 }
 
+/// A terminal that reports no size (0x0: some serial consoles and containers) gets the view at
+/// COLUMNS x LINES (else 80x24). It used to be drawn at 0x0: an empty screen.
+#[test]
+fn a_terminal_without_size_gets_the_view_at_columns_and_lines() {
+    let _g = lock();
+    let term = terminal(0, 0);
+    let screen = collect(&term.master);
+    let mut child = Command::new(bin())
+        .args([
+            "sport",
+            "--top",
+            "--speed",
+            "0",
+            "fixtures/sport-sample.bin",
+        ])
+        .stdin(term.stdio())
+        .stdout(term.stdio())
+        .stderr(term.stdio())
+        .env("TERM", "xterm")
+        .env("COLUMNS", "100")
+        .env("LINES", "20")
+        .spawn()
+        .unwrap();
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    let at = wait_for(&screen, at, "S.Port");
+    let at = wait_for(&screen, at, "Volts");
+    wait_for(&screen, at, "quit");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert!(status.success(), "{status:?}");
+}
+
+/// The screen as the terminal shows it after `bytes` (a tiny emulator of what the view
+/// writes: cursor moves `ESC[r;cH`, colours and modes ignored, text at the cursor).
+fn emulate(bytes: &[u8], w: usize, h: usize) -> Vec<String> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut grid = vec![vec![' '; w]; h];
+    let (mut row, mut col) = (0usize, 0usize);
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\x1b' {
+            if chars.peek() != Some(&'[') {
+                chars.next();
+                continue;
+            }
+            chars.next();
+            let mut params = String::new();
+            let mut end = ' ';
+            for c in chars.by_ref() {
+                if c.is_ascii_alphabetic() || c == '~' {
+                    end = c;
+                    break;
+                }
+                params.push(c);
+            }
+            match end {
+                'H' => {
+                    let mut n = params.split(';').map(|p| p.parse::<usize>().unwrap_or(1));
+                    row = n.next().unwrap_or(1).saturating_sub(1);
+                    col = n.next().unwrap_or(1).saturating_sub(1);
+                }
+                'J' if params == "2" => grid = vec![vec![' '; w]; h],
+                _ => {}
+            }
+        } else if c == '\r' {
+            col = 0;
+        } else if c == '\n' {
+            row += 1;
+        } else if row < h && col < w {
+            grid[row][col] = c;
+            col += 1;
+        }
+    }
+    grid.into_iter().map(|l| l.into_iter().collect()).collect()
+}
+
+/// At 80 columns the view shows each FLVSS cell on a line of its own with its own minimum and
+/// maximum (the typed numbers, not the cell count the Data text starts with), and every number
+/// whole: the app IDs 0xF101, 0xF104, 0xF105 (once all cut to `0xF1`), the S-Bus register
+/// 305419896 (once `30541`).
+#[test]
+fn top_at_80_columns_shows_each_cell_and_every_number_whole() {
+    let _g = lock();
+    for (protocol, file, want) in [
+        (
+            "sport",
+            "fixtures/edgetx-MODELE24-2014-07-11-sport.log",
+            &[
+                "Cell1", "Cell3", "4.200", "0xF101", "0xF104", "0xF105", "5.07",
+            ][..],
+        ),
+        (
+            "sbus",
+            "fixtures/sbus-digimat.pcap",
+            &["305419896", "-1245334075"][..],
+        ),
+    ] {
+        let term = terminal(80, 40);
+        let screen = collect(&term.master);
+        let mut child = term.run(&[&protocol, &"--top", &"--speed", &"0", &file]);
+        wait_for(&screen, 0, "END OF INPUT");
+        if protocol == "sbus" {
+            // The registers: filtered like the command line.
+            term.master
+                .try_clone_native()
+                .unwrap()
+                .write_all(b"fsensor=R0\r")
+                .unwrap();
+        }
+        // The screen as it stands once the view is still.
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let shown = loop {
+            let lines = emulate(&screen.lock().unwrap(), 80, 40);
+            let words: Vec<&str> = lines.iter().flat_map(|l| l.split_whitespace()).collect();
+            if want.iter().all(|w| words.contains(w)) {
+                break lines;
+            }
+            if Instant::now() > deadline {
+                let _ = child.kill();
+                panic!(
+                    "{want:?} not all whole on the screen:\n{}",
+                    lines.join("\n")
+                );
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        assert!(shown.iter().all(|l| l.trim_end().chars().count() <= 80));
+        term.master
+            .try_clone_native()
+            .unwrap()
+            .write_all(b"q")
+            .unwrap();
+        let status = wait_exit(&mut child);
+        assert!(status.success(), "{status:?}");
+    }
+}
+
+/// The pretty table (the default on a terminal) fits the terminal's width: on 80 columns no
+/// line is longer, every row is there with its numbers (Counter, Millis, ID, Sensor #) whole,
+/// and Data is wrapped, not lost. It ignored the width: the S.Port header was 111 columns, SAB2
+/// rows reached 250, and every row wrapped across the next one's columns. `--no-fit` keeps the
+/// full lines.
+#[test]
+fn the_pretty_table_fits_the_terminal() {
+    let _g = lock();
+    for (protocol, file) in [
+        ("sab2", "fixtures/sab2-session.bin"),
+        ("sport", "fixtures/sport-sample.bin"),
+        ("sbus", "fixtures/sbus-digimat.pcap"),
+    ] {
+        let rows = Command::new(bin())
+            .args([protocol, file, "-f", "tsv"])
+            .output()
+            .unwrap();
+        let tsv = String::from_utf8(rows.stdout).unwrap();
+        for (fit, args) in [(true, &[][..]), (false, &["--no-fit"][..])] {
+            let term = terminal(80, 24);
+            let screen = collect(&term.master);
+            let mut child = Command::new(bin())
+                .args([protocol, file])
+                .args(args)
+                .stdin(term.stdio())
+                .stdout(term.stdio())
+                .stderr(Stdio::null())
+                .env("TERM", "xterm")
+                .env("NO_COLOR", "1")
+                .spawn()
+                .unwrap();
+            assert!(wait_exit(&mut child).success());
+            std::thread::sleep(Duration::from_millis(200));
+            let out = String::from_utf8_lossy(&screen.lock().unwrap()).replace('\r', "");
+            let lines: Vec<&str> = out.lines().collect();
+            let longest = lines.iter().map(|l| l.chars().count()).max().unwrap();
+            if !fit {
+                assert!(longest > 80, "{protocol} --no-fit: {longest}");
+                continue;
+            }
+            assert!(longest <= 80, "{protocol}: a line of {longest}:\n{out}");
+            let words: Vec<&str> = out.split_whitespace().collect();
+            for row in tsv.lines().skip(1) {
+                let c: Vec<&str> = row.split('\t').collect();
+                // The row's first line starts with its Counter and Millis.
+                let start = format!("{} {}", c[0], c[1]);
+                assert!(
+                    lines.iter().any(|l| l
+                        .split_whitespace()
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                        .starts_with(&start)),
+                    "{protocol}: row {} missing:\n{out}",
+                    c[0]
+                );
+                for cell in [c[2], c[5]].into_iter().chain(c[7].split(' ')) {
+                    if !cell.is_empty() {
+                        assert!(
+                            words.contains(&cell),
+                            "{protocol}: {cell} not whole:\n{out}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn top_shows_the_rc_buses_sensors_and_channels() {
     let _g = lock();
@@ -371,12 +580,28 @@ fn top_shows_the_rc_buses_sensors_and_channels() {
         .write_all(b"q")
         .unwrap();
     assert!(wait_exit(&mut child).success());
-    // Futaba: the channel frames and the receiver voltage slot.
+    // Futaba: the channel frames (a line per channel) and the receiver voltage slot.
     let term = terminal(140, 30);
     let screen = collect(&term.master);
     let mut child = term.run(&[&"futaba", &"--top", &"fixtures/futaba-session.bin"]);
     let at = wait_for(&screen, 0, "Futaba SBUS");
-    let at = wait_for(&screen, at, "SBUS2");
+    wait_for(&screen, at, "CH16");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    assert!(wait_exit(&mut child).success());
+    let term = terminal(140, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[
+        &"futaba",
+        &"--top",
+        &"--type",
+        &"Slot",
+        &"fixtures/futaba-session.bin",
+    ]);
+    let at = wait_for(&screen, 0, "Futaba SBUS");
     wait_for(&screen, at, "RxV");
     term.master
         .try_clone_native()
@@ -384,4 +609,84 @@ fn top_shows_the_rc_buses_sensors_and_channels() {
         .write_all(b"q")
         .unwrap();
     assert!(wait_exit(&mut child).success());
+}
+
+/// Several sources: each line names its port with its device (the port's file name), and two
+/// ports with the same ID and sensor keep a line each.
+#[test]
+fn top_with_two_sources_keeps_a_line_per_port() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let t0 = 1_700_000_000_000_000i64;
+    let mut files = Vec::new();
+    for (name, shift) in [("left.pcap", 0), ("right.pcap", 6_000)] {
+        let mut out = Vec::new();
+        busnoop::pcap::write::header(&mut out, busnoop::pcap::linktype::USER0);
+        for i in 0..20u32 {
+            let mut f = Vec::new();
+            wire::encode_frame(&mut f, wire::header_for(0), 0x10, 0x0100, 6500 + i);
+            busnoop::pcap::write::record(&mut out, t0 + shift + 12_000 * i as i64, &f);
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, out).unwrap();
+        files.push(path);
+    }
+    let term = terminal(120, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"sport", &"--top", &"--speed", &"0", &files[0], &files[1]]);
+    let at = wait_for(&screen, 0, "S.Port");
+    // `left.pcap: Vario` (the screen is drawn with cursor moves over the blanks).
+    wait_for(&screen, at, "left.pcap:");
+    wait_for(&screen, at, "right.pcap:");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert!(status.success(), "{status:?}");
+}
+
+/// Modbus in the live view: one line per slave and function, showing the answer's registers by
+/// the register map's names and units.
+#[test]
+fn top_shows_modbus_registers_by_their_map_names() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("busnoop.toml");
+    std::fs::write(
+        &cfg,
+        "[modbus.slaves]\nBoiler = 1\n[modbus.registers]\n\
+         \"1/100\" = { name = \"Flow temperature\", type = \"i16\", scale = 0.1, unit = \"°C\" }\n",
+    )
+    .unwrap();
+    let mut b = bus();
+    let term = terminal(120, 30);
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"modbus", &"--top", &"--config", &cfg, &b.path]);
+    let at = wait_for(&screen, 0, "\x1b[?1049h");
+    let f = |bytes: &[u8]| {
+        let mut v = bytes.to_vec();
+        busnoop::modbus::wire::push_crc(&mut v);
+        v
+    };
+    for i in 0..10u16 {
+        let t = (600 + i).to_be_bytes();
+        b.master.write_all(&f(&[1, 3, 0, 100, 0, 1])).unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+        b.master.write_all(&f(&[1, 3, 2, t[0], t[1]])).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let at = wait_for(&screen, at, "Boiler");
+    // (the view draws word by word and only what changed, and cuts the value to its column;
+    // the unit has its own)
+    let at = wait_for(&screen, at, "Flow temperatur");
+    wait_for(&screen, at, "°C");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    assert!(wait_exit(&mut child).success());
+    drop(b);
 }

@@ -135,10 +135,59 @@ fn frame_rows(tsv: &str) -> Vec<std::collections::HashMap<String, String>> {
     rows
 }
 
+/// The numbers of every row (JSON Lines `parts`, in order) by Counter.
+fn parts_by_counter(protocol: &str, input: &Path, extra: &[&str]) -> Vec<Vec<(String, f64)>> {
+    let json = ok(&busnoop()
+        .arg(protocol)
+        .arg(input)
+        .args(["-f", "jsonl"])
+        .args(extra)
+        .output()
+        .unwrap());
+    let mut by = vec![Vec::new()];
+    for l in json.lines() {
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        let parts = v["parts"]
+            .as_object()
+            .map(|p| {
+                p.iter()
+                    .map(|(k, x)| (k.clone(), x.as_f64().unwrap()))
+                    .collect()
+            })
+            .unwrap_or_default();
+        by.push(parts);
+    }
+    by
+}
+
+/// The dissector's numbers of a packet: `part` and `value` fields (comma-separated).
+fn dissected(names: &str, values: &str) -> Vec<(String, f64)> {
+    if names.is_empty() {
+        return Vec::new();
+    }
+    names
+        .split(',')
+        .zip(values.split(','))
+        .map(|(n, v)| (n.to_owned(), v.parse().unwrap()))
+        .collect()
+}
+
+/// The same numbers, as numbers (tshark prints a double in its shortest form: `0` for 0.00).
+fn same_numbers(a: &[(String, f64)], b: &[(String, f64)]) -> bool {
+    let mut a = a.to_vec();
+    let mut b = b.to_vec();
+    a.sort_by(|x, y| x.0.cmp(&y.0));
+    b.sort_by(|x, y| x.0.cmp(&y.0));
+    a.len() == b.len()
+        && a.iter()
+            .zip(&b)
+            .all(|(x, y)| x.0 == y.0 && (x.1 - y.1).abs() <= 1e-9 * x.1.abs().max(1.0))
+}
+
 /// The S.Port export of `input`, decoded by tshark with busnoop-sport.lua, against the table:
-/// frame for frame the same physical IDs, app IDs, CRC status and (when `all_values`, or when
-/// the dissector names the sensor) values.
-fn sport_export_matches(input: &Path, all_values: bool) {
+/// frame for frame the same physical IDs, app IDs, CRC status, and every number of every data
+/// frame by name and value (`sport.part`, `sport.value`, a number); `sport.value > 4` filters.
+fn sport_export_matches(input: &Path, expect_bad: bool) {
     let Some(mut tshark) = tshark() else { return };
     let dir = tempfile::tempdir().unwrap();
     let export = dir.path().join("export.pcapng");
@@ -150,6 +199,7 @@ fn sport_export_matches(input: &Path, all_values: bool) {
         .output()
         .unwrap());
     let rows = frame_rows(&table);
+    let parts = parts_by_counter("sport", input, &[]);
     let lua = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/contrib/wireshark/busnoop-sport.lua"
@@ -160,14 +210,8 @@ fn sport_export_matches(input: &Path, all_values: bool) {
         .arg("-r")
         .arg(&export)
         .args(["-T", "fields", "-E", "occurrence=a"])
-        .args([
-            "-e",
-            "sport.phys_id",
-            "-e",
-            "sport.app_id",
-            "-e",
-            "sport.value",
-        ])
+        .args(["-e", "sport.phys_id", "-e", "sport.app_id"])
+        .args(["-e", "sport.part", "-e", "sport.value"])
         .args(["-e", "sport.crc_status", "-e", "_ws.expert.message"])
         .output()
         .unwrap();
@@ -175,32 +219,53 @@ fn sport_export_matches(input: &Path, all_values: bool) {
     let packets: Vec<Vec<&str>> = fields.lines().map(|l| l.split('\t').collect()).collect();
     assert_eq!(packets.len(), rows.len(), "{fields}");
     assert!(rows.len() > 20);
-    let mut bad = 0;
+    let (mut bad, mut numbers, mut above_4) = (0, 0, 0);
     for (row, pkt) in rows.iter().zip(&packets) {
         let what = format!("{row:?} against {pkt:?}");
         assert_eq!(row["ID"], pkt[0], "{what}");
         let crc_bad = row["Type"] == "BadCRC";
         if row["Type"].is_empty() {
-            assert_eq!(pkt[3], "", "a poll has no CRC: {what}");
+            assert_eq!(pkt[4], "", "a poll has no CRC: {what}");
             continue;
         }
-        assert_eq!(pkt[3], if crc_bad { "bad" } else { "good" }, "{what}");
+        assert_eq!(pkt[4], if crc_bad { "bad" } else { "good" }, "{what}");
         if crc_bad {
             bad += 1;
-            assert!(pkt[4].split(',').any(|m| m == "Bad CRC"), "{what}");
+            assert!(pkt[5].split(',').any(|m| m == "Bad CRC"), "{what}");
             continue;
         }
         if !row["Sensor #"].is_empty() {
             let app = u16::from_str_radix(row["Sensor #"].trim_start_matches("0x"), 16).unwrap();
             assert_eq!(pkt[1], format!("0x{app:04x}"), "{what}");
         }
-        if all_values || !pkt[2].is_empty() {
-            assert_eq!(row["Value"], pkt[2], "{what}");
-        }
+        let want = &parts[row["Counter"].parse::<usize>().unwrap()];
+        let got = dissected(pkt[2], pkt[3]);
+        assert!(same_numbers(want, &got), "{what}: {want:?} against {got:?}");
+        numbers += want.len();
+        above_4 += usize::from(want.iter().any(|p| p.1 > 4.0));
     }
-    if all_values {
-        assert!(bad > 0, "the input has a bad CRC to show");
-    }
+    assert!(numbers > 0);
+    assert_eq!(bad > 0, expect_bad, "the input's bad CRCs");
+    // `sport.value` is a number: a display filter compares it.
+    let Some(mut tshark) = self::tshark() else {
+        return;
+    };
+    let filtered = ok(&tshark
+        .arg("-X")
+        .arg(format!("lua_script:{lua}"))
+        .arg("-r")
+        .arg(&export)
+        .args([
+            "-Y",
+            "sport.value > 4",
+            "-T",
+            "fields",
+            "-e",
+            "sport.phys_id",
+        ])
+        .output()
+        .unwrap());
+    assert_eq!(filtered.lines().count(), above_4, "sport.value > 4");
 }
 
 #[test]
@@ -216,6 +281,7 @@ fn tshark_decodes_the_sport_export_like_the_table() {
     let input = dir.path().join("sample.bin");
     std::fs::write(&input, bytes).unwrap();
     sport_export_matches(&input, true);
+    // Every sensor of the EdgeTX capture (cells, RSSI, RxBt, SWR), typed.
     sport_export_matches(&fixture("edgetx-MODELE24-2014-07-11-sport.log"), false);
 }
 
@@ -273,10 +339,24 @@ fn tshark_decodes_the_sab_export_like_the_table() {
             .args(["-T", "fields", "-E", "occurrence=a"])
             .args(["-e", "sab.address", "-e", "sab.type", "-e", "sab.command"])
             .args(["-e", "sab.crc_status", "-e", "_ws.expert.message"])
+            .args(["-e", "sab.value_name", "-e", "sab.value"])
             .output()
             .unwrap());
         let packets: Vec<Vec<&str>> = fields.lines().map(|l| l.split('\t').collect()).collect();
         assert_eq!(packets.len(), rows.len(), "{session}: {fields}");
+        // Every number of the table, typed, by name.
+        let parts = parts_by_counter("sab2", &fixture(session), &[]);
+        let mut numbers = 0;
+        for (row, pkt) in rows.iter().zip(&packets) {
+            let want = &parts[row["Counter"].parse::<usize>().unwrap()];
+            let got = dissected(pkt[5], pkt[6]);
+            assert!(
+                same_numbers(want, &got),
+                "{session}: {row:?}: {want:?} against {got:?}"
+            );
+            numbers += want.len();
+        }
+        assert!(numbers >= 5, "{session}: {numbers} numbers");
         let (mut frames, mut bad) = (0, 0);
         for (row, pkt) in rows.iter().zip(&packets) {
             let what = format!("{session}: {row:?} against {pkt:?}");

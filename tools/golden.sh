@@ -15,6 +15,9 @@
 #                                      # stored as the sha256 of stdout; run the benches first)
 #   BUSNOOP=path/to/busnoop tools/golden.sh   # another binary (e.g. a copy of the old one)
 #
+# The pretty runs write into files, which are never fitted to a terminal's width (only a pretty
+# table on a terminal is, unless --no-fit): fitting does not change these outputs.
+#
 # Build first (cargo build --release); compare the printed hash before and after a change, or
 # diff -r two output directories to see what moved.
 set -euo pipefail

@@ -7,7 +7,10 @@
 --                                                         HEADER..DATA)
 -- HEADER: bits 7..6 flags (00 request, 01 reserved, 10 NACK, 11 ACK), bits 5..0 the address.
 -- A bad CRC is expert info (error). Other bytes busnoop exported (garbage, runts) are shown as
--- such.
+-- such. A valid request's or ACK's payload of 1, 2 or 4 bytes is a number, as busnoop's default
+-- rule reads it (an unsigned little-endian integer, docs/sab.md "Values"): `sab.value` (a number:
+-- `sab.value > 1000` filters), named as busnoop's `parts` name it (`sab.value_name`: the command
+-- `0x10`, a request's `0x10.req`). Types declared with busnoop's `--value` are busnoop's alone.
 --
 -- Install: copy or link into your personal Lua plugins folder (Help > About Wireshark >
 -- Folders), or load it once: wireshark -X lua_script:busnoop-sab.lua frames.pcapng
@@ -30,6 +33,8 @@ local pf = {
   crc8 = ProtoField.uint8("sab.crc8", "CRC-8", base.HEX),
   crc16 = ProtoField.uint16("sab.crc16", "CRC-16", base.HEX),
   crc_status = ProtoField.string("sab.crc_status", "CRC status"),
+  value_name = ProtoField.string("sab.value_name", "Value name"),
+  value = ProtoField.uint32("sab.value", "Value", base.DEC),
 }
 p.fields = pf
 
@@ -78,8 +83,25 @@ local function body(u, at, n, t, pinfo)
     t:add(pf.payload, u(at + 2, n))
     if flags == 2 and n == 1 then t:add(pf.error_code, u(at + 2, 1)) end
   end
-  return string.format("%s address %d command 0x%02X%s", flag_names[flags], addr,
+  local info = string.format("%s address %d command 0x%02X%s", flag_names[flags], addr,
     u(at + 1, 1):uint(), n > 0 and string.format(" (%d bytes)", n) or "")
+  -- The number of a request's or an ACK's payload of 1, 2 or 4 bytes, once its CRC is known.
+  local number = nil
+  if (flags == 0 or flags == 3) and (n == 1 or n == 2 or n == 4) then
+    local name = string.format("0x%02X", u(at + 1, 1):uint())
+    if flags == 0 then name = name .. ".req" end
+    number = { name = name, range = u(at + 2, n) }
+  end
+  return info, number
+end
+
+-- Adds the payload's number to the tree and the info line.
+local function add_number(t, number, info)
+  if number == nil then return info end
+  local v = number.range:le_uint()
+  t:add(pf.value_name, number.name)
+  t:add_le(pf.value, number.range)
+  return string.format("%s %s=%d", info, number.name, v)
 end
 
 function p.dissector(tvb, pinfo, tree)
@@ -99,8 +121,10 @@ function p.dissector(tvb, pinfo, tree)
       pinfo.cols.info = "SAB v1 frame cut short"
       return len
     end
-    info = body(tvb, 2, n, t, pinfo)
+    local number
+    info, number = body(tvb, 2, n, t, pinfo)
     ok = crc8_maxim(tvb, 1, n + 3) == tvb(n + 4, 1):uint()
+    if ok then info = add_number(t, number, info) end
     local c = t:add(pf.crc8, tvb(n + 4, 1))
     if not ok then c:add_proto_expert_info(ef_crc) end
   elseif first == 0x7E then
@@ -128,8 +152,10 @@ function p.dissector(tvb, pinfo, tree)
       pinfo.cols.info = string.format("SAB2 runt (%d bytes between flags)", n)
       return len
     end
-    info = body(u, 0, n - 4, t, pinfo)
+    local number
+    info, number = body(u, 0, n - 4, t, pinfo)
     ok = crc16_modbus(u, 0, n - 3) == u(n - 2, 2):le_uint()
+    if ok then info = add_number(t, number, info) end
     local c = t:add_le(pf.crc16, u(n - 2, 2))
     if not ok then c:add_proto_expert_info(ef_crc) end
   else

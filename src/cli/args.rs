@@ -42,7 +42,7 @@ pub enum Command {
     Detect(DetectArgs),
     /// Plot a capture's numbers as time series: one panel per unit, broken frames marked, as
     /// SVG or PNG (`busnoop plot flight.log --sensor Alt,VFAS -o flight.svg`).
-    Plot(PlotArgs),
+    Plot(Box<PlotArgs>),
     /// List the serial ports of this machine (type, USB VID:PID, serial number, names).
     Ports,
     /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
@@ -69,17 +69,33 @@ pub struct PlotArgs {
     /// The capture to plot: a file (raw wire bytes, an EdgeTX/OpenTX log, a pcap) or `-` (a
     /// pipe, like a FIFO, needs --protocol: it can be read only once).
     pub source: PathBuf,
-    /// The numbers to plot, by their names in the wide table without unit (`Alt`, `VFAS`,
-    /// `Cell1`, `Cell1@8`), comma-separated [default: every number].
-    #[arg(long, value_name = "LIST", value_delimiter = ',')]
-    pub sensor: Vec<String>,
     /// The image to write: FILE.svg or FILE.png.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
     /// The protocol [default: detected as by `busnoop detect`; required for `-` and FIFOs].
     #[arg(long, value_name = "NAME", value_parser = protocol_names())]
     pub protocol: Option<String>,
+    /// Draw from this moment on: seconds since the capture's start (`90`, `1.5`), or a time of
+    /// day (`12:34:56`) for sources with wall-clock time.
+    #[arg(long, value_name = "TIME", value_parser = crate::plot::When::parse)]
+    pub from: Option<crate::plot::When>,
+    /// Draw up to this moment (as --from).
+    #[arg(long, value_name = "TIME", value_parser = crate::plot::When::parse)]
+    pub to: Option<crate::plot::When>,
+    /// The table's row selection (--id, --type, --device, --name …) and the project file
+    /// (--config, --no-config); `--sensor` names the numbers to plot (see its help).
+    #[command(flatten)]
+    pub select: project::SelectArgs,
+    /// The protocol's own options, after `--`: `busnoop plot cap.bin -o x.svg --protocol sbus
+    /// -- --mode data`, `-- --value 0x10=u16*0.01:m`, `-- --baud 38400`.
+    #[arg(last = true, value_name = "PROTOCOL OPTIONS")]
+    pub protocol_args: Vec<std::ffi::OsString>,
 }
+
+/// `busnoop plot --sensor`'s help (the table's `--sensor` selects rows; the plot's, series).
+pub(super) const PLOT_SENSOR_HELP: &str = "The numbers to plot, by their names in the wide \
+     table without unit (`Alt`, `VFAS`, `Cell1`, `Cell1@8`) or a sensor's Sensor column name \
+     (`Volts`, `Cels`), comma-separated [default: every number]";
 
 /// The subcommands of the protocols, for `plot --protocol`.
 fn protocol_names() -> clap::builder::PossibleValuesParser {
@@ -122,7 +138,9 @@ pub fn command() -> clap::Command {
     for (i, name) in fixed.iter().enumerate() {
         cmd = cmd.mut_subcommand(name, |c| c.display_order(PROTOCOLS.len() + i));
     }
-    cmd
+    cmd.mut_subcommand("plot", |c| {
+        c.mut_arg("sensor", |a| a.help(PLOT_SENSOR_HELP))
+    })
 }
 
 /// The subcommand of `p`.
@@ -224,7 +242,14 @@ impl Parsed {
 #[derive(Args, Debug, Clone)]
 pub struct CaptureArgs {
     /// What to read (each subcommand names the sources it accepts).
+    #[arg(index = 1)]
     pub source: PathBuf,
+
+    /// More sources, decoded at once (each with its own decoder) and merged by time into one
+    /// table with a Port column: two adapters on the two wires of a full-duplex link, or two
+    /// buses (docs/live.md, "Two wires, two adapters").
+    #[arg(index = 2, value_name = "SOURCE")]
+    pub more: Vec<PathBuf>,
 
     #[command(flatten)]
     pub output: OutputArgs,
@@ -234,6 +259,13 @@ pub struct CaptureArgs {
 
     #[command(flatten)]
     pub select: project::SelectArgs,
+}
+
+impl CaptureArgs {
+    /// SOURCE and the more sources after it, as given.
+    pub fn sources(&self) -> impl Iterator<Item = &PathBuf> {
+        std::iter::once(&self.source).chain(&self.more)
+    }
 }
 
 /// Options for live capture.
@@ -246,6 +278,13 @@ pub struct LiveArgs {
     // The help names the protocol's default (see `protocol_command`).
     #[arg(long, value_name = "FORMAT")]
     pub line: Option<String>,
+
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level; see
+    /// docs/logic.md). Several (`--channel RX,TX` or repeated): each channel is a port of its
+    /// own, merged by time with a Port column.
+    #[arg(long, value_name = "NAME|N", value_delimiter = ',')]
+    pub channel: Vec<String>,
 
     /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
     /// number), go on, and mark the gap with a row.
@@ -318,14 +357,25 @@ pub struct OutputArgs {
     #[arg(long)]
     pub raw: bool,
 
+    /// Pretty table on a terminal: full lines, however wide. By default its rows are fitted
+    /// to the terminal's width (Data and Note wrapped within their columns, names cut with
+    /// `…`, never a number); a file or a pipe always gets full lines.
+    #[arg(long)]
+    pub no_fit: bool,
+
     /// Print a per-device summary on stderr at the end (and on Ctrl-C).
     #[arg(long)]
     pub stats: bool,
 
     /// Form of the --stats summary: `text`, or `json` (one JSON object, the last line on
-    /// stderr; implies --stats).
+    /// stderr, also when the run fails; implies --stats; schema docs/stats.v1.schema.json).
     #[arg(long, value_enum, value_name = "FORM")]
     pub stats_format: Option<StatsFormat>,
+
+    /// Write the statistics as one JSON object into FILE at the end of the run, also when it
+    /// fails (schema docs/stats.v1.schema.json); stderr keeps its usual messages.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
 
     /// `abs` adds a `Time` column with wall-clock times when the source has them.
     #[arg(long, value_enum, default_value_t = TimeMode::Rel)]
@@ -419,8 +469,8 @@ pub const BAUD_RANGE: std::ops::RangeInclusive<i64> = 50..=12_000_000;
 #[derive(Args, Debug)]
 pub struct DetectArgs {
     /// What to examine: a capture file (raw wire bytes, an EdgeTX S.Port log, a busnoop .pcap
-    /// recording, a pcap/pcapng capture), `-` for standard input, or a serial device, which is
-    /// listened to (passively, read-only) at each baud rate in turn.
+    /// recording, a pcap/pcapng capture, a logic-analyzer trace), `-` for standard input, or a
+    /// serial device, which is listened to (passively, read-only) at each baud rate in turn.
     pub source: PathBuf,
 
     /// Serial devices: how long to listen at each baud rate.
@@ -437,6 +487,11 @@ pub struct DetectArgs {
     /// Serial devices: DTR and RTS, as for the protocol commands.
     #[arg(long, value_enum, value_name = "MODE", default_value_t)]
     pub dtr_rts: crate::source::serial::ModemLines,
+
+    /// A logic-analyzer trace (sigrok .sr, VCD, Saleae CSV export): the channel to read, by
+    /// name or number (default: the only channel, or the only one that changes level).
+    #[arg(long, value_name = "NAME|N")]
+    pub channel: Option<String>,
 }
 
 impl DetectArgs {
@@ -446,6 +501,7 @@ impl DetectArgs {
             listen_ms: self.listen_ms,
             bauds: self.bauds.clone(),
             dtr_rts: self.dtr_rts,
+            channel: self.channel.clone(),
         }
     }
 }

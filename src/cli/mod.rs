@@ -21,6 +21,7 @@ mod args;
 mod choices;
 mod extcap;
 mod manual;
+mod many;
 mod paths;
 pub mod project;
 
@@ -51,15 +52,17 @@ pub fn main() -> ExitCode {
         }
     };
     init_tracing(verbose);
-    match run(parsed) {
-        Ok(()) => ExitCode::from(code::OK),
+    let (code, message) = match run(parsed) {
+        Ok(()) => (code::OK, String::new()),
         Err(f) => {
             if !f.is_quiet() {
                 eprintln!("busnoop: {f}");
             }
-            ExitCode::from(f.exit_code())
+            (f.exit_code(), f.to_string())
         }
-    }
+    };
+    // The statistics as JSON: after every other message, whatever the end.
+    ExitCode::from(crate::stats_json::finish(code, &message))
 }
 
 fn init_tracing(verbose: u8) {
@@ -105,25 +108,72 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
             (p.command, args)
         }
     };
+    // The protocol's own options: the user's, and the detected variant's where the user gave
+    // none of that name.
+    let given = |name: &str| {
+        a.protocol_args.iter().any(|u| {
+            u.to_str()
+                .is_some_and(|u| u.split('=').next() == Some(name))
+        })
+    };
     let mut argv: Vec<std::ffi::OsString> = vec!["busnoop".into(), command.into()];
-    argv.extend(extra.iter().map(Into::into));
+    let mut skip_value = false;
+    for e in extra {
+        if e.starts_with("--") {
+            skip_value = given(e.split('=').next().unwrap_or(e));
+            if skip_value {
+                continue;
+            }
+        } else if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        argv.push(e.into());
+    }
+    argv.extend(a.protocol_args.iter().cloned());
+    argv.push("--".into());
     argv.push(a.source.clone().into());
-    let Ok((Parsed::Protocol(mut run), _)) = Parsed::from(argv) else {
+    let (Parsed::Protocol(mut run), _) = Parsed::from(argv).map_err(|e| {
+        Failure::Usage(format!(
+            "plot: the options after -- are {command}'s: {}",
+            e.to_string()
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ")
+        ))
+    })?
+    else {
         return Err(Failure::Internal(format!(
             "plot: {command} is not a protocol"
         )));
     };
-    let sensors = (run.protocol.vocab.sensors)();
+    // The table's selection and project file; `--sensor` names the series instead.
+    let sensors: Vec<String> = a
+        .select
+        .sensor
+        .iter()
+        .flat_map(|s| s.split(','))
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(str::to_owned)
+        .collect();
+    run.capture.select = project::SelectArgs {
+        sensor: Vec::new(),
+        ..a.select.clone()
+    };
+    let vocab = (run.protocol.vocab.sensors)();
     let mut wanted = Vec::new();
-    for name in &a.sensor {
+    for name in &sensors {
         wanted.push(name.clone());
-        for s in sensors.iter().filter(|s| s.is(name)) {
+        // A Sensor column name plots its numbers (`Volts` → VFAS, `Cels` → every cell); a
+        // number's name only that number.
+        for s in vocab.iter().filter(|s| s.column.eq_ignore_ascii_case(name)) {
             wanted.push(s.column.clone());
             wanted.extend(s.parts.iter().cloned());
         }
     }
     run.capture.output.plot = Some(crate::plot::PlotSpec {
-        sensors: a.sensor.clone(),
+        sensors,
         wanted,
         path: a.output.clone(),
         title: format!(
@@ -133,6 +183,8 @@ fn plot(a: &PlotArgs) -> Result<(), Failure> {
                 |n| n.to_string_lossy().into_owned()
             )
         ),
+        from: a.from,
+        to: a.to,
     });
     run_protocol(run)
 }
@@ -174,6 +226,16 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         &options.sensors(),
     )?;
     prepare(&mut capture, section);
+    if let Some(p) = &capture.output.stats_json {
+        check_stats_file(p, &capture.source)?;
+    }
+    crate::stats_json::expect(
+        crate::stats_json::Destinations {
+            stderr: capture.output.stats_format == Some(StatsFormat::Json),
+            file: capture.output.stats_json.clone(),
+        },
+        protocol.name,
+    );
     let names: Vec<(String, u32)> = sel
         .names
         .pairs()
@@ -187,6 +249,23 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
             names: &names,
         })
     })
+}
+
+/// `--stats-json FILE`: its folder exists, and it is not the input (it is written at the end,
+/// when the input was read).
+fn check_stats_file(path: &Path, source: &Path) -> Result<(), Failure> {
+    crate::sink::check_folder(path)?;
+    let same = std::fs::canonicalize(path)
+        .ok()
+        .is_some_and(|p| std::fs::canonicalize(source).is_ok_and(|s| s == p));
+    if same {
+        return Err(Failure::Usage(format!(
+            "--stats-json {} is the input: writing it would destroy the capture; write \
+             somewhere else",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The project file's defaults under the command line's options; `--stats-format` implies
@@ -207,6 +286,7 @@ fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
         InputKind::EdgeTxLog => "an EdgeTX/OpenTX S.Port log",
         InputKind::Recording => "a busnoop recording",
         InputKind::Raw | InputKind::Serial => "raw serial data",
+        InputKind::Trace => "a logic-analyzer trace",
     };
     Failure::Input(format!(
         "this is {what}; {} captures are {}",
@@ -221,13 +301,13 @@ pub(crate) fn is_dash(p: &Path) -> bool {
 
 /// Opens SOURCE (a device, a file or standard input), picks the reader for its kind, asks
 /// `decoder_for` for the protocol decoder, decodes everything into the table and prints the
-/// summary.
+/// summary. Several sources (or a recording of several ports) go to [`many::run`].
 pub fn run_capture(
     args: &CaptureArgs,
     protocol: &Protocol,
     default_line: Line,
     selection: &Selection,
-    decoder_for: impl FnOnce(InputKind, &Line) -> Result<Box<dyn Decoder>, Failure>,
+    decoder_for: impl Fn(InputKind, &Line) -> Result<Box<dyn Decoder>, Failure>,
 ) -> Result<(), Failure> {
     let record_to_stdout = args.live.record.as_deref().is_some_and(is_dash);
     if record_to_stdout && args.output.output_file().is_none() {
@@ -244,13 +324,15 @@ pub fn run_capture(
         Some(p) => Some(p.path.as_path()),
         None => args.output.output_file(),
     };
-    check_distinct(
-        &input,
-        table_file,
-        args.live.record.as_deref(),
-        args.live.export.as_deref(),
-        project::File::path(&args.select).as_deref(),
-    )?;
+    for source in args.sources() {
+        check_distinct(
+            &Input::parse(source),
+            table_file,
+            args.live.record.as_deref(),
+            args.live.export.as_deref(),
+            project::File::path(&args.select).as_deref(),
+        )?;
+    }
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
@@ -285,6 +367,8 @@ pub fn run_capture(
     let stop = Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let mut line = default_line;
+    // A trace's rate is measured unless it is given (--baud, or a speed in --line).
+    let mut fixed_baud = args.live.baud;
     if let Some(l) = &args.live.line {
         line = line
             .parse_over(l)
@@ -294,6 +378,9 @@ pub fn run_capture(
                 "--line {l}: the speed is out of range (50 to 12000000)"
             )));
         }
+        if line.baud != default_line.baud {
+            fixed_baud = fixed_baud.or(Some(line.baud));
+        }
     }
     if let Some(b) = args.live.baud {
         line.baud = b;
@@ -302,6 +389,22 @@ pub fn run_capture(
         line,
         lines: args.live.dtr_rts,
     };
+    let trace = source::logic::Options {
+        line,
+        baud: fixed_baud,
+        channel: args.live.channel.first().cloned(),
+    };
+    if !args.more.is_empty() || args.live.channel.len() > 1 || many::several_ports(&input) {
+        return many::run(
+            args,
+            protocol,
+            &serial,
+            &trace,
+            selection,
+            &decoder_for,
+            &stop,
+        );
+    }
     // A capture reader hands on its first input bytes for the wrong-protocol check after the
     // run (which looks at the first ADVICE_BYTES only); a recording keeps its packets.
     let keep_input = if matches!(input, Input::Device(_)) {
@@ -309,7 +412,20 @@ pub fn run_capture(
     } else {
         crate::detect::ADVICE_BYTES as u64
     };
-    let (kind, reader, progress) = open_source(input, &serial, args.live.reconnect, keep_input)?;
+    let (kind, reader, progress) = open_source(
+        input,
+        &serial,
+        &trace,
+        args.live.reconnect,
+        keep_input,
+        None,
+    )?;
+    if !args.live.channel.is_empty() && kind != InputKind::Trace {
+        return Err(Failure::Usage(format!(
+            "--channel picks a wire of a logic-analyzer trace; {} is not one",
+            args.source.display()
+        )));
+    }
     tracing::info!("{}: {:?}", args.source.display(), kind);
     if !protocol.reads(kind) {
         return Err(unusable(kind, protocol));
@@ -325,7 +441,7 @@ pub fn run_capture(
     // Before anything else is written: a recording of packets refuses a raw name.
     let content = match kind {
         InputKind::Pcap | InputKind::Pcapng => Content::Packets,
-        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording => {
+        InputKind::Serial | InputKind::EdgeTxLog | InputKind::Recording | InputKind::Trace => {
             Content::Line { timed: true }
         }
         InputKind::Raw => Content::Line { timed: false },
@@ -365,44 +481,12 @@ pub fn run_capture(
         None => None,
     };
     let out = &args.output;
-    // With --top and no -o, the view is the only output.
-    let mut table = match (out.top, out.output_file()) {
-        (true, None) => None,
-        (_, file) => {
-            let output = match file {
-                Some(p) => Output::create(p).map_err(|e| {
-                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
-                })?,
-                None => Output::stdout(),
-            };
-            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
-            let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-            let mut table = Table::new(
-                output,
-                out.table_options(to_terminal, no_color_env),
-                decoder.columns(),
-            );
-            table.set_pretty_widths(protocol.pretty_widths);
-            if let Some(p) = &out.plot {
-                table.set_plot(p.clone());
-            }
-            if out.wide {
-                // CSV or TSV: check_wide refused the others before anything was opened.
-                let step = match out.every {
-                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
-                    None => crate::sink::wide::Step::PollCycle,
-                };
-                if out.raw || out.time == TimeMode::Abs {
-                    eprintln!(
-                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
-                         Date and Time columns come with any source that has wall-clock time"
-                    );
-                }
-                table.set_wide(step, kind == InputKind::Serial);
-            }
-            Some(table)
-        }
-    };
+    let mut table = open_table(
+        out,
+        decoder.columns(),
+        protocol.pretty_widths,
+        kind == InputKind::Serial,
+    )?;
     let live = kind == InputKind::Serial;
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
     let pacer = if live { None } else { Pacer::new(speed) };
@@ -410,7 +494,7 @@ pub fn run_capture(
     let source_name = args.source.display().to_string();
     let ctx = Context {
         stop: &stop,
-        recorder: recorder.as_mut(),
+        recorder: recorder.as_mut().map(|r| r as &mut dyn crate::record::Keep),
         protocol: protocol.name,
         live,
         source: &source_name,
@@ -426,6 +510,9 @@ pub fn run_capture(
             baud: live.then_some(line.baud),
             speed: pacer.as_ref().map(Pacer::speed),
             live,
+            vocab: Some(protocol.vocab),
+            names: selection.names.clone(),
+            sensors: selection.sensors.clone(),
         };
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)
@@ -515,7 +602,7 @@ pub fn run_capture(
     }
     // `busnoop plot`: drawn once the input is read, also after Ctrl-C (what was read so far),
     // whose exit code then stays.
-    if let Some(plot) = table.as_mut().and_then(Table::take_plot)
+    if let Some(mut plot) = table.as_mut().and_then(Table::take_plot)
         && let Err(f) = plot.draw()
     {
         if result.is_ok() {
@@ -524,6 +611,54 @@ pub fn run_capture(
         eprintln!("busnoop: {f}");
     }
     result
+}
+
+/// The table (`None` with `--top` and no `-o`: the view is the only output): `extra`, the
+/// columns after the base ones (the decoder's, after `Port` with several sources); `widths`, the
+/// pretty widths of the first columns; `live`: the source is a serial device.
+fn open_table(
+    out: &OutputArgs,
+    extra: &[&'static str],
+    widths: &[usize],
+    live: bool,
+) -> Result<Option<Table>, Failure> {
+    // With --top and no -o, the view is the only output.
+    Ok(match (out.top, out.output_file()) {
+        (true, None) => None,
+        (_, file) => {
+            let output = match file {
+                Some(p) => Output::create(p).map_err(|e| {
+                    Failure::from_create(&format!("cannot create {}", p.display()), &e)
+                })?,
+                None => Output::stdout(),
+            };
+            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+            let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+            let mut table = Table::new(output, out.table_options(to_terminal, no_color_env), extra);
+            table.set_pretty_widths(widths);
+            if to_terminal && !out.no_fit {
+                table.fit_terminal();
+            }
+            if let Some(p) = &out.plot {
+                table.set_plot(p.clone());
+            }
+            if out.wide {
+                // CSV or TSV: check_wide refused the others before anything was opened.
+                let step = match out.every {
+                    Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
+                    None => crate::sink::wide::Step::PollCycle,
+                };
+                if out.raw || out.time == TimeMode::Abs {
+                    eprintln!(
+                        "busnoop: note: --wide has no Raw or Time column (--raw, --time abs); its \
+                         Date and Time columns come with any source that has wall-clock time"
+                    );
+                }
+                table.set_wide(step, live);
+            }
+            Some(table)
+        }
+    })
 }
 
 /// Notes on options that cannot do what they ask for this input or output: `--time abs` on a
@@ -535,6 +670,13 @@ fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
         notes.push(
             "--time abs: raw wire bytes carry no wall-clock time, so the Time column stays \
              empty (a recording made with --record FILE.pcap keeps the times)"
+                .to_string(),
+        );
+    }
+    if out.time == TimeMode::Abs && kind == InputKind::Trace {
+        notes.push(
+            "--time abs: a logic-analyzer trace carries no wall-clock time busnoop can trust, so \
+             the Time column stays empty; Millis counts from the start of the trace"
                 .to_string(),
         );
     }
@@ -605,11 +747,15 @@ fn check_wide(out: &OutputArgs) -> Result<(), Failure> {
 
 /// Opens SOURCE and returns its kind with the reader for it; `keep_input`: a capture's reader
 /// also hands on up to this many of its input bytes (for `--record`, the wrong-protocol check).
+/// `clock`: the instant a serial device's capture time counts from (several ports: one clock
+/// for all), else when it is opened.
 fn open_source(
     input: Input,
     cfg: &serial::SerialConfig,
+    trace: &source::logic::Options,
     reconnect: bool,
     keep_input: u64,
+    clock: Option<std::time::Instant>,
 ) -> Result<source::Reading, Failure> {
     if let Input::Device(path) = &input {
         match serial::open(path, cfg) {
@@ -617,7 +763,10 @@ fn open_source(
                 if let Some(w) = serial::latency_warning(path, std::path::Path::new("/sys")) {
                     eprintln!("busnoop: note: {w}");
                 }
-                let reader = SerialReader::new(path, port, *cfg, reconnect);
+                let mut reader = SerialReader::new(path, port, *cfg, reconnect);
+                if let Some(start) = clock {
+                    reader = reader.starting_at(start);
+                }
                 return Ok((InputKind::Serial, Box::new(reader), None));
             }
             // A character device that is not a terminal (/dev/null, /dev/zero): read it as a file.
@@ -634,6 +783,7 @@ fn open_source(
             Box::new(source::capture::CaptureReader::new(opened, keep_input))
         }
         InputKind::Raw | InputKind::Serial => Box::new(source::RawReader::new(opened)),
+        InputKind::Trace => source::logic::reader(opened, trace)?,
     };
     Ok((kind, reader, Some(progress)))
 }
@@ -681,9 +831,21 @@ fn report(
     hidden: u64,
     result: &Result<(), Failure>,
 ) {
-    if matches!(result, Err(Failure::BrokenPipe))
-        || QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
-    {
+    if QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    // Written at the very end (`main`), after the failure's message if any.
+    if crate::stats_json::wanted() {
+        crate::stats_json::record(
+            &decoder.stats(),
+            protocol,
+            rows,
+            hidden,
+            decoder.valid_frames(),
+            &decoder.problems(),
+        );
+    }
+    if matches!(result, Err(Failure::BrokenPipe)) {
         return;
     }
     if stats == Some(StatsFormat::Text) {
@@ -698,10 +860,10 @@ fn report(
         eprintln!("{}", decoder.stats());
     }
     // When the output failed, the one line that matters is the write error (printed last).
-    let problems = decoder.problems().line();
+    let problems = decoder.problems();
     if !matches!(result, Err(Failure::Output(_)))
         && stats != Some(StatsFormat::Json)
-        && let Some(p) = &problems
+        && let Some(p) = problems.line()
     {
         eprintln!("busnoop: {p}");
     }
@@ -710,17 +872,6 @@ fn report(
             "busnoop: interrupted after {rows} rows; all decoded rows were written{}",
             i.input_note()
         );
-    }
-    if stats == Some(StatsFormat::Json) {
-        let json = crate::stats_json::to_json(
-            &decoder.stats(),
-            protocol,
-            rows,
-            hidden,
-            decoder.valid_frames(),
-            problems.as_deref(),
-        );
-        eprintln!("{json}");
     }
 }
 

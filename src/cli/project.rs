@@ -480,7 +480,11 @@ pub fn selection(
     let names = Names::parse(&spec.names, "--name", vocab).map_err(Failure::Usage)?;
     let filter =
         Filter::new(&spec, vocab, &names, sensors, protocol.name).map_err(Failure::Usage)?;
-    Ok(Selection { filter, names })
+    Ok(Selection {
+        filter,
+        names,
+        sensors: sensors.to_vec(),
+    })
 }
 
 /// Puts the file's defaults where the command line left an option unset: the format (unless

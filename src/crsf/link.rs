@@ -69,7 +69,7 @@ impl Described {
 
 /// A protocol on the CRSF frame shape: its start bytes, its device and type names, and how a
 /// valid frame becomes a row.
-pub(crate) trait Dialect: Default {
+pub(crate) trait Dialect: Default + Send {
     /// The protocol's name in messages ("CRSF").
     const NAME: &'static str;
     /// The bytes a frame may start with.
@@ -358,7 +358,7 @@ impl<D: Dialect> Decoder for LinkDecoder<D> {
             ]);
         }
         let first = st.first.unwrap_or(0);
-        r.row(vec![
+        r.total_row(vec![
             "all".to_owned(),
             String::new(),
             String::new(),
@@ -395,11 +395,17 @@ impl<D: Dialect> Decoder for LinkDecoder<D> {
     fn problems(&self) -> Problems {
         let st = &self.map.stats;
         let mut p = Problems::new(D::NAME);
-        p.count(st.crc_errors, "CRC error", "CRC errors")
-            .count(st.truncated, "truncated frame", "truncated frames")
-            .garbage(st.garbage_bytes, st.garbage_runs)
-            .count(st.resyncs, "resync", "resyncs")
+        p.count("crc_errors", st.crc_errors, "CRC error", "CRC errors")
             .count(
+                "truncated_frames",
+                st.truncated,
+                "truncated frame",
+                "truncated frames",
+            )
+            .garbage(st.garbage_bytes, st.garbage_runs)
+            .count("resyncs", st.resyncs, "resync", "resyncs")
+            .count(
+                "command_crc_errors",
                 st.inner_crc_errors,
                 "command CRC error",
                 "command CRC errors",

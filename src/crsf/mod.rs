@@ -47,9 +47,9 @@ pub const PROTOCOL: Protocol = Protocol {
             frames, CRC-8 0xD5, resynchronised byte by byte. One row per frame: ID the address, \
             Type the frame type, RC channels in µs on Betaflight's scale, telemetry named as \
             EdgeTX names it. 420000 baud 8N1, not inverted, on the receiver's wires to the flight \
-            controller (one adapter and one busnoop per wire); --baud 115200 for EdgeTX's \
+            controller (one adapter per wire, both in one run: `busnoop crsf RX TX`); --baud 115200 for EdgeTX's \
             telemetry mirror, 400000 for the module bay (docs/crsf.md).",
-    examples: "Examples:\n  busnoop crsf /dev/ttyUSB0\n  busnoop crsf /dev/ttyUSB0 --baud 115200 \
+    examples: "Examples:\n  busnoop crsf /dev/ttyUSB0\n  busnoop crsf /dev/ttyUSB0 /dev/ttyUSB1\n  busnoop crsf /dev/ttyUSB0 --baud 115200 \
                --wide\n  busnoop crsf capture.bin --type LinkStats --stats\n  \
                busnoop crsf capture.bin -f jsonl",
     source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \

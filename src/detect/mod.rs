@@ -48,6 +48,8 @@ pub struct Options {
     pub bauds: Vec<u32>,
     /// Serial devices: DTR and RTS, as for the protocol commands.
     pub dtr_rts: ModemLines,
+    /// Logic-analyzer traces: the channel to read (`--channel`).
+    pub channel: Option<String>,
 }
 
 /// One way of reading the bytes: a protocol, with options.
@@ -148,6 +150,8 @@ pub struct Ranked {
     pub score: Score,
     /// Which bytes (by position) lay inside valid frames.
     coverage: Vec<u64>,
+    /// The channel of a logic-analyzer trace that was read (`--channel`), for the command.
+    pub channel: Option<String>,
 }
 
 impl Ranked {
@@ -169,6 +173,10 @@ impl Ranked {
         }
         if let Some(b) = baud.filter(|&b| b != self.protocol.line.baud) {
             s.push_str(&format!(" --baud {b}"));
+        }
+        if let Some(c) = &self.channel {
+            s.push_str(" --channel ");
+            s.push_str(&shell_quote(Path::new(c)));
         }
         s.push(' ');
         s.push_str(&shell_quote(source));
@@ -277,6 +285,7 @@ pub fn rank(mut candidates: Vec<Candidate>, batches: &[Batch], kind: InputKind) 
                 inverted: c.inverted,
                 score,
                 coverage,
+                channel: None,
             }
         })
         .collect();
@@ -390,7 +399,10 @@ pub fn inverted_fix(r: &Ranked) -> String {
 /// The input's kind and its first [`SCAN_BYTES`] (fewer when it ends), and the signal that cut
 /// the reading short: SIGINT/SIGTERM end the wait of a slow pipe (`cat /dev/ttyUSB0 | busnoop
 /// detect -`), and what arrived is judged.
-fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Failure> {
+fn read_prefix(
+    input: &Input,
+    trace: &crate::source::logic::Options,
+) -> Result<(InputKind, Vec<Batch>, Option<i32>), Failure> {
     let stop = crate::signal::Stop::install()
         .map_err(|e| Failure::Internal(format!("cannot install signal handlers: {e}")))?;
     let (opened, progress) = crate::source::open(input)?;
@@ -398,6 +410,7 @@ fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Fa
     let reader: Box<dyn ChunkReader> = match kind {
         InputKind::EdgeTxLog => Box::new(crate::source::edgetx::EdgeTxReader::new(opened)),
         InputKind::Recording => Box::new(crate::source::recording::RecordingReader::new(opened)),
+        InputKind::Trace => crate::source::logic::reader(opened, trace)?,
         _ => Box::new(crate::source::RawReader::new(opened)),
     };
     let feed = crate::source::spawn(reader, Some(progress));
@@ -407,7 +420,7 @@ fn read_prefix(input: &Input) -> Result<(InputKind, Vec<Batch>, Option<i32>), Fa
         if let Some(sig) = stop.signal() {
             break Some(sig);
         }
-        match feed.rx.recv_timeout(Duration::from_millis(50)) {
+        match feed.recv_timeout(Duration::from_millis(50)) {
             Ok(Message::Data(b)) => {
                 bytes += b.bytes.len();
                 batches.push(b);
@@ -431,18 +444,86 @@ fn kind_text(kind: InputKind) -> &'static str {
         InputKind::Pcap | InputKind::Pcapng => "a network capture",
         InputKind::Recording => "a busnoop recording",
         InputKind::Serial => "a serial line",
+        InputKind::Trace => "a logic-analyzer trace",
     }
+}
+
+/// What the first megabytes of a file or pipe say: its kind, every candidate ranked, the bytes
+/// examined and the signal that cut the reading short.
+struct Scan {
+    kind: InputKind,
+    ranked: Vec<Ranked>,
+    examined: u64,
+    signal: Option<i32>,
+}
+
+/// Ranks every candidate on the start of `input`. A logic-analyzer trace is read through the
+/// software UART once per character format of the protocols (the rate measured), each
+/// protocol's candidates on the bytes of its own format; standard input can be read once only,
+/// so there the first format is tried.
+fn scan(input: &Input, channel: Option<&str>) -> Result<Scan, Failure> {
+    let mut formats: Vec<Line> = Vec::new();
+    for p in PROTOCOLS {
+        if p.reads(InputKind::Trace) && !formats.iter().any(|f| f.same_format(&p.line)) {
+            formats.push(p.line);
+        }
+    }
+    let trace = |line: Line| crate::source::logic::Options {
+        line,
+        baud: None,
+        channel: channel.map(str::to_owned),
+    };
+    let first = formats.first().copied().unwrap_or(Line::n81(115_200));
+    let (kind, batches, signal) = read_prefix(input, &trace(first))?;
+    let examined = batches.iter().map(|b| b.bytes.len() as u64).sum();
+    if kind != InputKind::Trace {
+        let ranked = rank(candidates(kind, None), &batches, kind);
+        return Ok(Scan {
+            kind,
+            ranked,
+            examined,
+            signal,
+        });
+    }
+    let of_format = |f: &Line| {
+        candidates(kind, None)
+            .into_iter()
+            .filter(|c| c.protocol.line.same_format(f))
+            .collect::<Vec<_>>()
+    };
+    let mut ranked = rank(of_format(&first), &batches, kind);
+    for f in formats.iter().skip(1) {
+        if signal.is_some() || matches!(input, Input::Stdin) {
+            break;
+        }
+        let (_, batches, _) = read_prefix(input, &trace(*f))?;
+        ranked.extend(rank(of_format(f), &batches, kind));
+    }
+    ranked.sort_by(|a, b| {
+        b.score
+            .share()
+            .total_cmp(&a.score.share())
+            .then(b.score.frames.cmp(&a.score.frames))
+    });
+    for r in &mut ranked {
+        r.channel = channel.map(str::to_owned);
+    }
+    Ok(Scan {
+        kind,
+        ranked,
+        examined,
+        signal,
+    })
 }
 
 /// The protocol of a file or pipe (`busnoop plot` without `--protocol`): the detect verdict on
 /// its first megabytes, with the options of the variant found.
 pub fn protocol_of(source: &Path) -> Result<(&'static Protocol, &'static [&'static str]), Failure> {
     let input = Input::parse(source);
-    let (kind, batches, signal) = read_prefix(&input)?;
+    let Scan { ranked, signal, .. } = scan(&input, None)?;
     if let Some(sig) = signal {
         return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
     }
-    let ranked = rank(candidates(kind, None), &batches, kind);
     let name = source.display();
     match verdict(&ranked) {
         Verdict::Found(i, _) => Ok((ranked[i].protocol, ranked[i].args)),
@@ -464,9 +545,12 @@ pub fn run(args: &Options) -> Result<(), Failure> {
             Ok(()) => return Ok(()),
         }
     }
-    let (kind, batches, signal) = read_prefix(&input)?;
-    let examined: u64 = batches.iter().map(|b| b.bytes.len() as u64).sum();
-    let ranked = rank(candidates(kind, None), &batches, kind);
+    let Scan {
+        kind,
+        ranked,
+        examined,
+        signal,
+    } = scan(&input, args.channel.as_deref())?;
     let name = args.source.display();
     let mut text = format!(
         "{name}: {}, {} examined{}\n",

@@ -106,7 +106,7 @@ impl Stats {
         }
         let mut row = vec!["all".to_owned(), String::new()];
         row.extend(cells(&total));
-        r.row(row);
+        r.total_row(row);
         let [c8, c16, c24] = self.control;
         let rssi = match (self.rssi_min, self.rssi_max) {
             (Some(a), Some(b)) => format!(", RSSI {a}-{b}"),
@@ -140,10 +140,20 @@ impl Stats {
     /// The one problems line, `subject` naming the variant.
     pub fn problems(&self, subject: &'static str) -> Problems {
         let mut p = Problems::new(subject);
-        p.count(self.crc_errors, "CRC error", "CRC errors")
-            .count(self.truncated, "truncated frame", "truncated frames")
+        p.count("crc_errors", self.crc_errors, "CRC error", "CRC errors")
+            .count(
+                "truncated_frames",
+                self.truncated,
+                "truncated frame",
+                "truncated frames",
+            )
             .garbage(self.garbage_bytes, self.garbage_runs)
-            .count(self.unusual_escapes, "unusual escape", "unusual escapes")
+            .count(
+                "unusual_escapes",
+                self.unusual_escapes,
+                "unusual escape",
+                "unusual escapes",
+            )
             .in_valid(self.valid_frames, "valid frame", "valid frames");
         p
     }

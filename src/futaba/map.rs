@@ -367,7 +367,7 @@ impl Mapper {
             Column::left("ID", 4).gap(2),
             Column::left("Device", 8).gap(2),
             Column::right("Answers", 8),
-            Column::right("Last raw", 9),
+            Column::right("Last raw", 9).text(),
         ]);
         let g = &st.sbus2;
         r.head.push(format!(
@@ -425,14 +425,20 @@ impl Mapper {
     pub fn problems(&self) -> Problems {
         let st = &self.stats;
         let mut p = Problems::new("Futaba SBUS");
-        p.count(st.truncated, "truncated frame", "truncated frames")
-            .count(
-                st.wrong_end,
-                "frame with a wrong end byte",
-                "frames with a wrong end byte",
-            )
-            .garbage(st.garbage_bytes, st.garbage_runs)
-            .in_valid(st.frames(), "valid frame", "valid frames");
+        p.count(
+            "truncated_frames",
+            st.truncated,
+            "truncated frame",
+            "truncated frames",
+        )
+        .count(
+            "wrong_end_bytes",
+            st.wrong_end,
+            "frame with a wrong end byte",
+            "frames with a wrong end byte",
+        )
+        .garbage(st.garbage_bytes, st.garbage_runs)
+        .in_valid(st.frames(), "valid frame", "valid frames");
         p
     }
 }

@@ -531,10 +531,20 @@ impl Mapper {
     pub fn problems(&self) -> Problems {
         let st = &self.stats;
         let mut p = Problems::new("FlySky iBUS");
-        p.count(st.bad_crc, "checksum error", "checksum errors")
-            .count(st.truncated, "truncated frame", "truncated frames")
-            .garbage(st.garbage_bytes, st.garbage_runs)
-            .in_valid(st.valid_frames, "valid frame", "valid frames");
+        p.count(
+            "crc_errors",
+            st.bad_crc,
+            "checksum error",
+            "checksum errors",
+        )
+        .count(
+            "truncated_frames",
+            st.truncated,
+            "truncated frame",
+            "truncated frames",
+        )
+        .garbage(st.garbage_bytes, st.garbage_runs)
+        .in_valid(st.valid_frames, "valid frame", "valid frames");
         p
     }
 }

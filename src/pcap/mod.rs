@@ -201,6 +201,87 @@ pub fn pcapng_first_interface(prefix: &[u8]) -> Result<Option<u32>, NeedMore> {
     } as u32))
 }
 
+/// An interface a pcapng file describes: its link type and its name (`if_name`), as
+/// [`pcapng_interfaces`] reads them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Interface {
+    pub link_type: u32,
+    pub name: Option<String>,
+}
+
+/// The interfaces the first section of a pcapng file describes before its first packet, from
+/// the file's first bytes (either byte order; blocks that are neither interfaces nor packets are
+/// passed over). Empty when `prefix` is not pcapng; a list cut short by the end of `prefix` or by
+/// a block that cannot be right ends there.
+pub fn pcapng_interfaces(prefix: &[u8]) -> Vec<Interface> {
+    let mut found = Vec::new();
+    if prefix.get(..4) != Some(&[0x0A, 0x0D, 0x0D, 0x0A][..]) {
+        return found;
+    }
+    let le = match prefix.get(8..12) {
+        Some([0x4D, 0x3C, 0x2B, 0x1A]) => true,
+        Some([0x1A, 0x2B, 0x3C, 0x4D]) => false,
+        _ => return found,
+    };
+    let u32_at = |at: usize| -> Option<u32> {
+        let b: [u8; 4] = prefix.get(at..at.checked_add(4)?)?.try_into().ok()?;
+        Some(if le {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    };
+    let u16_at = |at: usize| -> Option<u16> {
+        let b: [u8; 2] = prefix.get(at..at.checked_add(2)?)?.try_into().ok()?;
+        Some(if le {
+            u16::from_le_bytes(b)
+        } else {
+            u16::from_be_bytes(b)
+        })
+    };
+    let Some(mut at) = u32_at(4).map(|l| l as usize) else {
+        return found;
+    };
+    while let (Some(kind), Some(len)) = (u32_at(at), u32_at(at + 4)) {
+        let len = len as usize;
+        if len < 12 || !len.is_multiple_of(4) || at + len > prefix.len() {
+            break;
+        }
+        match kind {
+            // Interface description: link type, reserved, snap length, options.
+            1 if len >= 20 => {
+                let Some(link_type) = u16_at(at + 8) else {
+                    break;
+                };
+                let mut name = None;
+                let mut opt = at + 16;
+                while let (Some(code), Some(olen)) = (u16_at(opt), u16_at(opt + 2)) {
+                    let olen = olen as usize;
+                    let Some(value) = prefix.get(opt + 4..opt + 4 + olen) else {
+                        break;
+                    };
+                    if code == 0 || opt + 4 + olen > at + len - 4 {
+                        break;
+                    }
+                    if code == 2 {
+                        name = Some(String::from_utf8_lossy(value).into_owned());
+                    }
+                    opt += 4 + olen.next_multiple_of(4);
+                }
+                found.push(Interface {
+                    link_type: u32::from(link_type),
+                    name,
+                });
+            }
+            // Another section, or a packet: the interfaces before the first packet are known.
+            0x0A0D_0D0A | 2 | 3 | 6 => break,
+            _ => {}
+        }
+        at += len;
+    }
+    found
+}
+
 /// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),
 /// when it is one.
 pub fn anchor(ts_micros: i64) -> Option<Anchor> {
@@ -322,6 +403,37 @@ mod tests {
         let mut classic = Vec::new();
         write::header(&mut classic, 250);
         assert_eq!(pcapng_link_type(&classic), None);
+    }
+
+    #[test]
+    fn pcapng_interfaces_with_their_names() {
+        let mut out = Vec::new();
+        write_ng::section_header(&mut out);
+        assert_eq!(pcapng_interfaces(&out), []);
+        write_ng::interface(&mut out, 250, Some("/dev/ttyUSB0"), Some("S.Port"));
+        write_ng::interface(&mut out, 250, None, None);
+        write_ng::interface(&mut out, 147, Some("rx.bin"), None);
+        let whole = out.len();
+        write_ng::packet(&mut out, 0, 5, b"x", None);
+        write_ng::interface(&mut out, 1, Some("after a packet"), None);
+        let found = pcapng_interfaces(&out);
+        let names: Vec<(u32, Option<&str>)> = found
+            .iter()
+            .map(|i| (i.link_type, i.name.as_deref()))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                (250, Some("/dev/ttyUSB0")),
+                (250, None),
+                (147, Some("rx.bin"))
+            ]
+        );
+        // Cut inside the third interface: the first two.
+        assert_eq!(pcapng_interfaces(&out[..whole - 4]).len(), 2);
+        let mut classic = Vec::new();
+        write::header(&mut classic, 250);
+        assert_eq!(pcapng_interfaces(&classic), []);
     }
 
     #[test]

@@ -175,6 +175,9 @@ pub enum InputKind {
     Serial,
     /// pcapng (by its section header block).
     Pcapng,
+    /// A logic-analyzer trace (sigrok session, VCD, Saleae CSV export), read through busnoop's
+    /// software UART at the protocol's line: a serial line's bytes, each with its exact time.
+    Trace,
 }
 
 /// Everything the shared code knows of a protocol: the one place it is registered. The
@@ -235,8 +238,13 @@ impl std::fmt::Debug for Protocol {
 }
 
 impl Protocol {
-    /// Whether this protocol's decoder reads inputs of `kind`.
+    /// Whether this protocol's decoder reads inputs of `kind`. A logic-analyzer trace is read
+    /// by every protocol that reads a serial line.
     pub fn reads(&self, kind: InputKind) -> bool {
+        let kind = match kind {
+            InputKind::Trace => InputKind::Serial,
+            k => k,
+        };
         self.accepts.contains(&kind)
     }
 
@@ -246,8 +254,9 @@ impl Protocol {
     }
 }
 
-/// A protocol decoder as the driver sees it.
-pub trait Decoder {
+/// A protocol decoder as the driver sees it. `Send`: with several sources each decoder runs in
+/// the thread of its port (`merge`).
+pub trait Decoder: Send {
     /// Extra column names that follow the eight base columns.
     fn columns(&self) -> &'static [&'static str];
 

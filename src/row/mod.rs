@@ -18,6 +18,11 @@ pub const BASE_COLUMNS: [&str; 8] = [
     "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data",
 ];
 
+/// The column of the source a row came from, with several sources (`busnoop PROTO SRC1 SRC2`):
+/// the first of the extra columns (after `Value`; in pretty output after `Data`), JSON key
+/// `port`. A protocol's own extra columns never take this name.
+pub const PORT_COLUMN: &str = "Port";
+
 /// The `Type` names every protocol shares. A protocol's own types (`Data`, `Poll`, `ACK`, …)
 /// are its business; these mean the same everywhere and filters and summaries rely on them.
 pub mod kind {

@@ -127,9 +127,9 @@ impl Stats {
             Column::right("Timeouts", 8),
             Column::right("Late", 5),
             Column::right("BadCRC", 6),
-            Column::right("Resp min", 9),
-            Column::right("median", 9),
-            Column::right("max ms", 9),
+            Column::right("Resp min", 9).key("resp_min_ms"),
+            Column::right("median", 9).key("resp_median_ms"),
+            Column::right("max ms", 9).key("resp_max_ms"),
             Column::left("NACK codes", 0).gap(2),
         ]);
         if self.framings.is_empty() {
@@ -197,7 +197,7 @@ impl Stats {
         }
         let mut cells = vec!["all".to_owned(), String::new()];
         cells.extend(counts(&total));
-        r.row(cells);
+        r.total_row(cells);
         r.totals.push(format!(
             "bytes {}, valid frames {}, bad CRC {}, truncated {}, garbage {} bytes in {} runs",
             self.bytes,
@@ -219,6 +219,24 @@ impl Stats {
             "pairing: timeouts {}, late responses {}, responses without request {}, repeated responses {}",
             self.timeouts, self.late, self.unpaired, self.repeats
         ));
+        r.counts(&[
+            ("bytes", self.bytes),
+            ("valid_frames", self.valid_frames),
+            ("bad_crc", self.bad_crc),
+            ("truncated", self.truncated),
+            ("garbage_bytes", self.garbage_bytes),
+            ("garbage_runs", self.garbage_runs),
+            ("false_syncs_rescanned", self.false_syncs),
+            ("sync_with_long_length", self.bad_lengths),
+            ("runts", self.runts),
+            ("aborts", self.aborts),
+            ("overlong", self.overlong),
+            ("unusual_escapes", self.odd_escapes),
+            ("timeouts", self.timeouts),
+            ("late_responses", self.late),
+            ("responses_without_request", self.unpaired),
+            ("repeated_responses", self.repeats),
+        ]);
         r
     }
 
@@ -228,20 +246,46 @@ impl Stats {
         if self.valid_frames == 0 && self.bytes > 0 {
             p.item("no valid frame");
         }
-        p.count(self.bad_crc, "CRC error", "CRC errors")
-            .count(self.truncated, "truncated frame", "truncated frames")
-            .count(self.timeouts, "timeout", "timeouts")
-            .count(self.late, "late response", "late responses")
+        p.count("crc_errors", self.bad_crc, "CRC error", "CRC errors")
             .count(
+                "truncated_frames",
+                self.truncated,
+                "truncated frame",
+                "truncated frames",
+            )
+            .count("timeouts", self.timeouts, "timeout", "timeouts")
+            .count(
+                "late_responses",
+                self.late,
+                "late response",
+                "late responses",
+            )
+            .count(
+                "responses_without_request",
                 self.unpaired,
                 "response without request",
                 "responses without request",
             )
-            .count(self.repeats, "repeated response", "repeated responses")
-            .count(self.nacks, "NACK", "NACKs")
-            .count(self.runts, "runt", "runts")
-            .count(self.aborts, "aborted frame", "aborted frames")
-            .count(self.overlong, "overlong frame", "overlong frames")
+            .count(
+                "repeated_responses",
+                self.repeats,
+                "repeated response",
+                "repeated responses",
+            )
+            .count("nacks", self.nacks, "NACK", "NACKs")
+            .count("runts", self.runts, "runt", "runts")
+            .count(
+                "aborted_frames",
+                self.aborts,
+                "aborted frame",
+                "aborted frames",
+            )
+            .count(
+                "overlong_frames",
+                self.overlong,
+                "overlong frame",
+                "overlong frames",
+            )
             .garbage(self.garbage_bytes, self.garbage_runs)
             .in_valid(self.valid_frames, "valid frame", "valid frames");
         let framing = self

@@ -173,9 +173,11 @@ impl Default for Options {
 pub fn decoder(opts: Options, kind: InputKind) -> Box<dyn Decoder> {
     match kind {
         InputKind::Pcap | InputKind::Pcapng => Box::new(EtherDecoder::new(&opts)),
-        InputKind::Raw | InputKind::Serial | InputKind::Recording | InputKind::EdgeTxLog => {
-            Box::new(SerialDecoder::new(opts))
-        }
+        InputKind::Raw
+        | InputKind::Serial
+        | InputKind::Recording
+        | InputKind::EdgeTxLog
+        | InputKind::Trace => Box::new(SerialDecoder::new(opts)),
     }
 }
 

@@ -207,12 +207,35 @@ pub(super) fn report<'a>(
         t.late,
         t.unanswered_at_end
     ));
+    r.counts(&[
+        ("valid_telegrams", t.valid),
+        ("crc_errors", t.crc_errors),
+        ("cut_telegrams", t.broken),
+        ("garbage_bytes", t.garbage_bytes),
+        ("garbage_runs", t.garbage_runs),
+        ("retries", t.retries),
+        ("timeouts", t.timeouts),
+        ("naks", t.naks),
+        ("answers_without_request", t.no_request),
+        ("length_mismatches", t.mismatched),
+        ("late", t.late),
+        ("unanswered_at_end", t.unanswered_at_end),
+    ]);
     if ether {
         r.totals.push(format!(
             "packets {}, S-Bus datagrams {}, not S-Bus on the port {}, IP fragments skipped {}, \
              unparsable packets {}, other link types {}, sequence gaps {}",
             t.packets, t.datagrams, t.not_sbus, t.fragments, t.malformed, t.other_links, t.seq_gaps
         ));
+        r.counts(&[
+            ("packets", t.packets),
+            ("sbus_datagrams", t.datagrams),
+            ("not_sbus_datagrams", t.not_sbus),
+            ("ip_fragments_skipped", t.fragments),
+            ("unparsable_packets", t.malformed),
+            ("other_link_types", t.other_links),
+            ("sequence_gaps", t.seq_gaps),
+        ]);
         r.totals.push(format!(
             "conversations {}, forgotten after {} s idle {}, dropped at the cap of {} {}, \
              requests given up at the cap of {} {}, PLCs beyond {} counted together {}",
@@ -226,11 +249,23 @@ pub(super) fn report<'a>(
             MAX_PLCS,
             t.plcs_merged
         ));
+        r.counts(&[
+            ("conversations", t.conversations),
+            ("conversations_expired", t.conversations_expired),
+            ("conversations_dropped", t.conversations_dropped),
+            ("requests_given_up", t.requests_dropped),
+            ("plcs_merged", t.plcs_merged),
+        ]);
     } else {
         r.totals.push(format!(
             "CRC basis of data-mode telegrams: escaped {}, unescaped {}, both (no DLE pair) {}",
             t.basis[0], t.basis[1], t.basis[2]
         ));
+        r.counts(&[
+            ("crc_basis_escaped", t.basis[0]),
+            ("crc_basis_unescaped", t.basis[1]),
+            ("crc_basis_both", t.basis[2]),
+        ]);
     }
     if let Some(e) = &t.pcap_error {
         r.totals.push(format!("capture error: {e}"));
@@ -241,32 +276,46 @@ pub(super) fn report<'a>(
 /// What went wrong, for the one-line summary.
 pub(super) fn problems(t: &Totals) -> Problems {
     let mut p = Problems::new("S-Bus");
-    p.count(t.crc_errors, "CRC error", "CRC errors")
-        .count(t.broken, "cut telegram", "cut telegrams")
+    p.count("crc_errors", t.crc_errors, "CRC error", "CRC errors")
+        .count("cut_telegrams", t.broken, "cut telegram", "cut telegrams")
         .garbage(t.garbage_bytes, t.garbage_runs)
-        .count(t.timeouts, "timeout", "timeouts")
-        .count(t.retries, "retry", "retries")
-        .count(t.naks, "NAK", "NAKs")
+        .count("timeouts", t.timeouts, "timeout", "timeouts")
+        .count("retries", t.retries, "retry", "retries")
+        .count("naks", t.naks, "NAK", "NAKs")
         .count_then(
+            "conversations_dropped",
             t.conversations_dropped,
             "conversation",
             "conversations",
             &format!(" dropped (more than {MAX_CONVERSATIONS} at once)"),
         )
         .count_then(
+            "requests_given_up",
             t.requests_dropped,
             "request",
             "requests",
             &format!(" given up (more than {MAX_OUTSTANDING} waiting)"),
         )
         .count(
+            "not_sbus_datagrams",
             t.not_sbus,
             "datagram on the port that is not S-Bus",
             "datagrams on the port that are not S-Bus",
         )
-        .count(t.fragments, "IP fragment skipped", "IP fragments skipped")
-        .count(t.malformed, "unparsable packet", "unparsable packets")
         .count(
+            "ip_fragments_skipped",
+            t.fragments,
+            "IP fragment skipped",
+            "IP fragments skipped",
+        )
+        .count(
+            "unparsable_packets",
+            t.malformed,
+            "unparsable packet",
+            "unparsable packets",
+        )
+        .count(
+            "other_link_types_skipped",
             t.other_links,
             "packet of a link type that is not network traffic skipped",
             "packets of a link type that is not network traffic skipped",

@@ -1,6 +1,8 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
+mod fit;
 pub mod output;
+pub(crate) use fit::fallback_size;
 pub(crate) use output::{check_folder, create_file};
 mod spool;
 mod tap;
@@ -14,7 +16,7 @@ use crate::row::line::W;
 use crate::row::pretty::{BOLD, CYAN, DIMMED, PrettyLine, RED, YELLOW};
 use crate::row::spans::Spans;
 pub use crate::row::text::{Format, VALUE_COLUMN};
-use crate::row::text::{Text, is_json_number};
+use crate::row::text::{NUMERIC_EXTRA, Text, is_json_number};
 use crate::row::{BASE_COLUMNS, Class, Direct, Row};
 use crate::time::Anchor;
 pub use output::Output;
@@ -59,6 +61,11 @@ pub struct Table {
     /// The decoder's extra columns as last lent to it ([`Table::direct`]): the same slice
     /// as the table's own, checked once.
     direct_columns: Option<(usize, usize)>,
+    /// Pretty output on a terminal: the width rows are fitted to ([`fit`]), asked again at
+    /// every flush (the terminal may be resized).
+    fit: Option<usize>,
+    /// Which extra cell names a row's port (several sources, [`crate::row::PORT_COLUMN`]).
+    port_column: Option<usize>,
 }
 
 /// Pretty-output column widths for the base columns, when the protocol gives none (see
@@ -99,7 +106,48 @@ impl Table {
             hex: Vec::new(),
             error: None,
             direct_columns: None,
+            fit: None,
+            port_column: extra.iter().position(|c| *c == crate::row::PORT_COLUMN),
         }
+    }
+
+    /// Fits pretty rows to the terminal's width (its rows wrap Data and Note within their
+    /// columns and cut names with `…`, never a number): for a pretty table on a terminal.
+    pub fn fit_terminal(&mut self) {
+        if self.opts.format == Format::Pretty {
+            self.fit = Some(fit::terminal_width());
+        }
+    }
+
+    /// What may happen to each column of a fitted row.
+    fn fit_kinds(&self) -> Vec<fit::Kind> {
+        self.columns
+            .iter()
+            .enumerate()
+            .map(|(i, c)| match (i, *c) {
+                (0..=2, _) => fit::Kind::Right,
+                (7, _) | (_, "Note") | (_, "Raw") => fit::Kind::Wrap,
+                (5, _) | (_, "Time") | (_, "Unit") => fit::Kind::Keep,
+                (_, c) if NUMERIC_EXTRA.contains(&c) => fit::Kind::Keep,
+                _ => fit::Kind::Cut,
+            })
+            .collect()
+    }
+
+    /// Writes `lines` (one row) in `style`.
+    fn fitted(&mut self, lines: &[String], style: Option<&'static [u8]>) {
+        self.out.line(|w| {
+            for l in lines {
+                if let Some(s) = style {
+                    w.put(s);
+                }
+                w.put(l.as_bytes());
+                if style.is_some() {
+                    w.put(crate::row::pretty::RESET);
+                }
+                w.byte(b'\n');
+            }
+        });
     }
 
     /// Sets the pretty widths of the first columns (the base columns and the protocol's extra
@@ -136,17 +184,24 @@ impl Table {
 
     pub fn set_anchor(&mut self, anchor: Option<Anchor>) {
         self.anchor = anchor;
+        if let Some(p) = &mut self.plot {
+            p.set_anchor(anchor);
+        }
     }
 
     /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
     /// checks); `live`: write lines as they come rather than at the end.
     pub fn set_wide(&mut self, step: wide::Step, live: bool) {
-        self.wide = Some(wide::Wide::new(self.opts.format, step, self.opts.utc, live));
+        let mut w = wide::Wide::new(self.opts.format, step, self.opts.utc, live);
+        w.port_column(self.port_column);
+        self.wide = Some(w);
     }
 
     /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
     pub fn set_plot(&mut self, spec: crate::plot::PlotSpec) {
-        self.plot = Some(crate::plot::Plot::new(spec));
+        let mut plot = crate::plot::Plot::new(spec);
+        plot.port_column(self.port_column);
+        self.plot = Some(plot);
     }
 
     /// The plot's numbers, to draw at the end of the run (`busnoop plot`).
@@ -199,6 +254,14 @@ impl Table {
                 }
                 w.put(b"\r\n");
             }),
+            Format::Pretty if self.fit.is_some() => {
+                if self.text.widths.len() < cols.len() {
+                    self.text.widths.resize(cols.len(), 4);
+                }
+                let kinds = self.fit_kinds();
+                let lines = fit::lines(&cols, &self.text.widths, &kinds, self.fit.unwrap_or(80));
+                self.fitted(&lines, self.opts.color.then_some(BOLD));
+            }
             Format::Pretty => {
                 let style = self.opts.color.then_some(BOLD);
                 if self.text.widths.len() < cols.len() {
@@ -263,6 +326,9 @@ impl Table {
     pub fn flush(&mut self) -> Result<(), OutputError> {
         if let Some(e) = self.error.take() {
             return Err(e);
+        }
+        if self.fit.is_some() {
+            self.fit = Some(fit::terminal_width());
         }
         self.out.flush()
     }
@@ -490,6 +556,37 @@ impl Table {
         if self.text.widths.len() < n {
             self.text.widths.resize(n, 4);
         }
+        if let Some(width) = self.fit {
+            let mut cells: Vec<&str> = vec![
+                std::str::from_utf8(self.text.digits.as_bytes()).unwrap_or(""),
+                millis,
+                id,
+                row.device,
+                row.kind,
+                row.sensor_no,
+                row.sensor,
+                row.data,
+            ];
+            cells.extend((0..self.n_extra).map(|e| row.extra.get(e).copied().unwrap_or("")));
+            if self.opts.raw {
+                cells.push(raw);
+            }
+            if self.opts.time_abs {
+                cells.push(&self.scratch);
+            }
+            for (i, c) in cells.iter().enumerate() {
+                crate::row::pretty::fit(
+                    &mut self.text.widths,
+                    i,
+                    c.chars().count(),
+                    true,
+                    i + 1 == n,
+                );
+            }
+            let lines = fit::lines(&cells, &self.text.widths, &self.fit_kinds(), width);
+            self.fitted(&lines, style);
+            return;
+        }
         let (digits, opts, n_extra) = (&self.text.digits, &self.opts, self.n_extra);
         let (time, spans) = (&self.scratch, &mut self.text.spans);
         let widths = &mut self.text.widths[..];
@@ -617,6 +714,7 @@ impl RowOut for Table {
     fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
         if self.wide.is_some()
             || self.plot.is_some()
+            || self.fit.is_some()
             || self.opts.time_abs
             || !self.header_written
             || self.error.is_some()

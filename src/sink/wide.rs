@@ -12,7 +12,10 @@
 //! frame's cells, an S-Bus response's registers) is its own column, named `Name(unit)` as EdgeTX
 //! names the columns of its logs (`RxBt(V)`, `Cell1(V)`; `SWR` has no unit). When two IDs send a
 //! number of the same name and unit (two FLVSS), the columns carry the ID: `Cell1@1(V)`,
-//! `Cell1@8(V)`. Columns are in order of first appearance.
+//! `Cell1@8(V)`. With several sources (a `Port` column), each port's numbers are its own
+//! columns, and a name two ports share carries the port: `RxBt@/dev/ttyUSB1(V)` (after the ID,
+//! when that is shared too); a poll cycle ends when an ID comes round again on its own port.
+//! Columns are in order of first appearance.
 //!
 //! **Files** (and pipes) are read once and the table is written at the end, so that the header is
 //! complete and every shared name carries its ID: lines of steps before a column appeared have an
@@ -35,10 +38,12 @@ use super::spool::{self, Spool};
 use crate::row::Row;
 use crate::time::Anchor;
 
-/// What identifies a column: the row's ID and the part's name and unit.
+/// What identifies a column: the row's ID and port and the part's name and unit.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Key {
     pub id: Option<u32>,
+    /// The row's port, as its number in [`Columns::ports`] (0 without ports).
+    pub port: u32,
     pub name: String,
     pub unit: String,
 }
@@ -51,12 +56,26 @@ pub struct Columns {
     index: HashMap<Key, usize>,
     /// Lookup of a row's part without allocating: (id, name, unit) → column, via a reused key.
     probe: Key,
+    /// The ports seen, in order (several sources).
+    ports: Vec<String>,
 }
 
 impl Columns {
+    /// The number of `port` in the labels' list.
+    fn port(&mut self, port: &str) -> u32 {
+        match self.ports.iter().position(|p| p == port) {
+            Some(i) => i as u32,
+            None => {
+                self.ports.push(port.to_owned());
+                (self.ports.len() - 1) as u32
+            }
+        }
+    }
+
     /// The column of a part, if known.
-    fn find(&mut self, id: Option<u32>, name: &str, unit: &str) -> Option<usize> {
+    fn find(&mut self, id: Option<u32>, port: u32, name: &str, unit: &str) -> Option<usize> {
         self.probe.id = id;
+        self.probe.port = port;
         self.probe.name.clear();
         self.probe.name.push_str(name);
         self.probe.unit.clear();
@@ -67,11 +86,8 @@ impl Columns {
     /// Adds a column, labelled by the live rule (files relabel at the end, [`Self::finalize`]).
     fn add(&mut self, key: Key) -> usize {
         let i = self.keys.len();
-        let clash = self
-            .keys
-            .iter()
-            .any(|k| k.name == key.name && k.unit == key.unit && k.id != key.id);
-        self.labels.push(label(&key, clash));
+        let clash = clash(&self.keys, &key);
+        self.labels.push(label(&key, clash, &self.ports));
         self.index.insert(key.clone(), i);
         self.keys.push(key);
         i
@@ -82,11 +98,8 @@ impl Columns {
     fn finalize(&mut self) {
         for i in 0..self.keys.len() {
             let k = &self.keys[i];
-            let clash = self
-                .keys
-                .iter()
-                .any(|o| o.name == k.name && o.unit == k.unit && o.id != k.id);
-            self.labels[i] = label(k, clash);
+            let clash = clash(&self.keys, k);
+            self.labels[i] = label(k, clash, &self.ports);
         }
     }
 
@@ -102,12 +115,14 @@ impl Columns {
         self.keys.is_empty()
     }
 
-    /// Index of a row's part, adding the column when it is new.
-    pub fn column(&mut self, id: Option<u32>, name: &str, unit: &str) -> usize {
-        match self.find(id, name, unit) {
+    /// Index of a row's part (`port`: its number, [`Columns::port`]), adding the column when it
+    /// is new.
+    pub fn column(&mut self, id: Option<u32>, port: u32, name: &str, unit: &str) -> usize {
+        match self.find(id, port, name, unit) {
             Some(i) => i,
             None => self.add(Key {
                 id,
+                port,
                 name: name.to_owned(),
                 unit: unit.to_owned(),
             }),
@@ -115,11 +130,29 @@ impl Columns {
     }
 }
 
-/// `Name(unit)`, `Name@ID(unit)` when another ID has the same name and unit.
-fn label(k: &Key, with_id: bool) -> String {
+/// Whether another column of `keys` has the name and unit of `key` with another ID, and with
+/// another port.
+fn clash(keys: &[Key], key: &Key) -> (bool, bool) {
+    let same = keys
+        .iter()
+        .filter(|k| k.name == key.name && k.unit == key.unit);
+    let (mut id, mut port) = (false, false);
+    for k in same {
+        id |= k.id != key.id && k.port == key.port;
+        port |= k.port != key.port;
+    }
+    (id, port)
+}
+
+/// `Name(unit)`, `Name@ID(unit)` when another ID of its port has the same name and unit,
+/// `Name@PORT(unit)` (or `Name@ID@PORT(unit)`) when another port has.
+fn label(k: &Key, (with_id, with_port): (bool, bool), ports: &[String]) -> String {
     let mut s = k.name.clone();
     if with_id && let Some(id) = k.id {
         let _ = write!(s, "@{id}");
+    }
+    if with_port && let Some(p) = ports.get(k.port as usize) {
+        let _ = write!(s, "@{p}");
     }
     if !k.unit.is_empty() {
         let _ = write!(s, "({})", k.unit);
@@ -148,8 +181,10 @@ pub struct Wide {
     header_cols: Option<usize>,
     /// Held value text of every column.
     held: Vec<String>,
-    /// IDs seen in the current step (poll cycles).
-    seen: Vec<u32>,
+    /// IDs seen in the current step (poll cycles), each with its port's number.
+    seen: Vec<(u32, u32)>,
+    /// Which extra cell of a row names its port (several sources).
+    port_column: Option<usize>,
     /// Time of the last row of the current step; `None`: no row since the last written step.
     pending: Option<u64>,
     /// Current interval (`--every`).
@@ -180,6 +215,7 @@ impl Wide {
             header_cols: None,
             held: Vec::new(),
             seen: Vec::new(),
+            port_column: None,
             pending: None,
             bucket: None,
             wall: None,
@@ -187,6 +223,11 @@ impl Wide {
             line: String::new(),
             back: Vec::new(),
         }
+    }
+
+    /// Rows name their port in extra cell `column` ([`crate::row::PORT_COLUMN`]).
+    pub fn port_column(&mut self, column: Option<usize>) {
+        self.port_column = column;
     }
 
     /// Takes one row of the long table; writes the previous step (to `buf` when live) when this
@@ -200,16 +241,20 @@ impl Wide {
         let Some(t) = row.micros else {
             return Ok(());
         };
+        let port = match self.port_column.and_then(|c| row.extra.get(c)) {
+            Some(p) => self.cols.port(p),
+            None => 0,
+        };
         match self.step {
             Step::PollCycle => {
                 if let Some(id) = row.id {
-                    if self.seen.contains(&id) {
+                    if self.seen.contains(&(port, id)) {
                         if let Some(at) = self.pending {
                             self.emit(at, anchor, buf)?;
                         }
                         self.seen.clear();
                     }
-                    self.seen.push(id);
+                    self.seen.push((port, id));
                 }
             }
             Step::Every(us) => {
@@ -224,7 +269,7 @@ impl Wide {
             }
         }
         for p in row.parts {
-            let i = self.cols.column(row.id, p.name, p.unit);
+            let i = self.cols.column(row.id, port, p.name, p.unit);
             if i >= self.held.len() {
                 self.held.resize(i + 1, String::new());
             }

@@ -9,6 +9,7 @@
 
 pub mod capture;
 pub mod edgetx;
+pub mod logic;
 pub mod recording;
 pub mod serial;
 
@@ -17,7 +18,7 @@ use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TryRecvError, sync_channel};
 use std::thread;
 use std::time::Duration;
 
@@ -195,6 +196,12 @@ pub fn detect(prefix: &[u8], complete: bool) -> Option<InputKind> {
                 Err(crate::pcap::NeedMore) => None,
             };
         }
+    }
+    // Logic-analyzer traces: a zip (sigrok session), a VCD keyword, a Saleae CSV header.
+    match logic::recognise(prefix, complete || prefix.len() >= DETECT_LEN) {
+        Some(Some(_)) => return Some(InputKind::Trace),
+        Some(None) => {}
+        None => return None,
     }
     match edgetx::looks_like_log(prefix) {
         Some(true) => Some(InputKind::EdgeTxLog),
@@ -448,7 +455,9 @@ pub type Reading = (InputKind, Box<dyn ChunkReader>, Option<Progress>);
 
 /// The receiving end of a reader thread.
 pub struct Feed {
-    pub rx: Receiver<Message>,
+    rx: Receiver<Message>,
+    /// Messages taken by [`Feed::anchor`] before the driver runs, handed on first.
+    early: std::cell::RefCell<std::collections::VecDeque<Message>>,
     /// Set by the driver when it stops: the reader thread reads no more.
     halt: Arc<AtomicBool>,
     /// For files and streams: how far the input was read.
@@ -459,6 +468,45 @@ impl Feed {
     /// Tells the reader thread to stop reading (it finishes the read it is in, if any).
     pub fn halt(&self) {
         self.halt.store(true, Ordering::Relaxed);
+    }
+
+    /// The next message, waiting at most `timeout`.
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Message, RecvTimeoutError> {
+        match self.early.borrow_mut().pop_front() {
+            Some(m) => Ok(m),
+            None => self.rx.recv_timeout(timeout),
+        }
+    }
+
+    /// The next message if one is there.
+    pub fn try_recv(&self) -> Result<Message, TryRecvError> {
+        match self.early.borrow_mut().pop_front() {
+            Some(m) => Ok(m),
+            None => self.rx.try_recv(),
+        }
+    }
+
+    /// The wall-clock time of the input's start, when it has one: waits for the reader's first
+    /// messages up to its first data (warnings may come first), keeping them for the driver.
+    /// `None` for an input without one (raw bytes), and when `stop` is set meanwhile (the
+    /// driver then ends on the signal).
+    pub fn anchor(&self, stop: &crate::signal::Stop) -> Option<Anchor> {
+        loop {
+            let m = match self.rx.recv_timeout(Duration::from_millis(20)) {
+                Ok(m) => m,
+                Err(RecvTimeoutError::Timeout) if stop.signal().is_none() => continue,
+                Err(_) => return None,
+            };
+            let found = match &m {
+                Message::Anchor(a) => Some(Some(*a)),
+                Message::Warning(_) => None,
+                _ => Some(None),
+            };
+            self.early.borrow_mut().push_back(m);
+            if let Some(a) = found {
+                return a;
+            }
+        }
     }
 }
 
@@ -478,6 +526,7 @@ pub fn spawn(mut reader: Box<dyn ChunkReader>, progress: Option<Progress>) -> Fe
     let halt = Arc::new(AtomicBool::new(false));
     let feed = Feed {
         rx,
+        early: Default::default(),
         halt: halt.clone(),
         progress: progress.clone(),
     };
@@ -550,6 +599,22 @@ mod tests {
         assert_eq!(detect(&eth, false), Some(InputKind::Pcapng));
         crate::pcap::write_ng::interface(&mut ng, 250, Some("/dev/ttyUSB0"), None);
         assert_eq!(detect(&ng, false), Some(InputKind::Recording));
+        // Logic-analyzer traces: a zip (sigrok session), a VCD, a Saleae export.
+        assert_eq!(detect(b"PK\x03\x04\x14\x00", false), Some(InputKind::Trace));
+        assert_eq!(
+            detect(b"$timescale 1 us $end", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(detect(b"$times", false), None);
+        assert_eq!(
+            detect(b"Time [s],Channel 0\n0,1\n", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(
+            detect(b"Time [s],Value,Parity", false),
+            Some(InputKind::Trace)
+        );
+        assert_eq!(detect(b"$GPGGA,1", true), Some(InputKind::Raw));
         assert_eq!(detect(b"2014-07", false), None);
         assert_eq!(detect(b"2014-07", true), Some(InputKind::Raw));
         assert_eq!(detect(b"", true), Some(InputKind::Raw));

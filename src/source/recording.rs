@@ -2,6 +2,11 @@
 //! [`crate::record`]) as timed byte batches, read with the shared [`PcapStream`]. Records of
 //! other tools' RTAC serial captures that are not line data (line events, lost data, status
 //! changes) become rows ([`Message::Note`]) at their place among the bytes.
+//!
+//! A recording of several ports (one interface per port, `busnoop PROTO SRC1 SRC2 --record
+//! FILE.pcapng`) is read once per port, each reader keeping the records of its interface
+//! ([`RecordingReader::interface`]); all of them take the capture's start from its first record,
+//! so the ports share one clock as they did when recorded.
 
 use std::io::{self, Read};
 use std::path::PathBuf;
@@ -74,6 +79,12 @@ pub struct RecordingReader {
     failure: Option<Failure>,
     /// Records that are not data, shown as rows and counted for the summary warning.
     counts: EventCounts,
+    /// Only the records of this interface (one port of a recording of several).
+    only: Option<u32>,
+    /// The interface of the first record, and whether a record of another was met (read as
+    /// one line, the user is told once).
+    first_interface: Option<u32>,
+    mixed: bool,
 }
 
 /// RTAC serial records that are not line data, by kind.
@@ -135,7 +146,17 @@ impl RecordingReader {
             pending: None,
             failure: None,
             counts: EventCounts::default(),
+            only: None,
+            first_interface: None,
+            mixed: false,
         }
+    }
+
+    /// Reads only the records of pcapng interface `interface` (a port of a recording of
+    /// several), and the capture's start from the first record of any.
+    pub fn interface(mut self, interface: u32) -> Self {
+        self.only = Some(interface);
+        self
     }
 
     fn bad(&self, what: &str) -> Failure {
@@ -283,6 +304,19 @@ impl RecordingReader {
                 if let Some(a) = pcap::anchor(p.ts_micros) {
                     let _ = tx.send(Message::Anchor(a));
                 }
+            }
+            if self.only.is_some_and(|i| i != p.interface) {
+                self.next += 1;
+                continue;
+            }
+            let first = *self.first_interface.get_or_insert(p.interface);
+            if self.only.is_none() && p.interface != first && !self.mixed {
+                self.mixed = true;
+                let _ = tx.send(Message::Warning(format!(
+                    "{}: a recording of several ports (interfaces {first} and {}), read as one \
+                     line; name the file itself to read each port apart",
+                    self.name, p.interface
+                )));
             }
             // pcapng names the link type per interface: each packet carries its own.
             let (event, lines, payload) = match p.link_type {

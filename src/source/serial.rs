@@ -432,6 +432,12 @@ impl SerialReader {
         }
     }
 
+    /// Counts its capture time from `start` (several ports at once: one clock for all).
+    pub fn starting_at(mut self, start: Instant) -> Self {
+        self.start = start;
+        self
+    }
+
     fn micros(&self) -> u64 {
         self.start.elapsed().as_micros() as u64
     }

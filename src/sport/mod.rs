@@ -607,7 +607,7 @@ impl Decoder for SportDecoder {
             Column::right("Data", 8),
             Column::right("Other", 6),
             Column::right("BadCRC", 7),
-            Column::right("Trunc", 6),
+            Column::right("Trunc", 6).key("truncated"),
             Column::right("Mean ms", 8),
             Column::right("Max ms", 8),
         ]);
@@ -655,7 +655,7 @@ impl Decoder for SportDecoder {
         }
         let mut cells = vec!["all".to_owned(), String::new()];
         cells.extend(counts(&total));
-        r.row(cells);
+        r.total_row(cells);
         r.totals.push(format!(
             "valid frames {}, garbage {} bytes in {} runs, non-standard check bits {}, unusual escapes {}, repeated frames {}",
             st.valid_frames,
@@ -665,16 +665,34 @@ impl Decoder for SportDecoder {
             st.unusual_escapes,
             st.repeats
         ));
+        r.counts(&[
+            ("valid_frames", st.valid_frames),
+            ("garbage_bytes", st.garbage_bytes),
+            ("garbage_runs", st.garbage_runs),
+            ("non_standard_check_bits", st.check_bits),
+            ("unusual_escapes", st.unusual_escapes),
+            ("repeated_frames", st.repeats),
+        ]);
         r
     }
 
     fn problems(&self) -> Problems {
         let st = &self.table.stats;
         let mut p = Problems::new("S.Port");
-        p.count(st.crc_errors, "CRC error", "CRC errors")
-            .count(st.truncated, "truncated frame", "truncated frames")
+        p.count("crc_errors", st.crc_errors, "CRC error", "CRC errors")
+            .count(
+                "truncated_frames",
+                st.truncated,
+                "truncated frame",
+                "truncated frames",
+            )
             .garbage(st.garbage_bytes, st.garbage_runs)
-            .count(st.unusual_escapes, "unusual escape", "unusual escapes")
+            .count(
+                "unusual_escapes",
+                st.unusual_escapes,
+                "unusual escape",
+                "unusual escapes",
+            )
             // "in 1 valid frames": the count is not made singular (as it always was).
             .in_valid(st.valid_frames, "valid frames", "valid frames");
         p

@@ -125,6 +125,7 @@ impl<'a> Top<'a> {
             None => (&self.model, now),
         };
         let (ui, info) = (&mut self.ui, &self.info);
+        self.screen.fit()?;
         self.screen
             .terminal
             .draw(|f| view::draw(f, model, ui, info, now))?;
@@ -152,17 +153,18 @@ impl<'a> Top<'a> {
         if let Some(edit) = &mut self.ui.editing {
             match k.code {
                 KeyCode::Enter => {
-                    self.ui.filter = std::mem::take(edit);
+                    let text = std::mem::take(edit);
                     self.ui.editing = None;
+                    self.ui.apply_filter(text, &self.info);
                 }
                 KeyCode::Esc => {
-                    self.ui.filter.clear();
                     self.ui.editing = None;
+                    self.ui.apply_filter(String::new(), &self.info);
                 }
                 KeyCode::Backspace => {
                     edit.pop();
                 }
-                KeyCode::Char(c) if edit.chars().count() < 40 => edit.push(c),
+                KeyCode::Char(c) if edit.chars().count() < 120 => edit.push(c),
                 _ => {}
             }
             return;

@@ -1,12 +1,19 @@
-//! The live view's state: the table rows aggregated into one line per device and sensor.
+//! The live view's state: the table rows aggregated into one line per device, sensor and
+//! number.
 //!
 //! Pure code: every function takes the current time (µs on the capture's clock) as an argument,
 //! so that tests drive it with fixed times. A line's key is the row's `ID`, `Sensor #` and
 //! `Sensor` columns (S.Port physical ID + app ID, S-Bus station + address + command, SAB
-//! address + command), so the view works for every protocol without knowing any of them.
+//! address + command) and the name of one of the row's numbers ([`Row::parts`]): a frame that
+//! carries several numbers (an FLVSS frame's two cells, an S-Bus answer's registers) gives a
+//! line for each, with its own last value, minimum and maximum, taken from the typed numbers
+//! and never from the Data text. A row without numbers (a request, `R (run)`) gives its key a
+//! line with its Data text. The view works for every protocol without knowing any of them, and
+//! for rows without an ID.
 
 use std::collections::{HashMap, VecDeque};
 
+use crate::filter::Filter;
 use crate::row::{Class, Row, kind};
 
 /// At most this many lines are kept; rows of further keys are only counted.
@@ -22,8 +29,19 @@ pub const CHANGED_FOR: u64 = 1_000_000;
 pub const STALE_AFTER: u64 = 3_000_000;
 /// Error and event rows kept for the bottom of the screen.
 pub const EVENTS: usize = 64;
-/// Text fields are cut to this many characters (a line's value, an event's data).
+/// Text fields are cut to this many characters (a line's Data text, an event's data).
 const TEXT_MAX: usize = 200;
+/// Row types remembered per line (for the `f` filter's `type=`).
+const KINDS_MAX: usize = 8;
+
+/// The row's columns that make a line's group (every number of a row shares them).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+struct Group {
+    id: Option<u32>,
+    sensor_no: String,
+    sensor: String,
+    port: String,
+}
 
 /// What identifies a line.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -31,27 +49,52 @@ pub struct Key {
     pub id: Option<u32>,
     pub sensor_no: String,
     pub sensor: String,
+    /// The number's name (`Cell1`, `VFAS`, `R0`); empty for the line of a row's Data text.
+    pub part: String,
+    /// The row's port (several sources, [`crate::row::PORT_COLUMN`]), or "".
+    pub port: String,
 }
 
-/// One device/sensor.
+impl Key {
+    fn group(&self) -> Group {
+        Group {
+            id: self.id,
+            sensor_no: self.sensor_no.clone(),
+            sensor: self.sensor.clone(),
+            port: self.port.clone(),
+        }
+    }
+}
+
+/// A number with the text it was written as (the sensor's full wire precision).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Number {
+    pub value: f64,
+    pub text: String,
+}
+
+/// One device/sensor/number.
 #[derive(Clone, Debug)]
 pub struct Track {
     pub key: Key,
     pub device: String,
-    /// The `Data` column of the last row that carried a value.
+    /// The number's text (`4.138`), or the Data text of a line without number.
     pub value: String,
-    /// Whether `value` came from a request (kept only until an answer brings one).
-    value_from_request: bool,
-    /// The first number of `value`.
-    pub number: Option<f64>,
+    /// `value` is a number (never cut on the screen).
+    pub numeric: bool,
+    /// Whether `value` came from a request (a line of requests' Data hides behind the numbers
+    /// of the answers, see [`Model::order`]).
+    pub from_request: bool,
     pub unit: String,
-    pub min: Option<f64>,
-    pub max: Option<f64>,
-    /// Rows of this key (requests, answers, errors).
+    pub min: Option<Number>,
+    pub max: Option<Number>,
+    /// The types of the rows seen (`Data`, `Request`, `Response`), for the filter.
+    pub kinds: Vec<String>,
+    /// Rows of this line (for a number: the rows that carried it).
     pub frames: u64,
-    /// Bad CRC and truncated frames.
+    /// Bad CRC and truncated frames of its group.
     pub crc_errors: u64,
-    /// Timeouts, NAKs and NACKs.
+    /// Timeouts, NAKs and NACKs of its group.
     pub timeouts: u64,
     pub first_seen: u64,
     pub last_seen: u64,
@@ -68,11 +111,12 @@ impl Track {
             key,
             device: cut(device),
             value: String::new(),
-            value_from_request: false,
-            number: None,
+            numeric: false,
+            from_request: false,
             unit: String::new(),
             min: None,
             max: None,
+            kinds: Vec::new(),
             frames: 0,
             crc_errors: 0,
             timeouts: 0,
@@ -122,6 +166,91 @@ impl Track {
         self.changed_at
             .is_some_and(|t| now.saturating_sub(t) < CHANGED_FOR)
     }
+
+    /// The number's name when it says more than the Sensor column (`Cels` → `Cell1`, `Volts`
+    /// → `VFAS`), else empty.
+    pub fn part_label(&self) -> &str {
+        if self.key.part.eq_ignore_ascii_case(&self.key.sensor) {
+            ""
+        } else {
+            &self.key.part
+        }
+    }
+
+    /// A frame of the line at `now`.
+    fn seen(&mut self, now: u64, kind: &str) {
+        self.frames += 1;
+        self.last_seen = now;
+        if self.times.len() == RATE_TIMES {
+            self.times.pop_front();
+        }
+        self.times.push_back(now);
+        if self.kinds.len() < KINDS_MAX && !self.kinds.iter().any(|k| k == kind) {
+            self.kinds.push(kind.to_owned());
+        }
+    }
+
+    /// A new value (`number`: the typed number it is, if any).
+    fn set(&mut self, text: &str, number: Option<f64>, now: u64) {
+        if self.value != text {
+            if !self.value.is_empty() {
+                self.changed_at = Some(now);
+            }
+            self.value = cut(text);
+        }
+        self.numeric = number.is_some();
+        if let Some(v) = number {
+            let n = || Number {
+                value: v,
+                text: text.to_owned(),
+            };
+            if self.min.as_ref().is_none_or(|m| v < m.value) {
+                self.min = Some(n());
+            }
+            if self.max.as_ref().is_none_or(|m| v > m.value) {
+                self.max = Some(n());
+            }
+        }
+    }
+
+    /// The line as a row for the filter: its ID, Device, Sensor # and Sensor, its number's
+    /// name, one of its row types, and class Warning when its group had errors (`errors`).
+    fn matches(&self, filter: &Filter) -> bool {
+        let part = [crate::row::Part {
+            name: &self.key.part,
+            unit: &self.unit,
+            text: &self.value,
+            value: 0.0,
+        }];
+        let class = if self.crc_errors + self.timeouts > 0 {
+            Class::Warning
+        } else {
+            Class::Plain
+        };
+        let row = |kind: &str| -> bool {
+            let row = Row {
+                id: self.key.id,
+                device: &self.device,
+                kind,
+                class,
+                sensor_no: &self.key.sensor_no,
+                sensor: &self.key.sensor,
+                data: &self.value,
+                parts: if self.key.part.is_empty() {
+                    crate::row::Parts::NONE
+                } else {
+                    crate::row::Parts::List(&part)
+                },
+                ..Row::empty(None)
+            };
+            filter.keep(&row)
+        };
+        if self.kinds.is_empty() {
+            row("Data")
+        } else {
+            self.kinds.iter().any(|k| row(k))
+        }
+    }
 }
 
 /// An error or event row for the bottom of the screen.
@@ -133,6 +262,8 @@ pub struct Event {
     pub id: Option<u32>,
     pub device: String,
     pub text: String,
+    /// The row's port, or "".
+    pub port: String,
 }
 
 /// How lines are ordered.
@@ -169,8 +300,12 @@ impl Sort {
 pub struct Model {
     lines: Vec<Track>,
     index: HashMap<Key, usize>,
+    /// The lines of each group.
+    groups: HashMap<Group, Vec<usize>>,
     /// Index of the `Unit` column among the decoder's extra columns.
     unit_col: Option<usize>,
+    /// Index of the `Port` column among the extra columns (several sources).
+    port_col: Option<usize>,
     /// Rows of keys beyond [`MAX_LINES`].
     pub overflow_rows: u64,
     /// Every row taken in.
@@ -190,12 +325,14 @@ pub struct Model {
 }
 
 impl Model {
-    /// `columns`: the decoder's extra columns (one named `Unit` gives the lines their unit).
+    /// `columns`: the decoder's extra columns (one named `Unit` gives the Data lines a unit).
     pub fn new(columns: &[&str]) -> Model {
         Model {
             lines: Vec::new(),
             index: HashMap::new(),
+            groups: HashMap::new(),
             unit_col: columns.iter().position(|c| *c == "Unit"),
+            port_col: columns.iter().position(|c| *c == crate::row::PORT_COLUMN),
             overflow_rows: 0,
             rows: 0,
             frame_rows: 0,
@@ -212,6 +349,22 @@ impl Model {
 
     pub fn lines(&self) -> &[Track] {
         &self.lines
+    }
+
+    /// The line of `key`, opened when there is room (`None` past [`MAX_LINES`], counted).
+    fn line(&mut self, key: Key, device: &str, now: u64) -> Option<usize> {
+        if let Some(&i) = self.index.get(&key) {
+            return Some(i);
+        }
+        if self.lines.len() >= MAX_LINES {
+            self.overflow_rows += 1;
+            return None;
+        }
+        let i = self.lines.len();
+        self.groups.entry(key.group()).or_default().push(i);
+        self.index.insert(key.clone(), i);
+        self.lines.push(Track::new(key, device, now));
+        Some(i)
     }
 
     /// Takes one table row in, at capture time `now` (the row's own time when it has one).
@@ -249,83 +402,109 @@ impl Model {
         if matches!(row.class, Class::Error | Class::Warning | Class::Info) || timeout {
             self.event(row, now);
         }
-        let key = Key {
+        let port = self.port(row);
+        let group = Group {
             id: row.id,
             sensor_no: row.sensor_no.to_owned(),
             sensor: row.sensor.to_owned(),
+            port: port.to_owned(),
         };
-        let keyed = !key.sensor_no.is_empty() || !key.sensor.is_empty();
-        let i = match self.index.get(&key) {
-            Some(&i) => i,
-            // An error row whose key has no line: counted on a line of its ID, if any (noise
-            // must not open lines).
-            None if crc || row.class == Class::Error || !keyed => {
-                if let Some(i) = self
+        let keyed = !group.sensor_no.is_empty() || !group.sensor.is_empty();
+        if crc || timeout || row.class == Class::Error {
+            // Counted on the lines of its group, or (noise must not open lines) of its ID.
+            let lines: Vec<usize> = match self.groups.get(&group) {
+                Some(l) => l.clone(),
+                None => self
                     .lines
                     .iter()
-                    .position(|l| l.key.id == row.id && row.id.is_some())
-                    && (crc || timeout)
-                {
-                    let l = &mut self.lines[i];
-                    l.crc_errors += crc as u64;
-                    l.timeouts += timeout as u64;
-                }
-                return;
+                    .position(|l| l.key.id == row.id && row.id.is_some() && l.key.port == port)
+                    .into_iter()
+                    .collect(),
+            };
+            for i in lines {
+                let l = &mut self.lines[i];
+                l.crc_errors += crc as u64;
+                l.timeouts += timeout as u64;
             }
-            None if self.lines.len() >= MAX_LINES => {
-                self.overflow_rows += 1;
-                return;
-            }
-            None => {
-                self.lines.push(Track::new(key.clone(), row.device, now));
-                self.index.insert(key, self.lines.len() - 1);
-                self.lines.len() - 1
-            }
-        };
+            return;
+        }
+        if !keyed {
+            return;
+        }
+        let request = row.kind == "Request";
         let unit = self
             .unit_col
             .and_then(|c| row.extra.get(c))
             .copied()
             .unwrap_or("");
-        let line = &mut self.lines[i];
-        line.frames += 1;
-        line.crc_errors += crc as u64;
-        line.timeouts += timeout as u64;
-        line.last_seen = now;
-        if line.times.len() == RATE_TIMES {
-            line.times.pop_front();
-        }
-        line.times.push_back(now);
-        if !row.device.is_empty() && line.device != row.device {
-            line.device = cut(row.device);
-        }
-        if crc || timeout || row.class == Class::Error || row.data.is_empty() {
-            return;
-        }
-        let request = row.kind == "Request";
-        if request && !(line.value.is_empty() || line.value_from_request) {
-            return;
-        }
-        let number = first_number(row.data);
-        // A write's answer (`ACK (0x0000)`) does not hide the value written.
-        if !request && line.value_from_request && line.number.is_some() && number.is_none() {
-            return;
-        }
-        if line.value != row.data {
-            if !line.value.is_empty() {
-                line.changed_at = Some(now);
+        if !row.parts.is_empty() {
+            for p in row.parts {
+                let key = Key {
+                    id: row.id,
+                    sensor_no: group.sensor_no.clone(),
+                    sensor: group.sensor.clone(),
+                    part: p.name.to_owned(),
+                    port: group.port.clone(),
+                };
+                let Some(i) = self.line(key, row.device, now) else {
+                    continue;
+                };
+                let l = &mut self.lines[i];
+                l.seen(now, row.kind);
+                if !row.device.is_empty() && l.device != row.device {
+                    l.device = cut(row.device);
+                }
+                let number = p.value.is_finite().then_some(p.value);
+                l.set(p.text, number, now);
+                l.from_request = request;
+                let unit = if p.unit.is_empty() { unit } else { p.unit };
+                if !unit.is_empty() && l.unit != unit {
+                    l.unit = cut(unit);
+                }
             }
-            line.value = cut(row.data);
+            return;
         }
-        line.value_from_request = request;
+        // A row without numbers: the line of its Data text, unless its group has numbers (a
+        // write's `ACK (0x0000)` does not hide the value written; a read's request `R0..R3`
+        // is said by the lines of the registers it brought).
+        let has_numbers = self
+            .groups
+            .get(&group)
+            .is_some_and(|l| l.iter().any(|&i| !self.lines[i].key.part.is_empty()));
+        if has_numbers {
+            return;
+        }
+        let key = Key {
+            id: group.id,
+            sensor_no: group.sensor_no,
+            sensor: group.sensor,
+            part: String::new(),
+            port: group.port,
+        };
+        let Some(i) = self.line(key, row.device, now) else {
+            return;
+        };
+        let l = &mut self.lines[i];
+        l.seen(now, row.kind);
+        if !row.device.is_empty() && l.device != row.device {
+            l.device = cut(row.device);
+        }
+        if row.data.is_empty() || (request && !(l.value.is_empty() || l.from_request)) {
+            return;
+        }
+        l.set(row.data, None, now);
+        l.from_request = request;
         if !unit.is_empty() {
-            line.unit = cut(unit);
+            l.unit = cut(unit);
         }
-        line.number = number;
-        if let Some(n) = line.number {
-            line.min = Some(line.min.map_or(n, |m| m.min(n)));
-            line.max = Some(line.max.map_or(n, |m| m.max(n)));
-        }
+    }
+
+    /// The row's port, or "".
+    fn port<'r>(&self, row: &Row<'r>) -> &'r str {
+        self.port_col
+            .and_then(|c| row.extra.get(c))
+            .copied()
+            .unwrap_or("")
     }
 
     fn event(&mut self, row: &Row<'_>, now: u64) {
@@ -341,7 +520,12 @@ impl Model {
                 text.push_str(part);
             }
         }
-        if let Some(note) = row.extra.iter().rev().find(|s| !s.is_empty())
+        if let Some((_, note)) = row
+            .extra
+            .iter()
+            .enumerate()
+            .rev()
+            .find(|&(i, s)| !s.is_empty() && Some(i) != self.port_col)
             && row.data.is_empty()
         {
             text.push_str(if text.is_empty() { "" } else { " " });
@@ -354,6 +538,7 @@ impl Model {
             id: row.id,
             device: cut(row.device),
             text: cut(&text),
+            port: self.port(row).to_owned(),
         });
     }
 
@@ -377,12 +562,28 @@ impl Model {
             .then(|| 100.0 * (self.frame_rows - self.error_rows) as f64 / self.frame_rows as f64)
     }
 
-    /// Indexes of the lines that match `filter`, in the order of `sort` at `now`; marked lines
-    /// first.
-    pub fn order(&self, sort: Sort, filter: &str, now: u64) -> Vec<usize> {
-        let filter = filter.to_lowercase();
+    /// Whether line `i` is a request's Data text in a group whose answers brought numbers
+    /// (`R0..R3` above the lines `R0` … `R3`): not shown.
+    fn hidden(&self, i: usize) -> bool {
+        let l = &self.lines[i];
+        l.key.part.is_empty()
+            && self
+                .groups
+                .get(&l.key.group())
+                .is_some_and(|g| g.iter().any(|&j| !self.lines[j].key.part.is_empty()))
+    }
+
+    /// Lines shown without a filter.
+    pub fn shown_lines(&self) -> usize {
+        (0..self.lines.len()).filter(|&i| !self.hidden(i)).count()
+    }
+
+    /// Indexes of the lines the filter keeps (the command line's filters, see
+    /// [`crate::filter`]), in the order of `sort` at `now`; marked lines first.
+    pub fn order(&self, sort: Sort, filter: Option<&Filter>, now: u64) -> Vec<usize> {
         let mut v: Vec<usize> = (0..self.lines.len())
-            .filter(|&i| filter.is_empty() || matches(&self.lines[i], &filter))
+            .filter(|&i| !self.hidden(i))
+            .filter(|&i| filter.is_none_or(|f| self.lines[i].matches(f)))
             .collect();
         let lines = &self.lines;
         v.sort_by(|&a, &b| {
@@ -411,18 +612,6 @@ impl Model {
     }
 }
 
-/// The filter (lower case) is a substring of the line's ID (decimal or 0x hex), device, sensor
-/// number or sensor name.
-fn matches(l: &Track, filter: &str) -> bool {
-    let id = l
-        .key
-        .id
-        .map_or(String::new(), |id| format!("{id} 0x{id:02x}"));
-    [id.as_str(), &l.device, &l.key.sensor_no, &l.key.sensor]
-        .iter()
-        .any(|s| s.to_lowercase().contains(filter))
-}
-
 /// Cuts a text to [`TEXT_MAX`] characters.
 fn cut(s: &str) -> String {
     match s.char_indices().nth(TEXT_MAX) {
@@ -431,33 +620,10 @@ fn cut(s: &str) -> String {
     }
 }
 
-/// The number a `Data` cell holds: the first one in parentheses (`23 01 (291)`: the bytes'
-/// value), else the first word that is a number, or the part after `=` of a word
-/// (`R0=305419896 R1=100`).
-pub fn first_number(data: &str) -> Option<f64> {
-    let parse = |w: &str| -> Option<f64> {
-        let w = w.trim_matches(|c: char| matches!(c, '(' | ')' | ',' | ';'));
-        if w.is_empty() || !w.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '+') {
-            return None;
-        }
-        w.parse::<f64>().ok().filter(|n| n.is_finite())
-    };
-    if let Some(open) = data.find('(')
-        && let Some(n) = data[open + 1..]
-            .split(|c: char| c.is_whitespace() || c == ',' || c == ')')
-            .next()
-            .and_then(parse)
-    {
-        return Some(n);
-    }
-    data.split_whitespace()
-        .map(|w| w.rsplit_once('=').map_or(w, |(_, v)| v))
-        .find_map(parse)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::row::{Part, Parts};
 
     fn data<'a>(
         id: u32,
@@ -480,37 +646,45 @@ mod tests {
         }
     }
 
-    #[test]
-    fn numbers_of_every_protocol() {
-        assert_eq!(first_number("0.00"), Some(0.0));
-        assert_eq!(first_number("-12.5"), Some(-12.5));
-        assert_eq!(first_number("R0=305419896 R1=100"), Some(305419896.0));
-        assert_eq!(first_number("23 01 (291)"), Some(291.0));
-        assert_eq!(
-            first_number("EF BE AD DE (3735928559, -559038737)"),
-            Some(3735928559.0)
-        );
-        assert_eq!(first_number("R (run)"), None);
-        assert_eq!(first_number("NAK, no reason specified (0x0001)"), None);
-        assert_eq!(first_number("F1=0 F2=1"), Some(0.0));
-        assert_eq!(first_number("R0..R3"), None);
-        assert_eq!(first_number(""), None);
-        assert_eq!(first_number("inf NaN"), None);
+    /// A row with one number named as its sensor.
+    fn num<'a>(row: Row<'a>, part: &'a [Part<'a>]) -> Row<'a> {
+        Row {
+            parts: Parts::List(part),
+            ..row
+        }
+    }
+
+    fn part<'a>(name: &'a str, unit: &'a str, text: &'a str) -> Part<'a> {
+        Part {
+            name,
+            unit,
+            text,
+            value: text.parse().unwrap(),
+        }
     }
 
     #[test]
-    fn one_line_per_key_with_value_unit_min_max_and_rate() {
+    fn one_line_per_number_with_value_unit_min_max_and_rate() {
         let mut m = Model::new(&["Unit", "Note"]);
         let unit = ["V", ""];
-        for (i, v) in ["12.1", "12.3", "11.9", "11.9"].iter().enumerate() {
-            m.row(&data(2, "210", "Volts", v, &unit), i as u64 * 250_000);
+        for (i, v) in ["12.1", "12.30", "11.9", "11.9"].iter().enumerate() {
+            let p = [part("VFAS", "V", v)];
+            m.row(
+                &num(data(2, "210", "Volts", v, &unit), &p),
+                i as u64 * 250_000,
+            );
         }
-        m.row(&data(2, "200", "Amps", "1.5", &["A", ""]), 100_000);
+        let p = [part("Curr", "A", "1.5")];
+        m.row(&num(data(2, "200", "Amps", "1.5", &["A", ""]), &p), 100_000);
         assert_eq!(m.lines().len(), 2);
         let l = &m.lines()[0];
         assert_eq!((l.value.as_str(), l.unit.as_str()), ("11.9", "V"));
-        assert_eq!((l.min, l.max, l.frames), (Some(11.9), Some(12.3), 4));
-        // Changed at 500 ms (12.3 -> 11.9), not at 750 ms (same value).
+        assert_eq!(l.part_label(), "VFAS");
+        // The texts as the rows wrote them (the wire's precision), not reformatted.
+        let (min, max) = (l.min.as_ref().unwrap(), l.max.as_ref().unwrap());
+        assert_eq!((min.text.as_str(), max.text.as_str()), ("11.9", "12.30"));
+        assert_eq!(l.frames, 4);
+        // Changed at 500 ms (12.30 -> 11.9), not at 750 ms (same value).
         assert_eq!(l.changed_at, Some(500_000));
         assert!(l.changed(1_000_000) && !l.changed(1_600_000));
         // 4 frames in the 1 s since the line appeared.
@@ -521,30 +695,128 @@ mod tests {
         assert_eq!(m.bytes, 40);
     }
 
+    /// An FLVSS frame carries the cell count and two cells (`count=3 cell1=4.138
+    /// cell2=4.137`), the next frame the third cell: each cell gets a line of its own, with its
+    /// own last value, minimum and maximum, from the row's typed numbers. The view used to read
+    /// the first number of the Data text, the cell count: Min 3 / Max 3, on one line whose
+    /// value swapped between the two half-frames.
     #[test]
-    fn requests_keep_their_value_only_until_an_answer_brings_one() {
+    fn every_cell_has_a_line_with_its_own_min_and_max() {
+        let mut m = Model::new(&["Unit", "Note"]);
+        let frames: [(&str, &[Part<'_>]); 4] = [
+            (
+                "count=3 cell1=4.138 cell2=4.137",
+                &[part("Cell1", "V", "4.138"), part("Cell2", "V", "4.137")],
+            ),
+            ("count=3 cell3=4.120", &[part("Cell3", "V", "4.120")]),
+            (
+                "count=3 cell1=3.902 cell2=3.950",
+                &[part("Cell1", "V", "3.902"), part("Cell2", "V", "3.950")],
+            ),
+            ("count=3 cell3=3.611", &[part("Cell3", "V", "3.611")]),
+        ];
+        for (t, (text, parts)) in frames.iter().enumerate() {
+            let row = Row {
+                parts: Parts::List(parts),
+                ..data(1, "0x0300", "Cels", text, &["V", ""])
+            };
+            m.row(&row, t as u64 * 100_000);
+        }
+        let got: Vec<(&str, &str, &str, &str)> = m
+            .order(Sort::Id, None, 1_000_000)
+            .into_iter()
+            .map(|i| {
+                let l = &m.lines()[i];
+                (
+                    l.key.part.as_str(),
+                    l.value.as_str(),
+                    l.min.as_ref().unwrap().text.as_str(),
+                    l.max.as_ref().unwrap().text.as_str(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("Cell1", "3.902", "3.902", "4.138"),
+                ("Cell2", "3.950", "3.950", "4.137"),
+                ("Cell3", "3.611", "3.611", "4.120"),
+            ]
+        );
+        assert!(m.lines().iter().all(|l| l.numeric && l.frames == 2));
+    }
+
+    /// A read's request (`R0..R3`) shows until the answer brings the registers, which then get
+    /// a line each; a write's `ACK (0x0000)` does not hide the value written.
+    #[test]
+    fn requests_show_until_an_answer_brings_numbers() {
         let mut m = Model::new(&[]);
         let req = Row {
             stamp: 0,
             kind: "Request",
-            data: "R0..R3",
+            data: "R0..R1",
             ..data(10, "R0", "Read register(s)", "", &[])
         };
+        m.row(&req, 0);
+        assert_eq!(m.order(Sort::Id, None, 0).len(), 1);
+        assert_eq!(m.lines()[0].value, "R0..R1");
+        let regs = [part("R0", "", "42"), part("R1", "", "1")];
         let resp = Row {
             stamp: 0,
             kind: "Response",
             data: "R0=42 R1=1",
+            parts: Parts::List(&regs),
             ..req
         };
-        m.row(&req, 0);
-        assert_eq!(m.lines()[0].value, "R0..R3");
         m.row(&resp, 1000);
         m.row(&req, 2000);
-        let l = &m.lines()[0];
+        let shown: Vec<(&str, &str)> = m
+            .order(Sort::Id, None, 3000)
+            .into_iter()
+            .map(|i| (m.lines()[i].key.part.as_str(), m.lines()[i].value.as_str()))
+            .collect();
+        assert_eq!(shown, [("R0", "42"), ("R1", "1")]);
+        let written = [part("R1", "", "181")];
+        let write = Row {
+            stamp: 0,
+            kind: "Request",
+            data: "R1=181",
+            parts: Parts::List(&written),
+            ..data(10, "R1", "Write register(s)", "", &[])
+        };
+        let ack = Row {
+            stamp: 0,
+            kind: "ACK",
+            data: "ACK (0x0000)",
+            ..write
+        };
+        m.row(&write, 4000);
+        m.row(&ack, 5000);
+        let i = m.order(Sort::Id, None, 6000)[2];
         assert_eq!(
-            (l.value.as_str(), l.number, l.frames),
-            ("R0=42 R1=1", Some(42.0), 3)
+            (
+                m.lines()[i].key.sensor.as_str(),
+                m.lines()[i].value.as_str()
+            ),
+            ("Write register(s)", "181")
         );
+        assert_eq!(m.order(Sort::Id, None, 6000).len(), 3);
+    }
+
+    /// Protocols without IDs (rows with `id: None`) have their lines too.
+    #[test]
+    fn rows_without_an_id_have_lines() {
+        let mut m = Model::new(&[]);
+        let p = [part("distance", "m", "1.25")];
+        let row = Row {
+            id: None,
+            ..num(data(0, "0x10", "distance", "1.25", &[]), &p)
+        };
+        m.row(&row, 0);
+        m.row(&row, 1000);
+        assert_eq!(m.lines().len(), 1);
+        assert_eq!(m.lines()[0].key.id, None);
+        assert_eq!(m.lines()[0].frames, 2);
     }
 
     #[test]
@@ -580,10 +852,9 @@ mod tests {
             ..data(7, "0x11", "", "", &[])
         };
         m.row(&timeout, 40);
-        assert_eq!(m.lines().len(), 2);
+        assert_eq!(m.lines().len(), 1);
         let l = &m.lines()[0];
         assert_eq!((l.crc_errors, l.timeouts, l.value.as_str()), (2, 1, "01"));
-        assert_eq!(m.lines()[1].timeouts, 1);
         assert_eq!((m.crc_errors, m.timeouts, m.error_rows), (2, 2, 2));
         assert_eq!(m.events.len(), 4);
         assert_eq!(m.events[0].kind, "BadCRC");
@@ -644,11 +915,16 @@ mod tests {
     #[test]
     fn sort_filter_and_marks() {
         let mut m = Model::new(&[]);
+        let (alt, volts, lat) = (
+            [part("Alt", "m", "1")],
+            [part("VFAS", "V", "1")],
+            [part("Lat", "deg", "1")],
+        );
         m.row(
             &Row {
                 stamp: 0,
                 device: "Vario",
-                ..data(0, "100", "Alt", "1", &[])
+                ..num(data(0, "0x0100", "Alt", "1", &[]), &alt)
             },
             0,
         );
@@ -657,7 +933,7 @@ mod tests {
                 &Row {
                     stamp: 0,
                     device: "FAS-40S",
-                    ..data(2, "210", "Volts", "1", &[])
+                    ..num(data(2, "0x0210", "Volts", "1", &[]), &volts)
                 },
                 t * 100_000,
             );
@@ -666,18 +942,30 @@ mod tests {
             &Row {
                 stamp: 0,
                 device: "GPS",
-                ..data(3, "800", "Lat", "1", &[])
+                ..num(data(24, "0x0800", "GPS", "1", &[]), &lat)
             },
             900_000,
         );
         let now = 1_000_000;
-        assert_eq!(m.order(Sort::Id, "", now), [0, 1, 2]);
-        assert_eq!(m.order(Sort::Rate, "", now)[0], 1);
-        assert_eq!(m.order(Sort::Age, "", now), [1, 2, 0], "equal ages by key");
-        assert_eq!(m.order(Sort::Name, "", now), [1, 2, 0]);
-        assert_eq!(m.order(Sort::Id, "volt", now), [1]);
-        assert_eq!(m.order(Sort::Id, "0x03", now), [2]);
+        assert_eq!(m.order(Sort::Id, None, now), [0, 1, 2]);
+        assert_eq!(m.order(Sort::Rate, None, now)[0], 1);
+        assert_eq!(
+            m.order(Sort::Age, None, now),
+            [1, 2, 0],
+            "equal ages by key"
+        );
+        assert_eq!(m.order(Sort::Name, None, now), [1, 2, 0]);
+        let vocab = crate::sport::PROTOCOL.vocab;
+        let f = |t: &str| Filter::from_words(t, vocab, &Default::default(), &[], "S.Port").unwrap();
+        assert_eq!(m.order(Sort::Id, Some(&f("sensor=VFAS")), now), [1]);
+        assert_eq!(m.order(Sort::Id, Some(&f("volts")), now), [1]);
+        // An ID is an ID, not a substring: `2` is not also 24.
+        assert_eq!(m.order(Sort::Id, Some(&f("2")), now), [1]);
+        assert_eq!(m.order(Sort::Id, Some(&f("id=24")), now), [2]);
+        assert_eq!(m.order(Sort::Id, Some(&f("not-id=0-9")), now), [2]);
+        assert_eq!(m.order(Sort::Id, Some(&f("device=Vario")), now), [0]);
+        assert_eq!(m.order(Sort::Id, Some(&f("type=Data")), now), [0, 1, 2]);
         m.toggle_mark(2);
-        assert_eq!(m.order(Sort::Id, "", now), [2, 0, 1]);
+        assert_eq!(m.order(Sort::Id, None, now), [2, 0, 1]);
     }
 }

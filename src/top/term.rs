@@ -6,6 +6,7 @@ use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Arc, Mutex, Once, OnceLock};
 
+use crate::sink::fallback_size;
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::cursor::{Hide, Show};
@@ -201,6 +202,8 @@ impl Capture {
 pub struct Screen {
     pub terminal: Terminal<CrosstermBackend<Stdout>>,
     capture: Option<Capture>,
+    /// Drawn at a fixed size ([`fallback_size`]): the terminal reports none.
+    fixed: bool,
 }
 
 impl Screen {
@@ -224,7 +227,15 @@ impl Screen {
             Terminal::new(CrosstermBackend::new(io::stdout()))
         })();
         match opened {
-            Ok(terminal) => Ok(Screen { terminal, capture }),
+            Ok(terminal) => {
+                let mut screen = Screen {
+                    terminal,
+                    capture,
+                    fixed: false,
+                };
+                screen.fit()?;
+                Ok(screen)
+            }
             Err(e) => {
                 restore();
                 if let Some(c) = capture {
@@ -233,6 +244,29 @@ impl Screen {
                 Err(e)
             }
         }
+    }
+
+    /// Before a draw: a terminal that reports no size (0x0) is drawn at [`fallback_size`]
+    /// (it was drawn at 0x0: an empty screen); once it reports one, at that.
+    pub fn fit(&mut self) -> io::Result<()> {
+        let (w, h) = ratatui::crossterm::terminal::size().unwrap_or((0, 0));
+        let none = w == 0 || h == 0;
+        if none && !self.fixed {
+            let var = |name: &str| std::env::var(name).ok();
+            let (w, h) = fallback_size(var("COLUMNS").as_deref(), var("LINES").as_deref());
+            let viewport = ratatui::Viewport::Fixed(ratatui::layout::Rect::new(0, 0, w, h));
+            self.terminal = Terminal::with_options(
+                CrosstermBackend::new(io::stdout()),
+                ratatui::TerminalOptions { viewport },
+            )?;
+            self.fixed = true;
+            self.terminal.clear()?;
+        } else if !none && self.fixed {
+            self.terminal = Terminal::new(CrosstermBackend::new(io::stdout()))?;
+            self.fixed = false;
+            self.terminal.clear()?;
+        }
+        Ok(())
     }
 
     /// The last `n` lines written to stderr while the view runs.
@@ -254,5 +288,18 @@ impl Drop for Screen {
         if let Some(c) = self.capture.take() {
             c.finish();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::sink::fallback_size;
+
+    #[test]
+    fn a_terminal_without_size_is_drawn_at_columns_and_lines_or_80x24() {
+        assert_eq!(fallback_size(Some("132"), Some("43")), (132, 43));
+        assert_eq!(fallback_size(None, None), (80, 24));
+        assert_eq!(fallback_size(Some("0"), Some("x")), (80, 24));
+        assert_eq!(fallback_size(Some("99999"), Some(" 30 ")), (80, 30));
     }
 }
