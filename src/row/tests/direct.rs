@@ -84,7 +84,7 @@ fn every_protocol_on_the_fixtures_and_seeds() {
     assert!(inputs.len() > 30, "{} inputs", inputs.len());
     for protocol in crate::protocols::PROTOCOLS {
         let direct: u64 = inputs.iter().map(|f| check(protocol, f, true)).sum();
-        if matches!(protocol.command, "sport") {
+        if matches!(protocol.command, "sport" | "sbus") {
             assert!(
                 direct > 1000,
                 "{}: {direct} rows written straight",
@@ -100,6 +100,8 @@ fn the_fuzz_corpora() {
     let corpora: &[(&str, &Protocol)] = &[
         ("fuzz/corpus/sport", &crate::sport::PROTOCOL),
         ("fuzz/corpus/recording", &crate::sport::PROTOCOL),
+        ("fuzz/corpus/sbus_ether", &crate::sbus::PROTOCOL),
+        ("fuzz/corpus/sbus_serial", &crate::sbus::PROTOCOL),
     ];
     for (dir, protocol) in corpora {
         let direct: u64 = files(dir).iter().map(|f| check(protocol, f, false)).sum();
