@@ -60,6 +60,8 @@ pub enum Failure {
     Device { path: PathBuf, message: String },
     /// Adapter gone during capture.
     Disconnected { path: PathBuf, frames: u64 },
+    /// The device went away where waiting for it is no option (`detect`): the message.
+    Unplugged(String),
     /// Output could not be written.
     Output(String),
     /// Input could not be read or used.
@@ -114,7 +116,7 @@ impl Failure {
             Failure::Permission { .. } => code::PERMISSION,
             Failure::Busy(_) => code::BUSY,
             Failure::Device { .. } => code::DEVICE,
-            Failure::Disconnected { .. } => code::DISCONNECTED,
+            Failure::Disconnected { .. } | Failure::Unplugged(_) => code::DISCONNECTED,
             Failure::Output(_) => code::OUTPUT,
             Failure::Input(_) => code::INPUT,
             Failure::NothingDecoded(_) => code::NOTHING_DECODED,
@@ -135,7 +137,7 @@ impl Failure {
     }
 
     /// Maps an error from creating an output (`what`: "cannot create recording FILE"): the
-    /// signal that ended the wait for a FIFO's reader ([`crate::sink::create_file`]), or an
+    /// signal that ended the wait for a FIFO's reader ([`crate::files::create_file`]), or an
     /// output error.
     pub fn from_create(what: &str, e: &std::io::Error) -> Failure {
         match crate::signal::Stop::received() {
@@ -189,6 +191,7 @@ impl fmt::Display for Failure {
                 p.display()
             ),
             Failure::Device { path, message } => write!(f, "{}: {message}", path.display()),
+            Failure::Unplugged(m) => write!(f, "{m}"),
             Failure::Disconnected { path, frames } => write!(
                 f,
                 "adapter disconnected after {} ({}); use --reconnect to wait for it",

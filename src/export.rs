@@ -61,7 +61,7 @@ impl Exporter {
     ) -> Result<Exporter, Failure> {
         let export = check(path, protocol)?;
         let what = format!("cannot create export {}", path.display());
-        let out = crate::sink::create_file(path)
+        let out = crate::files::create_file(path)
             .and_then(|file| Output::file(file, path))
             .map_err(|e| Failure::from_create(&what, &e))?;
         Ok(Exporter {
@@ -122,7 +122,8 @@ impl Exporter {
         }
         self.start()?;
         let anchor = *self.anchor.get_or_insert_with(Utc::now);
-        let ts = anchor.timestamp_micros() + row.micros.unwrap_or(0) as i64;
+        let micros = row.micros.unwrap_or(0).min(i64::MAX as u64) as i64;
+        let ts = anchor.timestamp_micros().saturating_add(micros);
         let comment = (row.class == Class::Error).then(|| {
             let mut c = format!("busnoop: {}", row.kind);
             for part in [row.data, row.extra.last().copied().unwrap_or("")] {

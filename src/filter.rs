@@ -170,6 +170,26 @@ impl Filter {
         sensors: &[String],
         protocol: &str,
     ) -> Result<Filter, Error> {
+        // An empty value would keep every row: `--id ""` from a script whose variable was
+        // empty is a mistake to say, not a filter to drop.
+        for (values, option) in [
+            (&spec.id, "--id"),
+            (&spec.not_id, "--not-id"),
+            (&spec.types, "--type"),
+            (&spec.not_types, "--not-type"),
+            (&spec.sensor, "--sensor"),
+            (&spec.device, "--device"),
+        ] {
+            if let Some(v) = values
+                .iter()
+                .find(|v| v.split(',').all(|s| s.trim().is_empty()))
+            {
+                return Err(format!(
+                    "{option} {v:?}: an empty value; give one or more, comma-separated, or leave \
+                     {option} out"
+                ));
+            }
+        }
         let mut f = Filter {
             ids: id_list(&spec.id, "--id", vocab)?,
             not_ids: id_list(&spec.not_id, "--not-id", vocab)?,
@@ -183,9 +203,19 @@ impl Filter {
             active: false,
         };
         if spec.hide_polls && !vocab.polls {
+            // Said in the protocol's own words: requests with answers, or a stream of frames.
+            let (what, example) = if vocab.types.contains(&"Request") {
+                ("every request is shown with its answer", "Request")
+            } else {
+                let rc = vocab.types.iter().find(|t| **t == "RC");
+                (
+                    "its frames come unasked",
+                    rc.or(vocab.types.first()).copied().unwrap_or("TYPE"),
+                )
+            };
             return Err(format!(
-                "--hide-polls: {protocol} has no polls (every request is shown with its answer); \
-                 to hide a type use --not-type, e.g. --not-type Request"
+                "--hide-polls: {protocol} has no polls ({what}); to hide a type use --not-type, \
+                 e.g. --not-type {example}"
             ));
         }
         if spec.hide_null && !vocab.keepalives {
@@ -241,6 +271,32 @@ impl Filter {
                 }
             }
             f.devices.push(v.into());
+        }
+        // Options that contradict each other would show nothing at all.
+        let has = |list: &[RangeInclusive<u32>], id: u32| list.iter().any(|r| r.contains(&id));
+        if !f.ids.is_empty()
+            && !f.not_ids.is_empty()
+            && vocab
+                .ids
+                .clone()
+                .is_some_and(|mut ids| ids.all(|id| !has(&f.ids, id) || has(&f.not_ids, id)))
+        {
+            return Err(format!(
+                "--not-id leaves no ID of --id ({} minus {}): no row could be shown",
+                spec.id.join(","),
+                spec.not_id.join(",")
+            ));
+        }
+        if !f.types.is_empty()
+            && f.types
+                .iter()
+                .all(|t| f.not_types.iter().any(|n| n.eq_ignore_ascii_case(t)))
+        {
+            return Err(format!(
+                "--not-type leaves no type of --type ({} minus {}): no row could be shown",
+                spec.types.join(","),
+                spec.not_types.join(",")
+            ));
         }
         f.active = !(f.ids.is_empty()
             && f.not_ids.is_empty()
@@ -874,6 +930,20 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.contains("S-Bus has no polls"), "{e}");
+        // A stream of frames is not told about requests and answers.
+        let stream = Vocab {
+            types: &["GPS", "RC", "Link"],
+            polls: false,
+            ..VOCAB
+        };
+        let e =
+            Filter::new(&spec(|s| s.hide_polls = true), &stream, &names, &[], "CRSF").unwrap_err();
+        assert!(
+            e.contains("frames come unasked")
+                && e.contains("--not-type RC")
+                && !e.contains("request"),
+            "{e}"
+        );
         let e = Filter::new(
             &spec(|s| s.hide_null = true),
             &no_polls,

@@ -51,6 +51,7 @@ mod detect;
 mod digits;
 mod exit;
 mod export;
+mod files;
 mod filter;
 pub mod fmt;
 pub mod fport;

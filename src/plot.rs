@@ -119,13 +119,88 @@ const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or
 /// name without `.svg`/`.png` is a usage error (exit 2). Its folder is checked with the other
 /// outputs' before the input is opened (`cli::run_capture`).
 pub fn check(path: &Path) -> Result<(), Failure> {
-    match ImageFormat::of(path) {
-        Some(_) => Ok(()),
-        None => Err(Failure::Usage(format!(
+    if ImageFormat::of(path).is_none() {
+        return Err(Failure::Usage(format!(
             "-o {}: {IMAGE_NAMES}",
             path.display()
-        ))),
+        )));
     }
+    // The image goes to a temporary file beside it, renamed over it at the end: the folder must
+    // take a new file, and an image already there must be writable (a FIFO, a device: written
+    // directly). Found only after decoding, the whole input was wasted.
+    if special(path) {
+        return Ok(());
+    }
+    let cannot =
+        |e: std::io::Error| Failure::Output(format!("cannot create {}: {e}", path.display()));
+    if std::fs::symlink_metadata(path).is_ok() {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(cannot)?;
+    }
+    let (probe, _) = temporary(path).map_err(cannot)?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+/// A FIFO, a device or another file that is not a regular file (or a link to one): written
+/// directly, never replaced.
+fn special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file())
+}
+
+/// A new file beside `path` for the image (`.NAME.busnoop-PID-N.tmp`), created exclusively;
+/// renamed over `path` once whole.
+fn temporary(path: &Path) -> std::io::Result<(PathBuf, std::fs::File)> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .map_or_else(|| "plot".into(), |n| n.to_string_lossy().into_owned());
+    let mut n = 0u32;
+    loop {
+        let tmp = dir.join(format!(".{name}.busnoop-{}-{n}.tmp", std::process::id()));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .mode(0o644)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 1000 => n += 1,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Writes the finished image to `path`: a regular file (or a new name) through a temporary file
+/// beside it, renamed over it, so that a full disk or a kill leaves the old image whole and no
+/// cut one; a FIFO or device directly, opened so that SIGINT/SIGTERM end the wait for a FIFO's
+/// reader ([`crate::files::create_file`]).
+fn write_image(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
+    use std::io::Write;
+    let failed =
+        |e: std::io::Error| Failure::Output(format!("cannot write {}: {e}", path.display()));
+    if special(path) {
+        let mut f = crate::files::create_file(path)
+            .map_err(|e| Failure::from_create(&format!("cannot create {}", path.display()), &e))?;
+        return f.write_all(bytes).map_err(failed);
+    }
+    let (tmp, mut f) = temporary(path)
+        .map_err(|e| Failure::Output(format!("cannot create {}: {e}", path.display())))?;
+    let written = f
+        .write_all(bytes)
+        .and_then(|()| f.sync_all())
+        .and_then(|()| std::fs::rename(&tmp, path));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(failed(e));
+    }
+    Ok(())
 }
 
 /// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels
@@ -264,17 +339,33 @@ const TITLE_FONT: u32 = 22;
 /// a band of dots hiding the line).
 const MARKERS_MAX: usize = 400;
 
+/// The most series a plot draws: 64 lines are already more than a reader tells apart, and
+/// each series keeps up to [`MAX_POINTS`] points. Without a bound, a crafted capture of
+/// thousands of numbers took a minute (a linear search per number) and drew an SVG of tens of
+/// megabytes.
+pub const MAX_SERIES: usize = 64;
+
 /// Collects the rows of a capture, then draws them.
 pub struct Plot {
     spec: PlotSpec,
     series: Vec<Series>,
     /// Where each series is, by (ID, name, unit, port).
     index: HashMap<(Option<u32>, String, String, String), usize>,
+    /// Lookup without allocating.
+    probe: (Option<u32>, String, String, String),
+    /// Numbers of series beyond [`MAX_SERIES`], left out.
+    left_out: u64,
+    /// Numbers `--sensor` did not ask for, in order of appearance (at most [`MAX_OTHERS`]), to
+    /// name them when it asked for none the capture has.
+    others: Vec<(Option<u32>, String, String)>,
     errors: Thinned,
     anchor: Option<Anchor>,
     /// Which extra cell of a row names its port (several sources).
     port_column: Option<usize>,
 }
+
+/// Numbers that `--sensor` did not ask for, kept to name them.
+const MAX_OTHERS: usize = 256;
 
 impl Plot {
     pub fn new(spec: PlotSpec) -> Self {
@@ -282,6 +373,9 @@ impl Plot {
             spec,
             series: Vec::new(),
             index: HashMap::new(),
+            probe: (None, String::new(), String::new(), String::new()),
+            left_out: 0,
+            others: Vec::new(),
             errors: Thinned::default(),
             anchor: None,
             port_column: None,
@@ -321,6 +415,8 @@ impl Plot {
         }
         if row.class == Class::Error {
             self.errors.push(t, 0.0);
+            // An error row carries no number (Row::parts); none is plotted all the same.
+            return;
         }
         let port = self
             .port_column
@@ -331,14 +427,29 @@ impl Plot {
             if !p.value.is_finite() {
                 continue;
             }
-            let key = (
-                row.id,
-                p.name.to_owned(),
-                p.unit.to_owned(),
-                port.to_owned(),
-            );
-            let i = match self.index.get(&key) {
+            if !self.wanted(row.id, p.name) {
+                let key = (row.id, p.name, p.unit);
+                if self.others.len() < MAX_OTHERS
+                    && !self.others.iter().any(|o| (o.0, &*o.1, &*o.2) == key)
+                {
+                    self.others
+                        .push((row.id, p.name.to_owned(), p.unit.to_owned()));
+                }
+                continue;
+            }
+            self.probe.0 = row.id;
+            self.probe.1.clear();
+            self.probe.1.push_str(p.name);
+            self.probe.2.clear();
+            self.probe.2.push_str(p.unit);
+            self.probe.3.clear();
+            self.probe.3.push_str(port);
+            let i = match self.index.get(&self.probe) {
                 Some(&i) => i,
+                None if self.series.len() >= MAX_SERIES => {
+                    self.left_out += 1;
+                    continue;
+                }
                 None => {
                     self.series.push(Series {
                         id: row.id,
@@ -347,12 +458,29 @@ impl Plot {
                         unit: p.unit.to_owned(),
                         points: Thinned::default(),
                     });
-                    self.index.insert(key, self.series.len() - 1);
+                    self.index.insert(self.probe.clone(), self.series.len() - 1);
                     self.series.len() - 1
                 }
             };
             self.series[i].points.push(t, p.value);
         }
+    }
+
+    /// Whether `--sensor` may ask for the number `name` of a row: by either of its names, or
+    /// as a label (`Name@ID`, `Name@PORT`); [`Plot::chosen`] then keeps the exact ones.
+    fn wanted(&self, _id: Option<u32>, name: &str) -> bool {
+        self.spec.sensors.is_empty()
+            || self.spec.wanted.iter().any(|w| {
+                w.eq_ignore_ascii_case(name)
+                    || w.split_once('@')
+                        .is_some_and(|(n, _)| n.eq_ignore_ascii_case(name))
+            })
+    }
+
+    /// Numbers left out because the plot had [`MAX_SERIES`] series already (tests).
+    #[cfg(test)]
+    pub fn left_out(&self) -> u64 {
+        self.left_out
     }
 
     /// `Name`, or `Name@ID` when another ID of its port has a series of that name and unit,
@@ -399,6 +527,15 @@ impl Plot {
     /// does not have a usage error (exit 2, with the names it has); a drawing that cannot be
     /// written is [`Failure::Output`] (exit 8).
     pub fn draw(&mut self) -> Result<(), Failure> {
+        // A signal that comes while drawing ends it (one that came before asked for the plot
+        // of what was read so far).
+        let before = crate::signal::Stop::received();
+        self.draw_until(&|| crate::signal::Stop::received().filter(|s| Some(*s) != before))
+    }
+
+    /// [`Plot::draw`], given up without an image when `stop` names a signal (checked between
+    /// the series).
+    fn draw_until(&mut self, stop: &dyn Fn() -> Option<i32>) -> Result<(), Failure> {
         // A time of day given as the range: the points outside it, now that the start is known.
         let (from, to) = self.range();
         for s in &mut self.series {
@@ -408,6 +545,19 @@ impl Plot {
         let chosen = self.chosen();
         if chosen.iter().all(|(_, s)| s.points.is_empty()) {
             let mut seen: Vec<String> = self.series.iter().map(|s| self.label(s)).collect();
+            for (id, name, unit) in &self.others {
+                let shared = self
+                    .others
+                    .iter()
+                    .any(|o| o.1 == *name && o.2 == *unit && o.0 != *id);
+                let label = match (shared, id) {
+                    (true, Some(id)) => format!("{name}@{id}"),
+                    _ => name.clone(),
+                };
+                if !seen.contains(&label) {
+                    seen.push(label);
+                }
+            }
             seen.dedup();
             return Err(if seen.is_empty() {
                 Failure::NothingDecoded("no row of this capture carries a number to plot".into())
@@ -434,28 +584,51 @@ impl Plot {
         let format = ImageFormat::of(&self.spec.path).ok_or_else(|| {
             Failure::Usage(format!("-o {}: {IMAGE_NAMES}", self.spec.path.display()))
         })?;
+        if self.left_out > 0 {
+            eprintln!(
+                "busnoop: note: plot: the first {MAX_SERIES} series are drawn; {} {} of other \
+                 series left out (choose with --sensor NAME,…)",
+                self.left_out,
+                if self.left_out == 1 {
+                    "number"
+                } else {
+                    "numbers"
+                }
+            );
+        }
         // Both backends measure text with this font (the SVG names it, a viewer draws it).
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
             .map_err(|_| Failure::Internal("cannot load the embedded font".into()))?;
         let groups = panels(&chosen);
         let size = (WIDTH, PANEL_HEIGHT * groups.len() as u32 + 40);
-        let r = match format {
+        // Drawn in memory, then written whole ([`write_image`]).
+        let drawn = match format {
             ImageFormat::Svg => {
-                let root = SVGBackend::new(&self.spec.path, size).into_drawing_area();
-                self.render(root, &groups)
+                let mut svg = String::new();
+                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+                self.render(root, &groups, stop).map(|()| svg.into_bytes())
             }
             ImageFormat::Png => {
-                let root = BitMapBackend::new(&self.spec.path, size).into_drawing_area();
-                self.render(root, &groups)
+                let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+                self.render(root, &groups, stop)
+                    .and_then(|()| png(&rgb, size).map_err(Into::into))
             }
         };
-        r.map_err(|e| Failure::Output(format!("cannot draw {}: {e}", self.spec.path.display())))
+        if let Some(sig) = stop() {
+            return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+        }
+        let bytes = drawn.map_err(|e| {
+            Failure::Internal(format!("cannot draw {}: {e}", self.spec.path.display()))
+        })?;
+        write_image(&self.spec.path, &bytes)
     }
 
     fn render<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
         groups: &[Panel<'_>],
+        stop: &dyn Fn() -> Option<i32>,
     ) -> Result<(), Box<dyn std::error::Error + 'static>>
     where
         DB::ErrorType: 'static,
@@ -537,6 +710,9 @@ impl Plot {
             }
             let mut entries = Vec::new();
             for (color_at, (label, s)) in panel.members.iter().enumerate() {
+                if stop().is_some() {
+                    return Err("stopped by a signal".into());
+                }
                 let color = COLORS[color_at % COLORS.len()].to_rgba();
                 // A step: each value held until the next sample.
                 let mut steps = Vec::with_capacity(s.points.kept.len() * 2);
@@ -648,6 +824,18 @@ fn number(v: f64, step: f64) -> String {
         return s.trim_start_matches('-').to_owned();
     }
     s
+}
+
+/// A PNG of an RGB image of `size` pixels.
+fn png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, png::EncodingError> {
+    let mut out = Vec::new();
+    let mut e = png::Encoder::new(&mut out, size.0, size.1);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    let mut w = e.write_header()?;
+    w.write_image_data(rgb)?;
+    w.finish()?;
+    Ok(out)
 }
 
 /// One panel: its unit and its series.
@@ -839,6 +1027,67 @@ mod tests {
             assert!(s.kept.len() <= MAX_POINTS);
         }
         assert!(s.kept.len() > MAX_POINTS / 8);
+    }
+
+    /// M2 (issue 32): at most MAX_SERIES series, found through a map; the numbers of the rest
+    /// are counted; labels still carry the ID when a name is shared.
+    #[test]
+    fn series_are_capped_and_counted() {
+        let mut p = Plot::new(PlotSpec::default());
+        let names: Vec<&'static [Part<'static>]> = (0..200)
+            .map(|i| {
+                let name: &'static str = format!("N{}", i % 100).leak();
+                &*vec![Part {
+                    name,
+                    unit: "V",
+                    text: "1",
+                    value: 1.0,
+                }]
+                .leak()
+            })
+            .collect();
+        for round in 0..3u64 {
+            for (i, parts) in names.iter().enumerate() {
+                let mut r = row(round * 1000 + i as u64, Class::Plain, parts);
+                r.id = Some((i / 100) as u32);
+                p.row(&r);
+            }
+        }
+        assert_eq!(p.series.len(), MAX_SERIES);
+        assert_eq!(p.left_out(), 3 * (200 - MAX_SERIES as u64));
+        assert!(p.series.iter().all(|s| s.points.kept.len() == 3));
+        assert_eq!(p.label(&p.series[0]), "N0");
+        // An error row carries no number into the plot.
+        let mut bad = row(5000, Class::Error, ALT1);
+        bad.id = Some(0);
+        p.row(&bad);
+        assert!(!p.series.iter().any(|s| s.name == "Alt"));
+    }
+
+    /// A signal while drawing gives the drawing up: no image, the signal's failure.
+    #[test]
+    fn a_signal_while_drawing_leaves_no_image() {
+        let dir = tempfile::tempdir().unwrap();
+        for (k, name) in ["p.svg", "p.png"].into_iter().enumerate() {
+            let path = dir.path().join(name);
+            let mut p = Plot::new(PlotSpec {
+                path: path.clone(),
+                title: "t".into(),
+                ..PlotSpec::default()
+            });
+            p.row(&row(0, Class::Plain, ALT1));
+            p.row(&row(1_000_000, Class::Plain, ALT2));
+            let r = p.draw_until(&|| Some(libc::SIGTERM));
+            assert!(matches!(r, Err(Failure::Signal(ref i)) if i.signal == libc::SIGTERM));
+            assert!(!path.exists());
+            assert_eq!(
+                std::fs::read_dir(dir.path()).unwrap().count(),
+                k,
+                "no temporary file"
+            );
+            p.draw_until(&|| None).unwrap();
+            assert!(path.exists());
+        }
     }
 
     /// A broken frame's moment is a red vertical line across the panel.

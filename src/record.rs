@@ -205,7 +205,7 @@ impl Recorder {
     pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
         let format = format_for(Some(path), content)?;
         let what = format!("cannot create recording {}", path.display());
-        let out = crate::sink::create_file(path)
+        let out = crate::files::create_file(path)
             .and_then(|file| Output::file(file, path))
             .map_err(|e| Failure::from_create(&what, &e))?;
         Ok(Self::new(Some(path), out, format, content))
@@ -382,9 +382,21 @@ impl Recorder {
             "busnoop: the adapter went away; reconnect gap begins".to_string()
         };
         let anchor = self.anchor.unwrap_or_else(Utc::now);
-        let payload = if up { rtac::LINK_UP } else { rtac::LINK_DOWN };
-        let comment = Some(comment.as_str());
-        self.write_record(port, anchor, micros, rtac::EVENT_STATUS, payload, comment)
+        // The device it is back at, so that a replay names it (not the recording).
+        let mut payload = if up { rtac::LINK_UP } else { rtac::LINK_DOWN }.to_vec();
+        let device = self.lines.get(at).and_then(|l| l.name.clone());
+        if let (true, Some(device)) = (up, device) {
+            payload.extend_from_slice(rtac::LINK_UP_AT);
+            payload.extend_from_slice(device.as_bytes());
+        }
+        self.write_record(
+            port,
+            anchor,
+            micros,
+            rtac::EVENT_STATUS,
+            &payload,
+            Some(&comment),
+        )
     }
 
     /// Writes one RTAC serial record at `micros` after `anchor` (in pcapng on the interface of
@@ -398,8 +410,8 @@ impl Recorder {
         data: &[u8],
         comment: Option<&str>,
     ) -> Result<(), Failure> {
-        let t = anchor + chrono::Duration::microseconds(micros as i64);
-        let ts = t.timestamp_micros();
+        // Plain µs arithmetic: a corrupt time cannot panic (pcap stamps hold what they can).
+        let ts = (anchor.timestamp_micros()).saturating_add(micros.min(i64::MAX as u64) as i64);
         self.scratch.clear();
         if self.format == RecordFormat::Pcapng {
             let mut body = Vec::with_capacity(rtac::HEADER_LEN + data.len());
@@ -644,7 +656,10 @@ mod tests {
                 Some((rtac::EVENT_STATUS, rtac::START.to_vec())),
                 Some((rtac::EVENT_RX_DATA, vec![0x7E, 0x1B])),
                 Some((rtac::EVENT_STATUS, rtac::LINK_DOWN.to_vec())),
-                Some((rtac::EVENT_STATUS, rtac::LINK_UP.to_vec())),
+                Some((
+                    rtac::EVENT_STATUS,
+                    b"busnoop link up at /dev/ttyUSB0".to_vec()
+                )),
             ]
         );
     }
@@ -659,6 +674,7 @@ mod tests {
             data: b"pkt",
             orig_len: 60,
             interface,
+            skipped: 0,
         }
     }
 

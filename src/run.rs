@@ -56,6 +56,9 @@ pub struct Context<'a> {
     pub source: &'a str,
     /// Filters and names between the decoder and the table.
     pub selection: &'a Selection,
+    /// No notices on stderr (a capture Wireshark runs through the extcap: it shows whatever
+    /// comes there as an error).
+    pub quiet: bool,
 }
 
 /// Feeds every message from `feed` through `decoder` into `table` until the source ends, fails,
@@ -79,6 +82,7 @@ pub fn drive(
         started: Instant::now(),
         silent_hinted: false,
         selection: ctx.selection,
+        quiet: ctx.quiet,
         clock: None,
         bytes: 0,
         first_byte: None,
@@ -139,6 +143,7 @@ struct Driver<'a> {
     started: Instant,
     silent_hinted: bool,
     selection: &'a Selection,
+    quiet: bool,
     /// Maps capture time to this process's clock: the instant of capture time 0.
     clock: Option<Instant>,
     bytes: u64,
@@ -388,7 +393,10 @@ impl Driver<'_> {
         );
         self.info_row(micros, "LinkDown", &data)?;
         self.flush()?;
-        eprintln!("busnoop: {data} (--reconnect)");
+        // Wireshark shows an extcap's stderr as an error: the row and the capture say it.
+        if !self.quiet {
+            eprintln!("busnoop: {data} (--reconnect)");
+        }
         Ok(())
     }
 
@@ -403,7 +411,9 @@ impl Driver<'_> {
         let data = format!("adapter back at {} after {gap:.1} s", path.display());
         self.info_row(micros, "LinkUp", &data)?;
         self.flush()?;
-        eprintln!("busnoop: {data}");
+        if !self.quiet {
+            eprintln!("busnoop: {data}");
+        }
         Ok(())
     }
 

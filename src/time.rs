@@ -20,4 +20,22 @@ impl Anchor {
             Anchor::Naive(n) => n.and_utc(),
         }
     }
+
+    /// The wall-clock time `micros` after the anchor; `None` when it falls outside the years 1
+    /// to 9999 (a corrupt time stamp: the table's `Time` cell stays empty, never a panic).
+    pub fn plus(self, micros: u64) -> Option<Anchor> {
+        use chrono::Datelike;
+        let delta = chrono::TimeDelta::microseconds(i64::try_from(micros).ok()?);
+        let (t, year) = match self {
+            Anchor::Instant(t) => {
+                let t = t.checked_add_signed(delta)?;
+                (Anchor::Instant(t), t.year())
+            }
+            Anchor::Naive(n) => {
+                let n = n.checked_add_signed(delta)?;
+                (Anchor::Naive(n), n.year())
+            }
+        };
+        (1..=9999).contains(&year).then_some(t)
+    }
 }

@@ -271,7 +271,7 @@ fn detect_listens_to_a_serial_port() {
     };
     let stderr = pty::stderr_of(&mut child);
     let mut lines = Vec::new();
-    while let Ok((_, l)) = rx.recv_timeout(std::time::Duration::from_secs(2)) {
+    while let Ok((_, l)) = rx.recv_timeout(common::PATIENCE) {
         lines.push(l);
     }
     assert_eq!(status.code(), Some(0), "{stderr}\n{lines:#?}");

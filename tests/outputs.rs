@@ -11,7 +11,7 @@ use std::os::unix::ffi::OsStrExt;
 use std::process::Stdio;
 
 use common::fixture;
-use common::{busnoop, capture, no_panic, output_within_10s, text};
+use common::{busnoop, capture, no_panic, output_within, text};
 
 #[test]
 fn unrelated_outputs_still_work() {
@@ -130,7 +130,7 @@ fn a_recording_pipe_closed_by_the_reader_exits_quietly() {
             head
         })
     };
-    let out = output_within_10s(
+    let out = output_within(
         busnoop()
             .arg("sport")
             .arg(&big)

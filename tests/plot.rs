@@ -357,7 +357,7 @@ fn a_pipe_needs_the_protocol_named() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let deadline = std::time::Instant::now() + common::PATIENCE;
     while child.try_wait().unwrap().is_none() {
         if std::time::Instant::now() > deadline {
             let _ = child.kill();
@@ -619,4 +619,196 @@ fn plot_takes_the_tables_options_the_protocols_and_a_time_range() {
     }
     let (code, _, err) = plot(&[l, "--from", "soon"]);
     assert_eq!(code, Some(2), "{err}");
+}
+
+/// Kills the child if the test fails before it exited.
+struct Guard(std::process::Child);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Waits for the child's exit, failing after [`common::PATIENCE`].
+fn exit_within(child: &mut std::process::Child) -> std::process::ExitStatus {
+    let deadline = std::time::Instant::now() + common::PATIENCE;
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        assert!(std::time::Instant::now() < deadline, "busnoop did not exit");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// M4 (issue 32): `plot -o out.svg` where out.svg is a FIFO without a reader blocked in
+/// `open()` and ignored SIGINT/SIGTERM. Now a signal ends the wait (130/143), and a reader that
+/// comes gets the image.
+#[test]
+fn a_fifo_image_without_a_reader_ends_on_a_signal() {
+    for (sig, code) in [(libc::SIGINT, 130), (libc::SIGTERM, 143)] {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("p.svg");
+        common::mkfifo(&fifo);
+        let child = common::busnoop()
+            .args(["plot", "--protocol", "sport"])
+            .arg(fixture("sport-sample.bin"))
+            .arg("-o")
+            .arg(&fifo)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut g = Guard(child);
+        common::wait_for_handlers(&g.0);
+        unsafe { libc::kill(g.0.id() as i32, sig) };
+        let status = exit_within(&mut g.0);
+        assert_eq!(status.code(), Some(code));
+    }
+    // A reader that comes gets the whole image.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("p.svg");
+    common::mkfifo(&fifo);
+    let child = common::busnoop()
+        .args(["plot", "--protocol", "sport"])
+        .arg(fixture("sport-sample.bin"))
+        .arg("-o")
+        .arg(&fifo)
+        .spawn()
+        .unwrap();
+    let mut g = Guard(child);
+    let svg = std::fs::read_to_string(&fifo).unwrap();
+    assert_eq!(exit_within(&mut g.0).code(), Some(0));
+    assert!(
+        svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+        "{svg}"
+    );
+}
+
+/// L4 (issue 32): a full disk replaced the old image with a cut one (the image was written in
+/// place); now it is written to a temporary name and renamed, so the old image stays whole. L15:
+/// the message is a sentence, not Rust debug text (`ImageError(IoError(Custom { … }))`).
+#[test]
+fn a_full_disk_keeps_the_old_image_and_says_so_plainly() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["p.svg", "p.png"] {
+        let image = dir.path().join(name);
+        let log = fixture("edgetx-MODELE24-2014-07-11-sport.log");
+        let out = common::busnoop()
+            .arg("plot")
+            .arg(&log)
+            .arg("-o")
+            .arg(&image)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", common::text(&out.stderr));
+        let old = std::fs::read(&image).unwrap();
+        assert!(old.len() > 20_000, "{}", old.len());
+        let mut cmd = common::busnoop();
+        cmd.arg("plot").arg(&log).arg("-o").arg(&image);
+        common::limit_file_size(&mut cmd, 10_000);
+        let out = cmd.output().unwrap();
+        let err = common::text(&out.stderr);
+        assert_eq!(out.status.code(), Some(8), "{err}");
+        assert!(
+            std::fs::read(&image).unwrap() == old,
+            "{name}: the old image is whole"
+        );
+        assert!(
+            err.starts_with(&format!(
+                "busnoop: cannot write {}: File too large",
+                image.display()
+            )),
+            "{err}"
+        );
+        assert!(
+            !err.contains("Error(") && !err.contains("Custom {"),
+            "{err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+        // No temporary file left behind.
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), if name == "p.svg" { 1 } else { 2 }, "{left:?}");
+    }
+}
+
+/// L4 (issue 32): an unwritable folder was found only after the whole input was decoded. Now
+/// it is refused first: a FIFO input that no one writes is never waited for.
+#[test]
+fn an_unwritable_image_folder_is_refused_before_the_input_is_read() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+    let locked = dir.path().join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let feed = dir.path().join("feed");
+    common::mkfifo(&feed);
+    std::fs::set_permissions(&feed, std::fs::Permissions::from_mode(0o666)).unwrap();
+    let (_keep, mut cmd) = common::unprivileged_busnoop();
+    let child = cmd
+        .args(["plot", "--protocol", "sport"])
+        .arg(&feed)
+        .arg("-o")
+        .arg(locked.join("p.svg"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut g = Guard(child);
+    let status = exit_within(&mut g.0);
+    let mut err = String::new();
+    std::io::Read::read_to_string(g.0.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(8), "{err}");
+    assert!(
+        err.contains("cannot create") && err.contains("ermission denied"),
+        "{err}"
+    );
+}
+
+/// M2 (issue 32): plot had no cap on series, found a row's series by a linear search and
+/// labelled them quadratically: a crafted 3 MB capture took 60 s. Now at most 64 series, the
+/// rest counted in a note.
+#[test]
+fn many_series_are_capped_with_a_note() {
+    use busnoop::sport::wire;
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = Vec::new();
+    for i in 0..30_000u32 {
+        // 28 IDs × 400 app IDs: 11 200 series.
+        let k = i % 11_200;
+        wire::encode_frame(
+            &mut bytes,
+            wire::header_for((k % 28) as u8),
+            0x10,
+            0x5100 + (k / 28) as u16 * 16,
+            i,
+        );
+    }
+    let input = dir.path().join("series.bin");
+    std::fs::write(&input, bytes).unwrap();
+    let image = dir.path().join("p.svg");
+    let t = std::time::Instant::now();
+    let out = common::busnoop()
+        .args(["plot", "--protocol", "sport"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&image)
+        .output()
+        .unwrap();
+    let err = common::text(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        t.elapsed() < std::time::Duration::from_secs(60),
+        "{:?}",
+        t.elapsed()
+    );
+    assert!(
+        err.contains("plot: the first 64 series are drawn") && err.contains("--sensor"),
+        "{err}"
+    );
+    let svg = std::fs::read_to_string(&image).unwrap();
+    assert_eq!(series_lines(&svg).len(), 64);
 }

@@ -276,26 +276,6 @@ fn output_to_a_full_disk() {
     );
 }
 
-/// Makes the disk "full" for `cmd` after `bytes` bytes of any file it writes (a file size
-/// limit, with SIGXFSZ ignored so that the write fails with EFBIG instead of killing it).
-fn limit_file_size(cmd: &mut std::process::Command, bytes: libc::rlim_t) {
-    use std::os::unix::process::CommandExt;
-    // SAFETY: only signal() and setrlimit() in the child before exec.
-    unsafe {
-        cmd.pre_exec(move || {
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            let lim = libc::rlimit {
-                rlim_cur: bytes,
-                rlim_max: bytes,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-}
-
 #[test]
 fn output_file_that_fills_up_ends_with_a_whole_row() {
     // A file size limit makes the disk "full" after 100 kB: the file is cut back to the last
@@ -305,7 +285,7 @@ fn output_file_that_fills_up_ends_with_a_whole_row() {
     let csv = dir.path().join("out.csv");
     let mut cmd = busnoop();
     cmd.arg("sport").arg(&big).arg("-o").arg(&csv);
-    limit_file_size(&mut cmd, 100_000);
+    common::limit_file_size(&mut cmd, 100_000);
     let out = cmd.output().unwrap();
     no_panic(&out);
     assert_eq!(out.status.code(), Some(8));
@@ -365,7 +345,7 @@ fn recording_and_export_that_fill_up_end_with_a_whole_record() {
             .arg(option)
             .arg(&file)
             .args(["-o", "/dev/null"]);
-        limit_file_size(&mut cmd, 100_000);
+        common::limit_file_size(&mut cmd, 100_000);
         let out = cmd.output().unwrap();
         no_panic(&out);
         let err = text(&out.stderr);
@@ -779,20 +759,29 @@ fn dev_urandom_is_read_as_a_file() {
         "2 MiB examined: {}",
         text(&out.stdout)
     );
-    // The decoders read it until Ctrl-C.
-    let child = busnoop()
-        .args(["sport", "/dev/urandom", "-f", "tsv"])
-        .stdout(Stdio::piped())
+    // The decoders read it until Ctrl-C: sent once its handlers are in place and 100 rows are
+    // written (into a file, to count them while it runs).
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("t.tsv");
+    let mut child = busnoop()
+        .args(["sport", "/dev/urandom", "-f", "tsv", "-o"])
+        .arg(&table)
+        .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
+    common::wait_for_handlers(&child);
+    common::until("100 rows", || {
+        std::fs::read(&table).is_ok_and(|t| t.iter().filter(|&&b| b == b'\n').count() > 100)
+    });
     // SAFETY: kill() sends a signal to our own child; no memory is involved.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let out = child.wait_with_output().unwrap();
-    no_panic(&out);
-    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).lines().count() > 100);
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(std::fs::read_to_string(&table).unwrap().lines().count() > 100);
 }
 
 /// `busnoop detect /dev/zero` reads it as a file: stderr does not claim that busnoop listens to

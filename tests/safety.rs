@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
 
 use common::fixture;
-use common::{busnoop, capture, no_panic, output_within_10s, text};
+use common::{busnoop, capture, no_panic, output_within, text};
 
 /// The run was refused with a usage error naming the clash, and `path` still holds `bytes`.
 fn refused(out: &Output, path: &Path, bytes: &[u8]) {
@@ -208,7 +208,7 @@ fn output_into_the_input_pipe_is_refused() {
         ["sport", "-", "-o", "/dev/stdin"],
         ["sport", "-", "--record", "/dev/stdin"],
     ] {
-        let out = output_within_10s(busnoop().args(args), Some(sample.clone()), Stdio::piped());
+        let out = output_within(busnoop().args(args), Some(sample.clone()), Stdio::piped());
         refused_saying(&out, "its own output");
     }
 
@@ -216,7 +216,7 @@ fn output_into_the_input_pipe_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("fifo");
     common::mkfifo(&fifo);
-    let out = output_within_10s(
+    let out = output_within(
         busnoop().arg("sport").arg(&fifo).arg("-o").arg(&fifo),
         None,
         Stdio::piped(),
@@ -232,7 +232,7 @@ fn output_onto_the_serial_port_is_refused() {
     let mut bus = common::pty::bus();
     let dev = bus.path.clone();
     for opt in ["-o", "--record"] {
-        let out = output_within_10s(
+        let out = output_within(
             busnoop().arg("sport").arg(&dev).arg(opt).arg(&dev),
             None,
             Stdio::piped(),
@@ -240,7 +240,7 @@ fn output_onto_the_serial_port_is_refused() {
         refused_saying(&out, "transmit");
     }
     let tty = std::fs::OpenOptions::new().write(true).open(&dev).unwrap();
-    let out = output_within_10s(busnoop().arg("sport").arg(&dev), None, tty.into());
+    let out = output_within(busnoop().arg("sport").arg(&dev), None, tty.into());
     no_panic(&out);
     assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
     assert!(
@@ -369,7 +369,7 @@ fn a_plot_checks_its_image_name_before_reading_the_capture() {
     let fifo = dir.path().join("fifo");
     common::mkfifo(&fifo);
     let plot = |image: PathBuf| {
-        output_within_10s(
+        output_within(
             busnoop()
                 .arg("plot")
                 .arg(&fifo)

@@ -383,7 +383,9 @@ fn export_matches(mode: Mode, name: &str, args: &[&str]) -> Option<[usize; 5]> {
                     continue;
                 }
                 counts[1] += 1;
-                if bad {
+                // (An answer to a request that failed its CRC is not paired: its registers
+                // are not known, the table shows its bytes.)
+                if bad || note.contains("not paired") {
                     continue;
                 }
                 let vals = values(&row["Data"]);

@@ -97,7 +97,7 @@ fn live_timeouts_and_the_recording_replays() {
     std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
     assert!(err.contains("S-Bus statistics"), "{err}");
     assert!(err.contains("data mode, master timeout 375 ms"), "{err}");
-    while let Ok((_, l)) = rx.recv_timeout(Duration::from_secs(2)) {
+    while let Ok((_, l)) = rx.recv_timeout(common::PATIENCE) {
         live.push(l);
     }
     assert_eq!(live.len(), 6, "{live:?}");

@@ -9,10 +9,10 @@ use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-use common::mkfifo;
+use common::{mkfifo, wait_for_handlers};
 
 /// Generous bound for "stops at once": the old driver took 70-180 s here.
-const STOP_WITHIN: Duration = Duration::from_secs(5);
+const STOP_WITHIN: Duration = common::PATIENCE;
 
 fn busnoop() -> Command {
     let mut c = Command::new(assert_cmd::cargo::cargo_bin("busnoop"));
@@ -32,29 +32,9 @@ impl Drop for Guard {
     }
 }
 
-/// Waits until the child has its signal handlers in place (so a signal is not fatal by default).
-fn wait_for_handlers(child: &Child) {
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let status = format!("/proc/{}/status", child.id());
-    loop {
-        let text = std::fs::read_to_string(&status).unwrap_or_default();
-        let caught = text
-            .lines()
-            .find_map(|l| l.strip_prefix("SigCgt:"))
-            .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
-            .unwrap_or(0);
-        let mask = (1 << (libc::SIGINT - 1)) | (1 << (libc::SIGTERM - 1));
-        if caught & mask == mask {
-            return;
-        }
-        assert!(Instant::now() < deadline, "busnoop installed no handlers");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 /// Waits until `path` holds at least `lines` lines.
 fn wait_for_rows(path: &Path, lines: usize) {
-    let deadline = Instant::now() + Duration::from_secs(20);
+    let deadline = Instant::now() + common::PATIENCE;
     while std::fs::read(path)
         .unwrap_or_default()
         .iter()
@@ -164,7 +144,13 @@ fn a_hangup_under_nohup_is_ignored() {
     let (fifo, out) = (dir.path().join("feed"), dir.path().join("out.tsv"));
     let (mut guard, writer) = endless_replay(&fifo, &out, true);
     unsafe { libc::kill(guard.0.id() as i32, libc::SIGHUP) };
-    std::thread::sleep(Duration::from_millis(300));
+    // Still decoding after the hangup: 10 000 rows more arrive.
+    let rows = std::fs::read(&out)
+        .unwrap()
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count();
+    wait_for_rows(&out, rows + 10_000);
     assert!(guard.0.try_wait().unwrap().is_none(), "a hangup stopped it");
     let (status, err) = signal_and_wait(&mut guard, libc::SIGTERM, STOP_WITHIN);
     assert_eq!(status.code(), Some(143), "{status:?} {err}");
@@ -265,7 +251,11 @@ fn ctrl_c_during_detect_on_a_slow_pipe_gives_the_verdict_so_far() {
     let mut pipe = guard.0.stdin.take().unwrap();
     pipe.write_all(&sample).unwrap();
     wait_for_handlers(&guard.0);
-    std::thread::sleep(Duration::from_millis(300));
+    // Once busnoop took in the 220 bytes and waits for more.
+    let pid = guard.0.id();
+    common::until("busnoop read the bytes", || {
+        common::pipe_unread(&pipe) == 0 && common::waits_for_input(pid)
+    });
     let (status, err) = signal_and_wait(&mut guard, libc::SIGINT, STOP_WITHIN);
     drop(pipe);
     let mut out = String::new();
@@ -308,7 +298,7 @@ fn a_fifo_waits_for_its_writer_and_ends_when_the_writer_closes() {
     let mut w = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
     w.write_all(&bytes).unwrap();
     drop(w);
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + common::PATIENCE;
     let status = loop {
         if let Some(s) = guard.0.try_wait().unwrap() {
             break s;

@@ -441,7 +441,7 @@ fn ctrl_c_flushes_every_row_and_prints_stats() {
     stdin.write_all(&bytes).unwrap();
     stdin.flush().unwrap();
     // Wait until the rows are in the file (they are flushed per chunk), then interrupt.
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let deadline = std::time::Instant::now() + common::PATIENCE;
     while std::fs::read_to_string(&csv_path)
         .unwrap_or_default()
         .lines()

@@ -48,17 +48,42 @@ fn terminal(cols: u16, rows: u16) -> Term {
     Term { master, slave }
 }
 
+/// A child killed when the test fails before it exited.
+struct Kill(Child);
+
+impl std::ops::Deref for Kill {
+    type Target = Child;
+    fn deref(&self) -> &Child {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Kill {
+    fn deref_mut(&mut self) -> &mut Child {
+        &mut self.0
+    }
+}
+
+impl Drop for Kill {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 impl Term {
     /// Starts busnoop with `args` on this terminal (stdin, stdout and stderr), `TERM=xterm`.
-    fn run(&self, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Child {
-        Command::new(bin())
-            .args(args.iter().map(|a| a.as_ref()))
-            .stdin(self.stdio())
-            .stdout(self.stdio())
-            .stderr(self.stdio())
-            .env("TERM", "xterm")
-            .spawn()
-            .unwrap()
+    fn run(&self, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Kill {
+        Kill(
+            Command::new(bin())
+                .args(args.iter().map(|a| a.as_ref()))
+                .stdin(self.stdio())
+                .stdout(self.stdio())
+                .stderr(self.stdio())
+                .env("TERM", "xterm")
+                .spawn()
+                .unwrap(),
+        )
     }
 
     fn stdio(&self) -> Stdio {
@@ -99,7 +124,7 @@ fn collect(master: &TTYPort) -> Arc<Mutex<Vec<u8>>> {
 
 /// Waits up to 10 s for `text` in what was drawn after byte `from`; returns where it ends.
 fn wait_for(screen: &Mutex<Vec<u8>>, from: usize, text: &str) -> usize {
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + common::PATIENCE;
     loop {
         {
             let s = screen.lock().unwrap();
@@ -218,9 +243,7 @@ fn a_silent_port_gets_the_wiring_hint_in_the_table_mode() {
         }
     });
     let line = loop {
-        let l = rx
-            .recv_timeout(Duration::from_secs(10))
-            .expect("no hint within 10 s");
+        let l = rx.recv_timeout(common::PATIENCE).expect("no hint");
         if l.contains("no bytes") {
             break l;
         }
@@ -341,8 +364,11 @@ fn a_second_sigterm_ends_at_once_and_still_gives_the_terminal_back() {
         &"sport", &"--top", &"--speed", &"0", &"-f", &"tsv", &"-o", &fifo, &long,
     ]);
     let at = wait_for(&screen, 0, "\x1b[?1049h");
-    // Time to fill the FIFO and block.
-    std::thread::sleep(Duration::from_millis(1500));
+    // Once the FIFO is full the table's write blocks.
+    let pid = child.id();
+    common::until("the table's write blocks", || {
+        common::waits_in(pid, "pipe_write")
+    });
     assert_ne!(term.lflag(), before, "raw mode while the view runs");
     unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
     std::thread::sleep(Duration::from_millis(300));
@@ -689,4 +715,240 @@ fn top_shows_modbus_registers_by_their_map_names() {
         .unwrap();
     assert!(wait_exit(&mut child).success());
     drop(b);
+}
+
+/// H1 (issue 32): a time stamp beyond the calendar panicked inside `--top` (the table's
+/// `--time abs`), leaving an empty table and a raw terminal. Now it is a `TimeJump` row.
+#[test]
+fn top_on_a_time_stamp_beyond_the_calendar_keeps_every_row() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    let t0 = 1_700_000_000_000_000u64;
+    let input = dir.path().join("far.pcapng");
+    std::fs::write(
+        &input,
+        common::pcapng(
+            147,
+            6,
+            &[(t0, &sample), (t0 | 1 << 63, &sample), (t0 + 1, &sample)],
+        ),
+    )
+    .unwrap();
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = term.run(&[
+        &"sport", &"--top", &"--time", &"abs", &"-f", &"tsv", &"-o", &table, &input,
+    ]);
+    let at = wait_for(&screen, 0, "END OF INPUT");
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(b"q")
+        .unwrap();
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(0));
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before);
+    let table = std::fs::read_to_string(&table).unwrap();
+    assert_eq!(table.lines().count(), 92, "{table}");
+    assert_eq!(table.matches("\tTimeJump\t").count(), 1, "{table}");
+}
+
+/// Types `keys` on the terminal.
+fn press(term: &Term, keys: &[u8]) {
+    term.master
+        .try_clone_native()
+        .unwrap()
+        .write_all(keys)
+        .unwrap();
+}
+
+/// A field of /proc/PID/status (`VmHWM`, in kB).
+fn status_kb(pid: u32, field: &str) -> u64 {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    s.lines()
+        .find_map(|l| l.strip_prefix(field))
+        .and_then(|v| {
+            v.trim_start_matches(':')
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or(0)
+}
+
+/// The process state letter of /proc/PID/stat (`T`: stopped).
+fn state(pid: u32) -> char {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    s.rsplit(')')
+        .next()
+        .and_then(|r| r.trim().chars().next())
+        .unwrap_or('?')
+}
+
+/// The long table of `file` as busnoop writes it without the view.
+fn full_table(file: &std::path::Path) -> String {
+    let out = Command::new(bin())
+        .args(["sport", "-f", "tsv"])
+        .arg(file)
+        .output()
+        .unwrap();
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// L1 (issue 32): the view allocated by the terminal's size (5000×5000: 2 GB and frozen;
+/// 65535×65535: SIGABRT with the terminal left raw). The drawn area is bounded.
+#[test]
+fn a_huge_terminal_is_drawn_in_a_bounded_area() {
+    let _g = lock();
+    for (cols, rows) in [(5000, 5000), (65535, 65535)] {
+        let term = terminal(cols, rows);
+        let before = term.lflag();
+        let screen = collect(&term.master);
+        let mut child = term.run(&[
+            &"sport",
+            &"--top",
+            &"--speed",
+            &"0",
+            &"fixtures/sport-sample.bin",
+        ]);
+        let at = wait_for(&screen, 0, "END OF INPUT");
+        let peak = status_kb(child.id(), "VmHWM");
+        assert!(peak < 200_000, "{cols}x{rows}: {peak} kB");
+        press(&term, b"q");
+        assert_eq!(wait_exit(&mut child).code(), Some(0));
+        wait_for(&screen, at, "\x1b[?1049l");
+        assert_eq!(term.lflag(), before);
+    }
+}
+
+/// L2 (issue 32): keys after the first 1023 bytes of a burst (a `q` among them) were ignored
+/// until another key came. Every byte of a burst is read.
+#[test]
+fn a_key_after_a_long_burst_is_not_lost() {
+    let _g = lock();
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = term.run(&[
+        &"sport",
+        &"--top",
+        &"--speed",
+        &"0",
+        &"fixtures/sport-sample.bin",
+    ]);
+    let at = wait_for(&screen, 0, "END OF INPUT");
+    // 3000 bytes of arrow keys and letters the view ignores, then q, in one write.
+    let mut burst = b"\x1b[A\x1b[Bx".repeat(400);
+    burst.push(b'q');
+    press(&term, &burst);
+    assert_eq!(wait_exit(&mut child).code(), Some(0));
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before);
+}
+
+/// L3 (issue 32): an external SIGTSTP or SIGQUIT left the terminal raw. SIGTSTP now puts the
+/// terminal back before stopping, SIGCONT takes the view up again; SIGQUIT puts it back before
+/// the process ends as SIGQUIT ends it.
+#[test]
+fn stop_continue_and_quit_signals_give_the_terminal_back() {
+    let _g = lock();
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = term.run(&[
+        &"sport",
+        &"--top",
+        &"--speed",
+        &"0",
+        &"fixtures/sport-sample.bin",
+    ]);
+    let at = wait_for(&screen, 0, "END OF INPUT");
+    assert_ne!(term.lflag(), before);
+    let pid = child.id();
+    unsafe { libc::kill(pid as i32, libc::SIGTSTP) };
+    common::until("busnoop stops on SIGTSTP", || state(pid) == 'T');
+    assert_eq!(term.lflag(), before, "cooked while stopped");
+    let at = wait_for(&screen, at, "\x1b[?1049l");
+    unsafe { libc::kill(pid as i32, libc::SIGCONT) };
+    let at = wait_for(&screen, at, "\x1b[?1049h");
+    let at = wait_for(&screen, at, "END OF INPUT");
+    common::until("raw again after SIGCONT", || term.lflag() != before);
+    unsafe { libc::kill(pid as i32, libc::SIGQUIT) };
+    let status = wait_exit(&mut child);
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(libc::SIGQUIT), "{status:?}");
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before, "cooked after SIGQUIT");
+}
+
+/// M5 (issue 32): a terminal that goes away without a SIGHUP reaching busnoop (nohup, a dying
+/// supervisor pty) made `--top` spin at 100 % CPU on `read(0) = 0` and stop decoding. End of
+/// file on the terminal ends the view; rows keep going to `-o` and the replay ends as usual.
+#[test]
+fn a_terminal_that_goes_away_ends_the_view_and_the_table_goes_on() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read("fixtures/sport-sample.bin").unwrap();
+    // About 3 s of bus time, paced at --speed 1.
+    let long = dir.path().join("long.bin");
+    std::fs::write(&long, sample.repeat(9)).unwrap();
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let mut child = term.run(&[
+        &"sport", &"--top", &"--speed", &"1", &"-f", &"tsv", &"-o", &table, &long,
+    ]);
+    let Term { master, slave } = term;
+    drop(slave);
+    // Wait for the view, then hang the terminal up by closing its master side.
+    let mut reader = master.try_clone_native().unwrap();
+    reader.set_timeout(Duration::from_millis(50)).unwrap();
+    let mut seen = Vec::new();
+    common::until("the view opens", || {
+        let mut buf = [0u8; 4096];
+        if let Ok(n) = reader.read(&mut buf) {
+            seen.extend_from_slice(&buf[..n]);
+        }
+        seen.windows(8).any(|w| w == b"\x1b[?1049h")
+    });
+    drop(reader);
+    drop(master);
+    let status = wait_exit(&mut child);
+    assert_eq!(status.code(), Some(0), "{status:?}");
+    let usage = unsafe {
+        let mut r: libc::rusage = std::mem::zeroed();
+        libc::getrusage(libc::RUSAGE_CHILDREN, &mut r);
+        r.ru_utime.tv_sec + r.ru_stime.tv_sec
+    };
+    assert!(usage < 5, "{usage} s of CPU");
+    assert_eq!(std::fs::read_to_string(&table).unwrap(), full_table(&long));
+}
+
+/// L16 (issue 32): `q` during a replay dropped the last row from `-o` (591 of 592 of the EdgeTX
+/// capture). `q` closes the view; the rest of the replay goes to `-o` at full speed.
+#[test]
+fn q_during_a_replay_closes_the_view_and_the_table_is_whole() {
+    let _g = lock();
+    let dir = tempfile::tempdir().unwrap();
+    let log = std::path::PathBuf::from("fixtures/edgetx-MODELE24-2014-07-11-sport.log");
+    let table = dir.path().join("t.tsv");
+    let term = terminal(100, 24);
+    let before = term.lflag();
+    let screen = collect(&term.master);
+    let mut child = term.run(&[&"sport", &"--top", &"-f", &"tsv", &"-o", &table, &log]);
+    let at = wait_for(&screen, 0, "FLVSS");
+    press(&term, b"q");
+    assert_eq!(wait_exit(&mut child).code(), Some(0));
+    wait_for(&screen, at, "\x1b[?1049l");
+    assert_eq!(term.lflag(), before);
+    let full = full_table(&log);
+    assert_eq!(full.lines().count(), 593);
+    assert!(
+        std::fs::read_to_string(&table).unwrap() == full,
+        "the whole table"
+    );
 }

@@ -420,3 +420,63 @@ fn an_unwritable_temporary_folder_is_a_failed_write() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+/// Protocols without a poll cycle (S-Bus and SAB, whose descriptors say `polls: false`) step
+/// by frame: one line per row that carries numbers, at that row's time, holding its numbers;
+/// they used to wait for an ID to come round again, which merged requests and answers of
+/// different stations into one line and wrote lines for rows without numbers (issue 26, item 3).
+#[test]
+fn protocols_without_polls_step_by_frame() {
+    for (protocol, file) in [
+        ("sab2", "sab2-session.bin"),
+        ("sab2", "sab1-session.bin"),
+        ("sbus", "sbus-digimat.pcap"),
+    ] {
+        let path = fixture(file);
+        let path = path.to_str().unwrap();
+        let long = run(&[protocol, path, "-f", "jsonl"]);
+        let numbered: Vec<serde_json::Value> = long
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+            .filter(|r| r["parts"].as_object().is_some_and(|p| !p.is_empty()))
+            .collect();
+        assert!(numbered.len() > 5, "{file}");
+        let (headers, rows) = table(&run(&[protocol, path, "--wide", "-f", "csv"]));
+        assert_eq!(
+            rows.len(),
+            numbered.len(),
+            "{file}: one line per row with numbers"
+        );
+        for (line, row) in rows.iter().zip(&numbered) {
+            if headers[0] == "Millis" {
+                assert_eq!(line["Millis"], row["millis"].to_string(), "{file}");
+            }
+            for (name, value) in row["parts"].as_object().unwrap() {
+                // The column is the part's name, or name@ID when another ID shares it.
+                let id = row["id"].to_string();
+                let cell = line
+                    .get(name)
+                    .or_else(|| line.get(&format!("{name}@{id}")))
+                    .unwrap_or_else(|| panic!("{file}: no column {name}: {headers:?}"));
+                assert_eq!(cell, &value.to_string(), "{file} {name}");
+            }
+        }
+    }
+    // --every still cuts fixed steps.
+    let path = fixture("sab2-session.bin");
+    let every = run(&[
+        "sab2",
+        path.to_str().unwrap(),
+        "--wide",
+        "--every",
+        "5",
+        "-f",
+        "csv",
+    ]);
+    let (_, rows) = table(&every);
+    let millis: Vec<&str> = rows.iter().map(|r| r["Millis"].as_str()).collect();
+    assert!(
+        millis.iter().all(|m| m.parse::<u64>().unwrap() % 5 == 0),
+        "{millis:?}"
+    );
+}

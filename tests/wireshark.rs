@@ -437,7 +437,6 @@ fn extcap_lists_its_interfaces_as_wireshark_asks() {
 fn extcap_captures_a_serial_bus_into_wiresharks_fifo() {
     use common::pty::{bus, lock, wait_exit};
     use std::io::{Read, Write};
-    use std::time::Duration;
     let _g = lock();
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("wireshark-fifo");
@@ -489,7 +488,7 @@ fn extcap_captures_a_serial_bus_into_wiresharks_fifo() {
     let mut live = Vec::new();
     while live.len() < 20 {
         let p = rx
-            .recv_timeout(Duration::from_secs(10))
+            .recv_timeout(common::PATIENCE)
             .expect("no frame reached the FIFO for 10 s");
         live.push(p);
     }

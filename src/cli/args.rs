@@ -407,6 +407,12 @@ pub struct OutputArgs {
           value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub every: Option<u64>,
 
+    /// With --wide: at most N columns, the first N numbers to appear; the numbers of later
+    /// columns are left out, counted in a note [default: 2000].
+    #[arg(long, value_name = "N", requires = "wide",
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub max_columns: Option<u32>,
+
     /// `busnoop plot`: rows go to a plot instead.
     #[arg(skip)]
     pub plot: Option<crate::plot::PlotSpec>,

@@ -26,7 +26,7 @@ fn value(p: &Protocol) -> String {
 }
 
 /// The options Wireshark passes (see the extcap documentation of Wireshark).
-#[derive(Args, Debug, Default)]
+#[derive(Args, Clone, Debug, Default)]
 pub struct ExtcapArgs {
     /// List the interfaces.
     #[arg(long)]
@@ -58,10 +58,16 @@ pub struct ExtcapArgs {
     /// Line speed.
     #[arg(long, value_name = "BAUD")]
     pub baud: Option<u32>,
+    /// Character format (8N1, 8E1, …), the protocol's by default.
+    #[arg(long, value_name = "FORMAT")]
+    pub line: Option<String>,
     /// Wait for an unplugged adapter.
     #[arg(long)]
     pub reconnect: bool,
 }
+
+/// The character formats the extcap offers besides the protocol's own.
+const LINE_FORMATS: &[&str] = &["8N1", "8E1", "8O1", "8N2", "8E2", "8O2", "7E1", "7O1"];
 
 fn interface(name: Option<&str>) -> Result<(&'static Protocol, Export), Failure> {
     let name =
@@ -120,6 +126,25 @@ pub fn describe(args: &ExtcapArgs, ports: &[String]) -> Result<String, Failure> 
             "arg {number=2}{call=--reconnect}{display=Wait for the adapter when it is unplugged}\
              {type=boolflag}{default=false}\n",
         );
+        // The character format: a Modbus bus at 8N1 instead of the standard's 8E1, a SAB bus
+        // at 8E1.
+        s.push_str(
+            "arg {number=3}{call=--line}{display=Character format}{type=selector}\
+             {tooltip=Data bits, parity and stop bits of the bus}\n",
+        );
+        let own = p.line.format();
+        let mut formats = vec![own.clone()];
+        for f in LINE_FORMATS {
+            if *f != own {
+                formats.push((*f).to_string());
+            }
+        }
+        for f in formats {
+            let default = if f == own { "{default=true}" } else { "" };
+            s.push_str(&format!(
+                "value {{arg=3}}{{value={f}}}{{display={f}}}{default}\n"
+            ));
+        }
         return Ok(s);
     }
     Err(Failure::Usage(
@@ -158,6 +183,10 @@ pub fn capture_command(args: &ExtcapArgs) -> Result<Vec<std::ffi::OsString>, Fai
         "--baud".into(),
         args.baud.unwrap_or(p.line.baud).to_string().into(),
     ];
+    if let Some(f) = &args.line {
+        cmd.push("--line".into());
+        cmd.push(f.into());
+    }
     if args.reconnect {
         cmd.push("--reconnect".into());
     }
@@ -234,6 +263,20 @@ mod tests {
             s.contains("{call=--baud}") && s.contains("{default=57600}"),
             "{s}"
         );
+        // The character format: the protocol's own first and by default (Modbus: 8E1).
+        let modbus = ExtcapArgs {
+            extcap_config: true,
+            extcap_interface: Some("busnoop-modbus".into()),
+            ..Default::default()
+        };
+        let s = describe(&modbus, &[]).unwrap();
+        assert!(s.contains("{call=--line}"), "{s}");
+        assert!(
+            s.contains("value {arg=3}{value=8E1}{display=8E1}{default=true}\n")
+                && s.contains("value {arg=3}{value=8N1}{display=8N1}\n"),
+            "{s}"
+        );
+        assert_eq!(s.matches("{value=8E1}").count(), 1, "{s}");
         let bad = ExtcapArgs {
             extcap_dlts: true,
             extcap_interface: Some("eth0".into()),
@@ -268,6 +311,13 @@ mod tests {
                 "--reconnect"
             ]
         );
+        let at_8n1 = ExtcapArgs {
+            line: Some("8N1".into()),
+            reconnect: false,
+            ..args.clone()
+        };
+        let cmd = capture_command(&at_8n1).unwrap();
+        assert_eq!(&cmd[cmd.len() - 2..], ["--line", "8N1"]);
         let no_fifo = ExtcapArgs { fifo: None, ..args };
         assert!(capture_command(&no_fifo).is_err());
     }

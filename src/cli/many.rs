@@ -217,7 +217,7 @@ pub(super) fn run(
     let mut extra = vec![PORT_COLUMN];
     extra.extend_from_slice(ports[0].decoder.columns());
     let widths = pretty_widths(protocol.pretty_widths, &ports);
-    let mut table = open_table(out, &extra, &widths, live)?;
+    let mut table = open_table(out, &extra, &widths, live, protocol.vocab.polls)?;
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
     }
@@ -230,6 +230,7 @@ pub(super) fn run(
         anchor: if live { None } else { anchor },
         clock: live.then_some(clock),
         selection,
+        quiet: QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed),
     };
     let merged = if out.top {
         let names: Vec<&str> = ports.iter().map(|p| p.name.as_str()).collect();

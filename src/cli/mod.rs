@@ -215,6 +215,7 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         let empty = toml::Table::new();
         options.configure(&f.own_keys(protocol, &empty))?;
     }
+    options.check()?;
     let section = file
         .as_ref()
         .and_then(|f| Some((f.section(protocol)?, f.name())));
@@ -254,7 +255,7 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
 /// `--stats-json FILE`: its folder exists, and it is not the input (it is written at the end,
 /// when the input was read).
 fn check_stats_file(path: &Path, source: &Path) -> Result<(), Failure> {
-    crate::sink::check_folder(path)?;
+    crate::files::check_folder(path)?;
     let same = std::fs::canonicalize(path)
         .ok()
         .is_some_and(|p| std::fs::canonicalize(source).is_ok_and(|s| s == p));
@@ -333,6 +334,16 @@ pub fn run_capture(
             project::File::path(&args.select).as_deref(),
         )?;
     }
+    // `>&-`: the table or the recording on standard output would vanish with exit 0.
+    if ((table_file.is_none() && !args.output.top) || record_to_stdout)
+        && crate::files::stdout_was_closed()
+    {
+        return Err(Failure::Output(
+            "standard output is closed (>&-): what goes there would be lost; give -o FILE, or \
+             send it somewhere (>FILE, >/dev/null)"
+                .into(),
+        ));
+    }
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
@@ -349,7 +360,7 @@ pub fn run_capture(
     .flatten()
     .filter(|p| !is_dash(p))
     {
-        crate::sink::check_folder(p)?;
+        crate::files::check_folder(p)?;
     }
     if let Some(p) = args.output.output_file()
         && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
@@ -486,6 +497,7 @@ pub fn run_capture(
         decoder.columns(),
         protocol.pretty_widths,
         kind == InputKind::Serial,
+        protocol.vocab.polls,
     )?;
     let live = kind == InputKind::Serial;
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
@@ -499,6 +511,7 @@ pub fn run_capture(
         live,
         source: &source_name,
         selection,
+        quiet: QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed),
     };
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
@@ -621,6 +634,7 @@ fn open_table(
     extra: &[&'static str],
     widths: &[usize],
     live: bool,
+    polls: bool,
 ) -> Result<Option<Table>, Failure> {
     // With --top and no -o, the view is the only output.
     Ok(match (out.top, out.output_file()) {
@@ -644,9 +658,11 @@ fn open_table(
             }
             if out.wide {
                 // CSV or TSV: check_wide refused the others before anything was opened.
+                // Protocols without a poll cycle step by frame.
                 let step = match out.every {
                     Some(ms) => crate::sink::wide::Step::Every(ms * 1000),
-                    None => crate::sink::wide::Step::PollCycle,
+                    None if polls => crate::sink::wide::Step::PollCycle,
+                    None => crate::sink::wide::Step::Frame,
                 };
                 if out.raw || out.time == TimeMode::Abs {
                     eprintln!(
@@ -654,7 +670,10 @@ fn open_table(
                          Date and Time columns come with any source that has wall-clock time"
                     );
                 }
-                table.set_wide(step, live);
+                let max = out
+                    .max_columns
+                    .map_or(crate::sink::wide::MAX_COLUMNS, |n| n as usize);
+                table.set_wide(step, live, max);
             }
             Some(table)
         }
@@ -858,6 +877,10 @@ fn report(
             eprintln!("{protocol} statistics ({rows} rows)");
         }
         eprintln!("{}", decoder.stats());
+    }
+    // Filters that are each fine but together keep nothing (`--type Null --errors`).
+    if rows > 0 && hidden == rows && result.is_ok() {
+        eprintln!("busnoop: note: the filters hid all {rows} rows");
     }
     // When the output failed, the one line that matters is the write error (printed last).
     let problems = decoder.problems();

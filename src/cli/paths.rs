@@ -79,6 +79,20 @@ impl FileId {
     }
 }
 
+/// Points standard error away from the input it turned out to be: to the controlling terminal
+/// when there is one, else to /dev/null.
+fn away_from_input() {
+    use std::os::fd::AsRawFd;
+    let to = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/tty")
+        .or_else(|_| std::fs::OpenOptions::new().write(true).open("/dev/null"));
+    if let Ok(f) = to {
+        // SAFETY: dup2 onto descriptor 2, open for the whole process.
+        unsafe { libc::dup2(f.as_raw_fd(), 2) };
+    }
+}
+
 /// Whether `m` is the device `/dev/null` is.
 fn is_dev_null(m: &std::fs::Metadata) -> bool {
     use std::os::unix::fs::MetadataExt;
@@ -148,6 +162,15 @@ pub(super) fn check_distinct(
                 s.consequence()
             )));
         }
+    }
+    // Standard error too: `2>>capture.bin` put busnoop's own messages into the capture it
+    // reads. The refusal cannot go there: it goes to the terminal, if there is one.
+    if same(&source, &FileId::of_fd(std::io::stderr().as_fd(), devices)) {
+        away_from_input();
+        return Err(Failure::Usage(format!(
+            "standard error is the same file as {source_name}: busnoop's messages would go into \
+             it; send them somewhere else (2>FILE)"
+        )));
     }
     if let Some(p) = project {
         let id = FileId::of_path(p, false);

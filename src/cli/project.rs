@@ -373,7 +373,7 @@ fn find_section(text: &str, section: &str) -> Option<usize> {
 const MAX_SIZE: u64 = 1 << 20;
 
 /// Reads `path` up to one byte past [`MAX_SIZE`], so that a larger file is told apart without
-/// being read whole (it used to be: `/dev/zero` grew memory until the machine ran out).
+/// being read whole (`--config /dev/zero` would grow memory without end).
 fn read_limited(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let mut bytes = Vec::new();

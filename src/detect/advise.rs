@@ -74,6 +74,26 @@ pub enum Advice {
     NothingDecoded(String),
 }
 
+/// The message for an input that gave no wire bytes: a file of no bytes, or one whose container
+/// holds none (an EdgeTX log of lines without bytes, a recording without data records).
+pub fn empty_input(name: &str, kind: InputKind) -> String {
+    match kind {
+        InputKind::EdgeTxLog => {
+            format!("empty input: {name} is an EdgeTX log whose lines carry no bytes")
+        }
+        InputKind::Recording => {
+            format!("empty input: {name} is a busnoop recording without data records")
+        }
+        InputKind::Pcap | InputKind::Pcapng => {
+            format!("empty input: {name} is a capture without packets")
+        }
+        InputKind::Trace => {
+            format!("empty input: {name} is a trace whose channel carries no characters")
+        }
+        InputKind::Raw | InputKind::Serial => format!("empty input: {name} holds no bytes"),
+    }
+}
+
 /// After a run of `protocol` over an input of `kind` that yielded `valid_frames`: is another
 /// protocol a much better fit, or did almost nothing decode? `kept` is the start of the input.
 pub fn advise(
@@ -89,7 +109,7 @@ pub fn advise(
         source.display().to_string()
     };
     if kept.total == 0 {
-        return Advice::NothingDecoded(format!("empty input: {name} holds no bytes"));
+        return Advice::NothingDecoded(empty_input(&name, kind));
     }
     let ranked = rank(candidates(kind, None), &kept.batches, kind);
     let own = ranked

@@ -10,12 +10,17 @@ pub(super) struct Listen {
 }
 
 /// The line settings to listen at: each protocol's character format at each of its rates (or at
-/// each of `bauds`, when given), once each, by format and then speed. A UART set to 8N1 loses
-/// the characters of an 8E2 line, so every protocol is heard in its own format.
+/// each of `bauds`, when given), once each, by format (in the order of the protocol table, so
+/// 8N1 first) and then speed. A UART set to 8N1 loses the characters of an 8E2 line, so every
+/// protocol is heard in its own format.
 pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
     let mut out: Vec<Line> = Vec::new();
+    let mut formats: Vec<String> = Vec::new();
     for p in PROTOCOLS {
         let rates = if bauds.is_empty() { p.rates } else { bauds };
+        if !formats.contains(&p.line.format()) {
+            formats.push(p.line.format());
+        }
         for &baud in rates {
             let line = Line { baud, ..p.line };
             if !out.contains(&line) {
@@ -23,7 +28,7 @@ pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
             }
         }
     }
-    out.sort_by_key(|l| (l.format(), l.baud));
+    out.sort_by_key(|l| (formats.iter().position(|f| *f == l.format()), l.baud));
     out
 }
 
@@ -32,8 +37,19 @@ pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
 pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
     let lines = listen_lines(&args.bauds);
     let listen = Duration::from_millis(args.listen_ms);
+    // Ctrl-C, SIGTERM, SIGHUP and an unplug end the listening; what was heard is still judged.
+    let stop = crate::signal::Stop::install().map_err(|e| {
+        LiveError::Failed(Failure::Internal(format!(
+            "cannot install signal handlers: {e}"
+        )))
+    })?;
     let mut listens = Vec::new();
+    let mut ended = None;
     for &line in &lines {
+        if let Some(sig) = stop.signal() {
+            ended = Some(Ended::Signal(sig));
+            break;
+        }
         let cfg = SerialConfig {
             line,
             lines: args.dtr_rts,
@@ -42,6 +58,11 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             Ok(p) => p,
             Err(e) if serial::is_not_a_tty(&e) && listens.is_empty() => {
                 return Err(LiveError::NotATty);
+            }
+            // Gone between two rates.
+            Err(_) if !listens.is_empty() && !path.exists() => {
+                ended = Some(Ended::Gone);
+                break;
             }
             Err(e) => return Err(LiveError::Failed(serial::open_failure(path, &e))),
         };
@@ -55,7 +76,18 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
                 lines.len()
             );
         }
-        listens.push(listen_once(port.as_mut(), path, line, listen).map_err(LiveError::Failed)?);
+        let (heard, end) = listen_once(port.as_mut(), path, line, listen, &stop);
+        listens.push(heard);
+        if end.is_some() {
+            ended = end;
+            break;
+        }
+    }
+    if listens.iter().all(|l| l.bytes == 0)
+        && let Some(end) = ended
+    {
+        // Nothing heard to judge.
+        return Err(LiveError::Failed(end.failure(path, &listens, lines.len())));
     }
     let mut text = format!("{}: a serial line\n", path.display());
     let report = judge_live(&listens);
@@ -97,28 +129,64 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
         }
     };
     crate::exit::write_stdout(text.as_bytes()).map_err(LiveError::Failed)?;
-    result.map_err(LiveError::Failed)
+    match ended {
+        Some(end) => Err(LiveError::Failed(end.failure(path, &listens, lines.len()))),
+        None => result.map_err(LiveError::Failed),
+    }
 }
 
-/// Reads `port` for `listen`, stamping every read with its time since the start.
+/// What ended the listening before every rate was heard.
+#[derive(Clone, Copy, Debug)]
+enum Ended {
+    Signal(i32),
+    /// The device went away (unplugged).
+    Gone,
+}
+
+impl Ended {
+    /// The failure to end with, after the evidence of what was heard; a signal's line is
+    /// written here (the failure of a signal has none of its own).
+    fn failure(self, path: &Path, listens: &[Listen], rates: usize) -> Failure {
+        let heard = format!(
+            "after listening at {} of {rates} line settings; the verdict is on what was heard",
+            listens.len()
+        );
+        match self {
+            Ended::Signal(sig) => {
+                eprintln!("busnoop: interrupted {heard}");
+                Failure::Signal(crate::exit::Interrupt::new(sig))
+            }
+            Ended::Gone => {
+                Failure::Unplugged(format!("{} went away (unplugged?) {heard}", path.display()))
+            }
+        }
+    }
+}
+
+/// Reads `port` for `listen`, stamping every read with its time since the start; a signal
+/// or the device going away ends it early, with what was heard so far.
 fn listen_once(
     port: &mut dyn serialport::SerialPort,
     path: &Path,
     line: Line,
     listen: Duration,
-) -> Result<Listen, Failure> {
+    stop: &crate::signal::Stop,
+) -> (Listen, Option<Ended>) {
     use std::io::ErrorKind::*;
     let start = Instant::now();
     let mut batches = Vec::new();
     let mut bytes = 0u64;
     let mut buf = [0u8; 4096];
+    let mut ended = None;
     while start.elapsed() < listen {
+        if let Some(sig) = stop.signal() {
+            ended = Some(Ended::Signal(sig));
+            break;
+        }
         match port.read(&mut buf) {
             Ok(0) => {
-                return Err(Failure::Disconnected {
-                    path: path.to_owned(),
-                    frames: 0,
-                });
+                ended = Some(Ended::Gone);
+                break;
             }
             Ok(n) => {
                 let t = start.elapsed().as_micros() as u64;
@@ -130,18 +198,17 @@ fn listen_once(
             Err(e) if matches!(e.kind(), TimedOut | WouldBlock | Interrupted) => {}
             Err(e) => {
                 tracing::info!("{}: {e}", path.display());
-                return Err(Failure::Disconnected {
-                    path: path.to_owned(),
-                    frames: 0,
-                });
+                ended = Some(Ended::Gone);
+                break;
             }
         }
     }
-    Ok(Listen {
+    let heard = Listen {
         line,
         batches,
         bytes,
-    })
+    };
+    (heard, ended)
 }
 
 /// The outcome of a live detection.

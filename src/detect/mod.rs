@@ -418,6 +418,10 @@ fn read_prefix(
     let mut bytes = 0;
     let signal = loop {
         if let Some(sig) = stop.signal() {
+            // What arrived before the signal is judged too.
+            while let Ok(Message::Data(b)) = feed.try_recv() {
+                batches.push(b);
+            }
             break Some(sig);
         }
         match feed.recv_timeout(Duration::from_millis(50)) {
@@ -571,8 +575,9 @@ pub fn run(args: &Options) -> Result<(), Failure> {
         text.push_str(&evidence(&ranked));
     }
     let result = match v {
-        Verdict::Empty => Err(Failure::NothingDecoded(format!(
-            "empty input: {name} holds no bytes"
+        Verdict::Empty => Err(Failure::NothingDecoded(advise::empty_input(
+            &name.to_string(),
+            kind,
         ))),
         Verdict::Unknown => {
             text.push_str("verdict: no known protocol");

@@ -389,6 +389,9 @@ impl Mapper {
             }
         };
         if framing == Framing::V2 && !crate::sport::wire::header_ok(phys_byte) {
+            // As `busnoop sport` for the same S.Port payload: a header byte with wrong check
+            // bits leaves the frame without numbers (wide, plot, JSON parts), its text stays.
+            parts = Which::None;
             st.check_bits += 1;
             let note = sc.note();
             note.push_str("non-standard check bits (physical ID byte ");

@@ -102,18 +102,25 @@ pub struct How<'a> {
     /// Live: the instant of capture time 0 of every port.
     pub clock: Option<Instant>,
     pub selection: &'a Selection,
+    /// No notices on stderr ([`crate::run::Context::quiet`]).
+    pub quiet: bool,
 }
 
 /// Decodes every port in its own thread and writes their rows, merged, into `sink` through the
 /// filters of `how.selection`.
 pub fn merge(ports: &mut [Port], sink: &mut dyn Sink, how: How<'_>) -> Merged {
+    let driven = Driven {
+        stop: how.stop,
+        protocol: how.protocol,
+        live: how.live,
+        quiet: how.quiet,
+    };
     let How {
-        stop,
-        protocol,
         live,
         anchor,
         clock,
         selection,
+        ..
     } = how;
     if anchor.is_some() {
         sink.set_anchor(anchor);
@@ -154,9 +161,7 @@ pub fn merge(ports: &mut [Port], sink: &mut dyn Sink, how: How<'_>) -> Merged {
             let quit = &quit;
             std::thread::Builder::new()
                 .name(format!("busnoop-port-{i}"))
-                .spawn_scoped(scope, move || {
-                    run_port(i, port, tx, quit, stop, protocol, live)
-                })
+                .spawn_scoped(scope, move || run_port(i, port, tx, quit, &driven))
                 .expect("spawn port thread");
         }
         match shared {
@@ -177,16 +182,29 @@ pub fn merge(ports: &mut [Port], sink: &mut dyn Sink, how: How<'_>) -> Merged {
     }
 }
 
+/// What every port's driver is told ([`How`]'s part of it).
+#[derive(Clone, Copy)]
+struct Driven<'a> {
+    stop: &'a Stop,
+    protocol: &'a str,
+    live: bool,
+    quiet: bool,
+}
+
 /// A port's thread: the driver, with its rows going to the merge.
 fn run_port(
     i: usize,
     port: &mut Port,
     tx: SyncSender<(usize, Up)>,
     quit: &AtomicBool,
-    stop: &Stop,
-    protocol: &str,
-    live: bool,
+    driven: &Driven<'_>,
 ) {
+    let Driven {
+        stop,
+        protocol,
+        live,
+        quiet,
+    } = *driven;
     let mut sink = PortSink {
         port: i,
         offset: port.offset,
@@ -203,6 +221,7 @@ fn run_port(
         live,
         source: &port.name,
         selection: &everything,
+        quiet,
     };
     let result = drive(port.decoder.as_mut(), &port.feed, &mut sink, ctx);
     sink.send();

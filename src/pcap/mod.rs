@@ -67,7 +67,8 @@ pub struct Packet<'a> {
     /// the decoders work in µs.
     pub nanos: Option<u16>,
     /// Capture time in µs since the first packet of the stream (0 for a packet stamped before
-    /// it): the `time` every decoder works with.
+    /// it): the `time` every decoder works with. A packet whose `ts_micros` is not
+    /// [`in_calendar`] gets the time of the packet before it (and does not start the stream).
     pub time: u64,
     /// LINKTYPE_* of the interface that captured it.
     pub link_type: u32,
@@ -77,6 +78,10 @@ pub struct Packet<'a> {
     pub orig_len: u32,
     /// pcapng interface ID within its section (0 for classic pcap).
     pub interface: u32,
+    /// Bytes of the capture skipped right before this packet (0 normally): a damaged record
+    /// header the reader resynchronised after, or a packet it could not place (an interface
+    /// beyond [`MAX_INTERFACES`] or never described).
+    pub skipped: u64,
 }
 
 /// Why a stream cannot be read on.
@@ -96,6 +101,8 @@ pub enum PcapError {
     NoSection { offset: u64 },
     /// The input ended inside a record.
     Truncated { offset: u64, missing: u64 },
+    /// Damaged bytes before the end of the input, skipped, with no record after them.
+    Damaged { offset: u64, skipped: u64 },
 }
 
 impl fmt::Display for PcapError {
@@ -127,6 +134,11 @@ impl fmt::Display for PcapError {
             PcapError::Truncated { offset, missing } => write!(
                 f,
                 "the capture ends inside the record at byte {offset} ({missing} bytes missing)"
+            ),
+            PcapError::Damaged { offset, skipped } => write!(
+                f,
+                "{skipped} damaged bytes before the end at byte {offset} skipped: no valid \
+                 record after them"
             ),
         }
     }
@@ -285,7 +297,18 @@ pub fn pcapng_interfaces(prefix: &[u8]) -> Vec<Interface> {
 /// The wall-clock time of a packet stamped `ts_micros` (the capture's start, for `--time abs`),
 /// when it is one.
 pub fn anchor(ts_micros: i64) -> Option<Anchor> {
-    chrono::DateTime::from_timestamp_micros(ts_micros).map(Anchor::Instant)
+    in_calendar(ts_micros)
+        .then(|| chrono::DateTime::from_timestamp_micros(ts_micros).map(Anchor::Instant))
+        .flatten()
+}
+
+/// A time stamp (µs since the Unix epoch) within the years 1 to 9999, the ones RFC 3339 and
+/// the table's `Time` column can write. A stamp outside (a flipped top bit, `if_tsresol` 10^0
+/// with a far time) is corrupt: the reader gives its packet the time of the one before, and the
+/// sources say so in a `TimeJump` row.
+pub fn in_calendar(ts_micros: i64) -> bool {
+    // 0001-01-01T00:00:00Z and 9999-12-31T23:59:59.999999Z.
+    (-62_135_596_800_000_000..=253_402_300_799_999_999).contains(&ts_micros)
 }
 
 /// Where one packet of [`Packets`] is.
@@ -297,6 +320,7 @@ struct Slot {
     link_type: u32,
     orig_len: u32,
     interface: u32,
+    skipped: u64,
     /// Its bytes end here in the shared buffer.
     end: usize,
 }
@@ -330,6 +354,7 @@ impl Packets {
             link_type: p.link_type,
             orig_len: p.orig_len,
             interface: p.interface,
+            skipped: p.skipped,
             end: self.data.len(),
         });
     }
@@ -346,6 +371,7 @@ impl Packets {
             data: &self.data[start..s.end],
             orig_len: s.orig_len,
             interface: s.interface,
+            skipped: s.skipped,
         })
     }
 
@@ -446,6 +472,7 @@ mod tests {
             data,
             orig_len: 99,
             interface: 3,
+            skipped: ts as u64,
         };
         let want = [p(5, b"ab"), p(6, b""), p(7, b"cde")];
         let mut b = Packets::default();

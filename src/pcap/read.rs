@@ -54,6 +54,8 @@ enum Format {
         big: bool,
         nanos: bool,
         link_type: u32,
+        /// The header's snap length (0: none given).
+        snaplen: u32,
         header_done: bool,
     },
     Pcapng {
@@ -78,6 +80,8 @@ pub struct PcapStream {
     offset: u64,
     /// Last packet time (for simple packet blocks, which carry none).
     last_ts: i64,
+    /// [`Packet::time`] of the packet before: a packet stamped outside the calendar gets it.
+    last_time: u64,
     /// Time of the first packet: [`Packet::time`] counts from it.
     first_ts: Option<i64>,
     /// The link type of a classic pcap's header or of the first pcapng interface, kept after
@@ -86,6 +90,16 @@ pub struct PcapStream {
     packets: u64,
     /// Longest record or block accepted.
     max_record: usize,
+    /// Bytes skipped since the last packet (a damaged record, a packet that could not be
+    /// placed): told on the next packet ([`Packet::skipped`]), or by [`PcapStream::finish`].
+    skip: u64,
+    /// Where the bytes skipped last began.
+    skip_offset: u64,
+    /// Bytes skipped in all, and how many times.
+    skipped_total: u64,
+    skips: u64,
+    /// Looking for the next plausible classic record after a damaged one.
+    resyncing: bool,
 }
 
 impl Default for PcapStream {
@@ -127,10 +141,16 @@ impl PcapStream {
             pending: Vec::new(),
             offset: 0,
             last_ts: 0,
+            last_time: 0,
             first_ts: None,
             first_link_type: None,
             packets: 0,
             max_record: MAX_RECORD,
+            skip: 0,
+            skip_offset: 0,
+            skipped_total: 0,
+            skips: 0,
+            resyncing: false,
         }
     }
 
@@ -161,8 +181,12 @@ impl PcapStream {
 
     /// µs since the first packet for a packet stamped `ts` (the first one sets the start).
     fn time(&mut self, ts: i64) -> u64 {
+        if !super::in_calendar(ts) {
+            return self.last_time;
+        }
         let first = *self.first_ts.get_or_insert(ts);
-        ts.saturating_sub(first).max(0) as u64
+        self.last_time = ts.saturating_sub(first).max(0) as u64;
+        self.last_time
     }
 
     /// pcapng interfaces kept for the current section (for tests of the bound).
@@ -172,6 +196,22 @@ impl PcapStream {
             Format::Pcapng { ifaces, .. } => ifaces.len(),
             _ => 0,
         }
+    }
+
+    /// Bytes skipped in all (damaged records, packets that could not be placed) and how many
+    /// times the reader skipped.
+    pub fn skipped(&self) -> (u64, u64) {
+        (self.skipped_total, self.skips)
+    }
+
+    /// Notes `n` bytes skipped at stream offset `at`.
+    fn skip_bytes(&mut self, at: u64, n: u64) {
+        if self.skip == 0 {
+            self.skip_offset = at;
+            self.skips += 1;
+        }
+        self.skip += n;
+        self.skipped_total += n;
     }
 
     /// Packets emitted so far.
@@ -247,6 +287,17 @@ impl PcapStream {
         if self.format == Format::Failed {
             return Ok(());
         }
+        if self.resyncing || self.skip > 0 {
+            // Damaged bytes to the end, no record after them.
+            let skipped = std::mem::take(&mut self.skip) + self.pending.len() as u64;
+            let offset = if skipped > self.pending.len() as u64 {
+                self.skip_offset
+            } else {
+                self.offset
+            };
+            self.format = Format::Failed;
+            return Err(PcapError::Damaged { offset, skipped });
+        }
         if self.pending.is_empty() {
             return Ok(());
         }
@@ -313,6 +364,7 @@ impl PcapStream {
             big,
             nanos,
             link_type: 0,
+            snaplen: 0,
             header_done: false,
         };
         Ok(Step::Took(0))
@@ -325,10 +377,12 @@ impl PcapStream {
         if let Format::Pcap {
             big,
             link_type,
+            snaplen,
             header_done,
             ..
         } = &mut self.format
         {
+            *snaplen = rd32(&b[16..], *big);
             // The upper bits may carry FCS information; the link type is the low 16 bits.
             *link_type = rd32(&b[20..], *big) & 0xFFFF;
             *header_done = true;
@@ -351,11 +405,18 @@ impl PcapStream {
             big,
             nanos,
             link_type,
+            snaplen,
             ..
         } = self.format
         else {
             unreachable!("pcap_records on a pcap stream")
         };
+        if self.resyncing {
+            if b.len() < 16 {
+                return Ok(Step::Need(16));
+            }
+            return Ok(self.pcap_resync(b, 0, big, nanos, snaplen));
+        }
         let mut at = 0;
         while let Some(r) = b.get(at..) {
             let Some(h) = r.first_chunk::<16>() else {
@@ -373,14 +434,14 @@ impl PcapStream {
                 [0, 4, 8, 12].map(|i| u32::from_le_bytes(word(i)))
             };
             let incl = incl as usize;
-            if incl > self.max_record {
+            if !self.sound_record(incl, orig, snaplen) {
+                // A damaged header (a flipped bit): the records before it go out first, then
+                // the reader looks for the next plausible one.
                 if at > 0 {
                     return Ok(Step::Took(at));
                 }
-                return Err(PcapError::BadLength {
-                    offset: self.offset,
-                    len: incl as u64,
-                });
+                self.resyncing = true;
+                return Ok(self.pcap_resync(b, 1, big, nanos, snaplen));
             }
             let Some(data) = r.get(16..16 + incl) else {
                 return Ok(if at == 0 {
@@ -402,10 +463,127 @@ impl PcapStream {
                 data,
                 orig_len: orig,
                 interface: 0,
+                skipped: std::mem::take(&mut self.skip),
             });
             at += 16 + incl;
         }
         Ok(Step::Took(at))
+    }
+
+    /// A classic record header whose lengths can be right: no more captured than on the
+    /// wire, within the snap length (with room for writers that exceed it a little) and the
+    /// record limit. (Its time is not judged: a flipped bit there is a time out of range, which
+    /// costs no record, see [`super::in_calendar`].)
+    fn sound_record(&self, incl: usize, orig: u32, snaplen: u32) -> bool {
+        incl <= orig as usize
+            && incl <= self.max_record
+            && (snaplen == 0 || incl <= (snaplen as usize).max(262_144))
+    }
+
+    /// After a damaged classic record header (at the start of `b`, or before it: `from` is
+    /// where the search goes on): skips to the next offset where a plausible record starts (sound lengths, its fraction of a second below one
+    /// second, its time within a day before and a year after the last good record) and the
+    /// record after it is plausible too, or the input ends right after it. Without one in
+    /// `b`, skips all but a header's worth; waits for more input when a candidate's successor
+    /// is not in `b` yet.
+    fn pcap_resync(&mut self, b: &[u8], from: usize, big: bool, nanos: bool, snaplen: u32) -> Step {
+        let rd = |at: usize| -> Option<[u32; 4]> {
+            let h = b.get(at..at + 16)?;
+            Some([0, 4, 8, 12].map(|i| rd32(&h[i..], big)))
+        };
+        let last_secs = (self.packets > 0).then_some(self.last_ts.div_euclid(1_000_000));
+        let plausible = |[secs, frac, incl, orig]: [u32; 4]| {
+            let frac_max = if nanos { 1_000_000_000 } else { 1_000_000 };
+            let near = last_secs
+                .is_none_or(|l| (l - 86_400..=l + 366 * 86_400).contains(&i64::from(secs)));
+            frac < frac_max && near && self.sound_record(incl as usize, orig, snaplen)
+        };
+        for q in from..b.len() {
+            let Some(h) = rd(q) else {
+                // Not a whole header left: wait for more.
+                break;
+            };
+            if !plausible(h) {
+                continue;
+            }
+            // Its successor must be plausible too: waited for when it is not here yet, so that
+            // how the input is cut never changes the choice.
+            let next = q + 16 + h[2] as usize;
+            match rd(next) {
+                Some(n) if !plausible(n) => continue,
+                Some(_) => {}
+                None => {
+                    if q > 0 {
+                        self.skip_bytes(self.offset, q as u64);
+                    }
+                    return if q > 0 {
+                        Step::Took(q)
+                    } else {
+                        Step::Need(next + 16)
+                    };
+                }
+            }
+            if q > 0 {
+                self.skip_bytes(self.offset, q as u64);
+            }
+            self.resyncing = false;
+            return Step::Took(q);
+        }
+        let keep = 15.min(b.len().saturating_sub(1));
+        let n = b.len() - keep;
+        self.skip_bytes(self.offset, n as u64);
+        Step::Took(n)
+    }
+
+    /// After a damaged pcapng block at the start of `b` (4-byte aligned, as every block; `from`
+    /// is where the search goes on, 0 when it went on past the start of an earlier call):
+    /// skips to the next 4-byte step where a block of a known type with a sound length starts
+    /// (its trailing length is checked when the block is parsed; a wrong one resynchronises
+    /// again). Without one in `b`, skips to where the unexamined last bytes begin.
+    fn pcapng_resync(&mut self, b: &[u8], from: usize, big: bool) -> Step {
+        const TYPES: [u32; 9] = [1, 2, 3, 4, 5, 6, 10, 0x0BAD, 0x4000_0BAD];
+        self.resyncing = true;
+        let mut q = from;
+        while q + 8 <= b.len() {
+            let kind = rd32(&b[q..], big);
+            let len = rd32(&b[q + 4..], big) as usize;
+            let sound = (12..=self.max_record).contains(&len) && len.is_multiple_of(4);
+            let shb = b[q..q + 4] == [0x0A, 0x0D, 0x0D, 0x0A];
+            if shb {
+                if q > 0 {
+                    self.skip_bytes(self.offset, q as u64);
+                }
+                self.resyncing = false;
+                return Step::Took(q);
+            }
+            if TYPES.contains(&kind) && sound {
+                // The trailing length (`sound`: at least 12) must match; waited for when it is
+                // not here yet, so that how the input is cut never changes the choice.
+                match b.get(q + len - 4..q + len) {
+                    None if q > 0 => {
+                        // Examined again, at the start, when the rest is here.
+                        self.skip_bytes(self.offset, q as u64);
+                        return Step::Took(q);
+                    }
+                    None => return Step::Need(len),
+                    Some(t) if rd32(t, big) as usize == len => {
+                        if q > 0 {
+                            self.skip_bytes(self.offset, q as u64);
+                        }
+                        self.resyncing = false;
+                        return Step::Took(q);
+                    }
+                    Some(_) => {}
+                }
+            }
+            q += 4;
+        }
+        // Every 4-byte step before `q` was looked at.
+        if q == 0 {
+            return Step::Need(8);
+        }
+        self.skip_bytes(self.offset, q as u64);
+        Step::Took(q)
     }
 
     fn pcapng_block(
@@ -417,23 +595,38 @@ impl PcapStream {
             return Ok(Step::Need(12));
         }
         let is_shb = b[..4] == [0x0A, 0x0D, 0x0D, 0x0A];
+        if self.resyncing {
+            let big = match &self.format {
+                Format::Pcapng { big, .. } => *big,
+                _ => false,
+            };
+            return Ok(self.pcapng_resync(b, 0, big));
+        }
+        let (section_big, in_section) = match &self.format {
+            Format::Pcapng {
+                big, in_section, ..
+            } => (*big, *in_section),
+            _ => (false, false),
+        };
         let big = if is_shb {
             match b[8..12] {
                 [0x1A, 0x2B, 0x3C, 0x4D] => true,
                 [0x4D, 0x3C, 0x2B, 0x1A] => false,
+                // A damaged section header inside the file: skipped like any damaged block.
+                _ if in_section => return Ok(self.pcapng_resync(b, 4, section_big)),
                 _ => {
                     return Err(PcapError::BadMagic([b[8], b[9], b[10], b[11]]));
                 }
             }
         } else {
-            match &self.format {
-                Format::Pcapng { big, .. } => *big,
-                _ => false,
-            }
+            section_big
         };
         let block_type = rd32(b, big);
         let len = rd32(&b[4..], big) as usize;
         if len < 12 || !len.is_multiple_of(4) || len > self.max_record {
+            if in_section {
+                return Ok(self.pcapng_resync(b, 4, big));
+            }
             return Err(PcapError::BadLength {
                 offset: self.offset,
                 len: len as u64,
@@ -443,6 +636,9 @@ impl PcapStream {
             return Ok(Step::Need(len));
         }
         if rd32(&b[len - 4..], big) as usize != len {
+            if in_section {
+                return Ok(self.pcapng_resync(b, 4, big));
+            }
             return Err(PcapError::LengthMismatch {
                 offset: self.offset,
             });
@@ -536,16 +732,16 @@ impl PcapStream {
                 let cap = rd32(&body[12..], big) as usize;
                 let orig = rd32(&body[16..], big);
                 if cap > body.len() - 20 {
-                    return Err(PcapError::BadLength {
-                        offset,
-                        len: cap as u64,
-                    });
+                    // A damaged captured length inside a sound block: the block is skipped.
+                    self.skip_bytes(offset, len as u64);
+                    return Ok(Step::Took(len));
                 }
                 let Some(iface) = ifaces.get(interface as usize) else {
-                    if (interface as u64) < *defined {
-                        return Err(PcapError::TooManyInterfaces { offset, interface });
-                    }
-                    return Err(PcapError::UnknownInterface { offset, interface });
+                    // An interface beyond the ones kept, or one never described (a flipped
+                    // bit): the packet cannot be placed. It is skipped and counted; the
+                    // packets after it are read.
+                    self.skip_bytes(offset, len as u64);
+                    return Ok(Step::Took(len));
                 };
                 let ts_micros = iface
                     .units
@@ -564,6 +760,7 @@ impl PcapStream {
                     data: &body[20..20 + cap],
                     orig_len: orig,
                     interface,
+                    skipped: std::mem::take(&mut self.skip),
                 });
             }
             // Simple packet block: interface 0, no time.
@@ -575,10 +772,8 @@ impl PcapStream {
                     });
                 }
                 let Some(iface) = ifaces.first() else {
-                    return Err(PcapError::UnknownInterface {
-                        offset,
-                        interface: 0,
-                    });
+                    self.skip_bytes(offset, len as u64);
+                    return Ok(Step::Took(len));
                 };
                 let orig = rd32(body, big);
                 let mut cap = (orig as usize).min(body.len() - 4);
@@ -597,6 +792,7 @@ impl PcapStream {
                     data: &body[4..4 + cap],
                     orig_len: orig,
                     interface: 0,
+                    skipped: std::mem::take(&mut self.skip),
                 });
             }
             _ => {}

@@ -20,6 +20,9 @@ pub const START: &[u8] = b"busnoop capture start";
 pub const START_UNTIMED: &[u8] = b"busnoop capture start (untimed)";
 pub const LINK_DOWN: &[u8] = b"busnoop link down";
 pub const LINK_UP: &[u8] = b"busnoop link up";
+/// After [`LINK_UP`], before the device the adapter is back at (recordings since issue 32;
+/// older ones have none, and a replay names the recording instead).
+pub const LINK_UP_AT: &[u8] = b" at ";
 
 /// One pcap record (stamped `ts_micros`, µs since the epoch): the RTAC serial header with
 /// `event` (control lines unknown) and then `data`.

@@ -77,6 +77,12 @@ pub trait Options {
         Ok(())
     }
 
+    /// Checks the options as a whole once the project file's keys are in (SAB: one name for
+    /// two commands): a usage error before any source is opened.
+    fn check(&self) -> Result<(), Failure> {
+        Ok(())
+    }
+
     /// `NAME=ID` names its options give (S-Bus `--station`), for the Device column.
     fn names(&self) -> Vec<String> {
         Vec::new()

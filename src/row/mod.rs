@@ -224,8 +224,10 @@ pub struct Row<'a> {
     pub data: &'a str,
     /// Values of the decoder's extra columns, in the order of its column list.
     pub extra: &'a [&'a str],
-    /// Every number the row carries, in wire order; empty when it carries none (and for frames
-    /// whose check failed). The first is the `Value` column; a packed value (an FLVSS frame's two
+    /// Every number the row carries, in wire order; empty when it carries none, for frames
+    /// whose check failed, and for frames flagged as corrupted though their check passed (S.Port's
+    /// non-standard check bits: the ID, outside the CRC, is damaged), so that a corrupted frame
+    /// never enters the wide table, a plot or JSON `parts`. The first is the `Value` column; a packed value (an FLVSS frame's two
     /// cells, a pair of halves, several registers) has one part per number, so every number is
     /// reachable (JSON `parts`, one wide column each).
     pub parts: Parts<'a>,

@@ -79,6 +79,10 @@ impl Options for Args {
         Ok(())
     }
 
+    fn check(&self) -> Result<(), Failure> {
+        super::check_commands(&self.command).map_err(Failure::Usage)
+    }
+
     fn sensors(&self) -> Vec<String> {
         self.command.iter().map(|(n, _)| n.clone()).collect()
     }

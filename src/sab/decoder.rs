@@ -193,9 +193,14 @@ impl Reasm {
         }
     }
 
+    /// A quiet line: a SAB v1 frame held for the frames after it is emitted
+    /// ([`sync::Reassembler::settle`]), then the garbage so far.
     fn flush_garbage(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
         match self {
-            Reasm::Sync(r) => r.flush_garbage(emit),
+            Reasm::Sync(r) => {
+                r.settle(emit);
+                r.flush_garbage(emit)
+            }
             Reasm::Hdlc(r) => r.flush_garbage(emit),
         }
     }
@@ -436,12 +441,15 @@ impl Decoder for SabDecoder {
     fn idle(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         let mut latch = Latch::new(out);
         let out = &mut latch;
-        if let Mode::Undecided(u) = &self.mode
+        if let Mode::Undecided(u) = &mut self.mode
             && !u.held.is_empty()
             && u.held
                 .first_time()
                 .is_some_and(|t| now.saturating_sub(t) >= detect::HOLD_MICROS)
         {
+            // A SAB v1 frame held for the frames after it counts: nothing more is coming.
+            let sv = &mut u.sync_valid;
+            u.sync.settle(&mut |e| *sv += e.is_valid() as u64);
             let (s, h) = (u.sync_valid, u.hdlc_valid);
             self.decide(
                 detect::majority(s, h),
@@ -466,7 +474,10 @@ impl Decoder for SabDecoder {
     fn finish(&mut self, out: &mut dyn RowOut) -> RowResult {
         let mut latch = Latch::new(out);
         let out = &mut latch;
-        if let Mode::Undecided(u) = &self.mode {
+        if let Mode::Undecided(u) = &mut self.mode {
+            // A SAB v1 frame held for the frames after it counts: the input ends.
+            let sv = &mut u.sync_valid;
+            u.sync.settle(&mut |e| *sv += e.is_valid() as u64);
             let (s, h) = (u.sync_valid, u.hdlc_valid);
             if self.pos == 0 {
                 return latch.result();

@@ -31,7 +31,7 @@ pub use config::{
     BITS_PER_BYTE, COLUMNS, DEFAULT_BAUD, DEFAULT_TIMEOUT_MS, FramingChoice, Options, PROTOCOL,
 };
 pub use decoder::SabDecoder;
-pub use names::{parse_command, parse_device};
+pub use names::{check_commands, parse_command, parse_device};
 pub use values::{Declared, Direction, Scale, ValueType};
 
 /// The SAB decoder (every input kind [`PROTOCOL`] accepts is a byte stream).

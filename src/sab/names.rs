@@ -91,9 +91,57 @@ pub fn parse_device(arg: &str) -> Result<(String, u8), String> {
     parse_pair(arg, "ADDR", super::header::ADDRESS_MASK as u64)
 }
 
-/// `NAME=CODE`, command 0..=255.
+/// `NAME=CODE`, command 0..=255. The name becomes a column of the wide table and a series of
+/// a plot, beside the time columns, the codes of unnamed commands (`0x10`) and request columns
+/// (`speed.req`), and is chosen in comma-separated lists (`--sensor`) and as `NAME@ADDRESS`:
+/// a name that would read as one of those is refused.
 pub fn parse_command(arg: &str) -> Result<(String, u8), String> {
-    parse_pair(arg, "CODE", 0xFF)
+    let (name, code) = parse_pair(arg, "CODE", 0xFF)?;
+    if ["Millis", "Date", "Time"]
+        .iter()
+        .any(|c| c.eq_ignore_ascii_case(name.trim()))
+    {
+        return Err(format!(
+            "the name `{name}` is a time column of the wide table; choose another"
+        ));
+    }
+    if parse_number(&name).is_some() {
+        return Err(format!(
+            "the name `{name}` reads as a command code; a name must not (the column of an \
+             unnamed command is its code)"
+        ));
+    }
+    if name.to_ascii_lowercase().ends_with(".req") {
+        return Err(format!(
+            "the name `{name}` ends with `.req`, which marks the payloads of requests"
+        ));
+    }
+    if let Some(c) = name.chars().find(|c| matches!(c, ',' | '@')) {
+        return Err(format!(
+            "the name `{name}` holds `{c}`, which separates names in lists (`,`) and a name \
+             from its address (`@`)"
+        ));
+    }
+    Ok((name, code))
+}
+
+/// Refuses one name for two commands (the later `--command` of one code overrides an earlier
+/// one, the project file's included): their numbers would share a column.
+pub fn check_commands(commands: &[(String, u8)]) -> Result<(), String> {
+    let mut last: std::collections::BTreeMap<u8, &str> = std::collections::BTreeMap::new();
+    for (name, code) in commands {
+        last.insert(*code, name);
+    }
+    let mut by_name: std::collections::BTreeMap<String, u8> = std::collections::BTreeMap::new();
+    for (code, name) in last {
+        if let Some(other) = by_name.insert(name.to_ascii_lowercase(), code) {
+            return Err(format!(
+                "--command: the name `{name}` is given to 0x{other:02X} and 0x{code:02X}; a \
+                 name names one command"
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

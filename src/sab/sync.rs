@@ -14,15 +14,22 @@
 //! The rule, which makes the output a function of the bytes alone:
 //!
 //! 1. A **frame** is accepted at the earliest position where a complete candidate passes its
-//!    CRC.
+//!    CRC, unless a valid frame starts inside it and reaches beyond its end, no valid frame
+//!    starts right at its end, and one starts right at the later frame's end (or the input
+//!    ends there): then the candidate is a damaged frame whose CRC-8 passed by chance (1 in
+//!    256; its LENGTH was hit, and it swallowed the next frame's 0x54). It is handled as a
+//!    failed candidate (rule 3: its 0x54 is garbage, scanning goes on with the next byte), so
+//!    the later frame, and any frame inside, are found. (The traffic decides: it goes on
+//!    cleanly after the true frame, so a frame whose payload holds a chance start keeps it.)
 //! 2. A failed candidate whose span contains no valid frame start is a **bad frame**
 //!    (`BadCrc`, or `Truncated` when the input ends inside it); its bytes are consumed.
 //! 3. A failed candidate whose span contains the start of a valid frame was a **false SYNC**:
 //!    only its 0x54 becomes garbage and scanning goes on with the next byte.
 //! 4. Every other byte is **garbage**.
 //!
-//! Memory is bounded: at most two frame lengths (74 bytes) are held while a rejected candidate
-//! waits for the candidates inside it to complete.
+//! Memory is bounded: at most three frame lengths (111 bytes) are held while a rejected
+//! candidate waits for the candidates inside it to complete, or a valid one for the frames
+//! after it and after the later frame inside it.
 
 use crc::{CRC_8_MAXIM_DOW, Crc};
 
@@ -37,7 +44,7 @@ pub const OVERHEAD: usize = 5;
 /// Longest frame on the wire.
 pub const MAX_FRAME: usize = MAX_PAYLOAD + OVERHEAD;
 /// Bytes held at most (see the module documentation).
-pub const CAPACITY: usize = 2 * MAX_FRAME;
+pub const CAPACITY: usize = 3 * MAX_FRAME;
 use crate::row::GARBAGE_ROW_MAX;
 
 const CRC8: Crc<u8> = Crc::<u8>::new(&CRC_8_MAXIM_DOW);
@@ -117,6 +124,94 @@ fn valid_frame(bytes: &[u8]) -> Option<usize> {
     let end = length + OVERHEAD;
     let frame = bytes.get(..end)?;
     (crc8(&frame[1..end - 1]) == frame[end - 1]).then_some(end)
+}
+
+/// For a valid frame ending at `end` at the start of `bytes`: whether it stands (rule 1 of
+/// the module documentation). `Some(None)`: it stands; `Some(Some(q))`: its 0x54 is taken for
+/// a false one (`q`: the valid frame start inside it that decided it); `None`: `bytes` ends
+/// before that is decided (never at the end of the input, `eof`).
+#[inline]
+fn overlap(bytes: &[u8], end: usize, eof: bool) -> Option<Option<usize>> {
+    // Only a frame with a valid frame start inside it is in doubt.
+    let mut p = 1;
+    let mut nested = None;
+    while let Some(k) = find(SYNC, &bytes[p..end]) {
+        p += k;
+        match check_bytes(&bytes[p..]) {
+            // One that reaches past its end: it would hide that frame's start. The traffic
+            // decides: it takes the place when a valid frame starts right at its own end, and
+            // none right at the frame's end (which it would hide in turn).
+            Check::Valid(len) if p + len > end => {
+                let frame_at = |at: usize| -> Option<bool> {
+                    match check_bytes(bytes.get(at..).unwrap_or(&[])) {
+                        Check::Valid(_) => Some(true),
+                        Check::Incomplete if !eof => None,
+                        _ if at >= bytes.len() && !eof => None,
+                        _ => Some(false),
+                    }
+                };
+                // (A stray 0x54 right at its end and a valid frame after it count as a valid
+                // frame at its end: a lost byte's signature has the next frame's LENGTH there,
+                // which is never 0x54.)
+                if frame_at(end)? || (bytes.get(end) == Some(&SYNC) && frame_at(end + 1)?) {
+                    return Some(None);
+                }
+                // Its 0x54 in the frame's CRC byte: the signature of a byte lost from the frame
+                // (its LENGTH then reaches one byte into the next frame, whose 0x54 passed as
+                // its CRC, 1 in 256); a real CRC byte of 0x54 starting a valid frame is 1 in 65 536.
+                if p == end - 1 || frame_at(p + len)? {
+                    return Some(Some(p));
+                }
+                // Neither: the frames counted below decide.
+                nested.get_or_insert(p);
+                break;
+            }
+            Check::Valid(_) => {
+                nested.get_or_insert(p);
+                p += 1;
+            }
+            Check::Incomplete if !eof => return None,
+            _ => p += 1,
+        }
+    }
+    let Some(q) = nested else {
+        return Some(None);
+    };
+    // Frames inside it: the reading from the byte after its 0x54 wins when it finds more valid
+    // frames, up to one frame length past its end (a LENGTH hit that made it swallow frames);
+    // a tie keeps it (a payload holding a frame by chance, followed by noise).
+    let horizon = end + MAX_FRAME;
+    let (n, _) = chain(bytes, end, horizon, eof)?;
+    let (m, _) = chain(bytes, 1, horizon, eof)?;
+    Some((m > n + 1).then_some(q))
+}
+
+/// Valid frames read greedily (the earliest valid one, then on from its end) from `from`,
+/// the ones that start before `horizon`: their number and their bytes before `horizon`.
+/// `None` when `bytes` ends before that is decided (never at the end of the input, `eof`).
+fn chain(bytes: &[u8], from: usize, horizon: usize, eof: bool) -> Option<(usize, usize)> {
+    let (mut n, mut covered, mut p) = (0, 0, from);
+    while p < horizon {
+        if p >= bytes.len() {
+            return eof.then_some((n, covered));
+        }
+        let to = horizon.min(bytes.len());
+        let Some(k) = find(SYNC, &bytes[p..to]) else {
+            p = to;
+            continue;
+        };
+        p += k;
+        match check_bytes(&bytes[p..]) {
+            Check::Valid(len) => {
+                n += 1;
+                covered += (p + len).min(horizon) - p;
+                p += len;
+            }
+            Check::Incomplete if !eof => return None,
+            _ => p += 1,
+        }
+    }
+    Some((n, covered))
 }
 
 /// Classifies the candidate at the start of `bytes` (which starts with 0x54). Out of line:
@@ -236,16 +331,30 @@ impl Reassembler {
                     continue;
                 }
                 if let Some(end) = valid_frame(rest) {
-                    self.emit_in_place(&rest[..end], time, emit);
-                    i += end;
-                    continue;
+                    match overlap(rest, end, false) {
+                        Some(None) => {
+                            self.emit_in_place(&rest[..end], time, emit);
+                            i += end;
+                            continue;
+                        }
+                        Some(Some(_)) => {
+                            // Rule 3: its 0x54 was a false one.
+                            self.run_note(|r| r.false_syncs += 1);
+                            self.garbage_byte(SYNC, time, emit);
+                            i += 1;
+                            continue;
+                        }
+                        // Decided byte by byte, with the bytes held.
+                        None => {
+                            self.step(data[i], time, emit);
+                            i += 1;
+                            continue;
+                        }
+                    }
                 }
                 match in_place(rest) {
-                    InPlace::Frame(end) => {
-                        self.emit_in_place(&rest[..end], time, emit);
-                        i += end;
-                        continue;
-                    }
+                    // (valid_frame found every valid frame above)
+                    InPlace::Frame(_) => {}
                     InPlace::BadLength => {
                         self.run_note(|r| r.bad_lengths += 1);
                         self.garbage_byte(SYNC, time, emit);
@@ -362,6 +471,18 @@ impl Reassembler {
         self.flush_garbage(emit);
     }
 
+    /// A quiet line (or the end of detection's look): a valid frame held while the frames after
+    /// it were awaited (rule 1) is emitted, since nothing is coming to take its place; then
+    /// decoding goes on as before. Nothing else changes.
+    pub fn settle(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
+        if self.known == 0
+            && let Some(end) = self.valid
+        {
+            self.emit_frame(end, emit);
+            self.process(false, emit);
+        }
+    }
+
     /// A gap in the capture: emits the garbage collected so far and forgets the bytes of an
     /// unfinished candidate without reporting them.
     pub fn reset(&mut self, emit: &mut impl FnMut(&Event<'_>)) {
@@ -429,7 +550,16 @@ impl Reassembler {
         while self.len > 0 {
             if self.known == 0 {
                 if let Some(end) = self.valid {
-                    self.emit_frame(end, emit);
+                    match overlap(&self.buf[..self.len], end, eof) {
+                        Some(None) => self.emit_frame(end, emit),
+                        Some(Some(_)) => {
+                            // Rule 3: its 0x54 was a false one.
+                            self.valid = None;
+                            self.run_note(|r| r.false_syncs += 1);
+                            self.garbage_front(emit);
+                        }
+                        None => return,
+                    }
                     continue;
                 }
                 match self.check(0) {
@@ -704,6 +834,90 @@ mod tests {
         let ev = events(&wire);
         assert_eq!(ev[0].kind, EventKind::Garbage);
         assert_eq!(ev[1].kind, EventKind::Frame);
+    }
+
+    /// A damaged frame whose wrong LENGTH reaches into the next frame and whose CRC-8 passes
+    /// there by chance (1 in 256), followed by two good frames: the damaged one is taken for a
+    /// false 0x54 (garbage), and both good frames come out.
+    fn swallowing(extra: usize) -> (Vec<u8>, usize, usize) {
+        let mut wire = Vec::new();
+        encode(&mut wire, 0x05, 0x10, &[1, 2, 3]);
+        let first = wire.len();
+        let mut payload = vec![0x20, 0x21, 0x22, 0x23, 0x24, 0x25];
+        // The damaged frame's LENGTH says 3 + extra: it ends inside the next frame's payload,
+        // at payload[extra - 5], whose value is made the CRC-8 it expects.
+        wire[1] = 3 + extra as u8;
+        let at = extra - 5;
+        let mut second = Vec::new();
+        encode(&mut second, 0x85, 0x11, &payload);
+        let mut probe = wire[1..].to_vec();
+        probe.extend_from_slice(&second[..4 + at]);
+        payload[at] = crc8(&probe);
+        second.clear();
+        encode(&mut second, 0x85, 0x11, &payload);
+        wire.extend_from_slice(&second);
+        let good = wire.len();
+        encode(&mut wire, 0x05, 0x12, &[9]);
+        (wire, first, good)
+    }
+
+    #[test]
+    fn a_damaged_frame_that_passes_its_crc_by_chance_does_not_hide_the_next() {
+        for extra in 5..11 {
+            let (wire, first, good) = swallowing(extra);
+            let ev = events(&wire);
+            assert_eq!(
+                kinds(&ev),
+                [
+                    (EventKind::Garbage, crate::fmt::hex(&wire[..first])),
+                    (EventKind::Frame, crate::fmt::hex(&wire[first..good])),
+                    (EventKind::Frame, crate::fmt::hex(&wire[good..])),
+                ],
+                "extra {extra}"
+            );
+            assert_eq!(ev[0].false_syncs, 1);
+            // The same byte by byte.
+            let mut r = Reassembler::new();
+            let mut out = Vec::new();
+            for &b in &wire {
+                r.push(&[b], None, &mut |e| out.push(OwnedEvent::from(e)));
+            }
+            r.finish(&mut |e| out.push(OwnedEvent::from(e)));
+            assert_eq!(kinds(&out), kinds(&ev), "extra {extra}, byte by byte");
+        }
+    }
+
+    /// A valid frame whose payload happens to hold a valid frame start that reaches beyond it
+    /// stays a frame when a valid frame follows it right after its end.
+    #[test]
+    fn a_frame_followed_by_a_frame_keeps_a_chance_start_inside_it() {
+        // The inner candidate `54 02 ..` starts in the payload and ends in the next frame.
+        let mut wire = Vec::new();
+        let mut payload = vec![0x11, SYNC, 0x02, 0x33];
+        encode(&mut wire, 0x05, 0x10, &payload);
+        let mut next = Vec::new();
+        encode(&mut next, 0x05, 0x12, &[7, 8, 9]);
+        // Make `54 02 33 CRC(..) next[0..3]` check: its CRC byte is next[2].
+        for v in 0..=255u8 {
+            payload[3] = v;
+            wire.clear();
+            encode(&mut wire, 0x05, 0x10, &payload);
+            let mut inner = vec![0x02, v, wire[wire.len() - 1]];
+            inner.extend_from_slice(&next[..2]);
+            if crc8(&inner) == next[2] {
+                break;
+            }
+        }
+        let first = wire.len();
+        wire.extend_from_slice(&next);
+        let ev = events(&wire);
+        assert_eq!(
+            kinds(&ev),
+            [
+                (EventKind::Frame, crate::fmt::hex(&wire[..first])),
+                (EventKind::Frame, crate::fmt::hex(&wire[first..])),
+            ]
+        );
     }
 
     #[test]

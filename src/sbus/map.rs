@@ -478,6 +478,15 @@ impl Mapper {
                 *class = Class::Warning;
                 None
             }
+            Answer::AfterBadRequest => {
+                self.totals.no_request += 1;
+                self.sc.note(
+                    "answers a request that failed its CRC: not paired (its station and \
+                     command are not known)",
+                );
+                *class = Class::Warning;
+                None
+            }
             Answer::NoRequest => {
                 self.totals.no_request += 1;
                 self.sc.note("no request");

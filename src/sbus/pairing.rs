@@ -71,6 +71,9 @@ pub enum Answer {
     SeqMismatch { req: Outstanding },
     /// No request is waiting.
     NoRequest,
+    /// The request before it failed its CRC: it opened nothing (its station and command may
+    /// be the broken bytes), so the answer is not paired.
+    AfterBadRequest,
 }
 
 /// Serial line pairing: one outstanding request.
@@ -80,6 +83,8 @@ pub struct SerialPairing {
     /// Logical bytes of the last request (to recognise retries).
     last: Vec<u8>,
     last_answered: bool,
+    /// The last request failed its CRC and nothing answered it yet.
+    after_bad: bool,
     pub timeout: u64,
 }
 
@@ -89,6 +94,7 @@ impl SerialPairing {
             pending: None,
             last: Vec::with_capacity(300),
             last_answered: true,
+            after_bad: false,
             timeout,
         }
     }
@@ -128,6 +134,7 @@ impl SerialPairing {
                 kind = RequestKind::resend(&mut next, &p);
             }
         }
+        self.after_bad = false;
         self.last.clear();
         self.last.extend_from_slice(&head);
         self.last.extend_from_slice(body);
@@ -143,7 +150,10 @@ impl SerialPairing {
     /// stays pending after its timeout).
     pub fn answer(&mut self, time: u64, seq: Option<u16>) -> Answer {
         let Some(mut p) = self.pending else {
-            return Answer::NoRequest;
+            return match std::mem::take(&mut self.after_bad) {
+                true => Answer::AfterBadRequest,
+                false => Answer::NoRequest,
+            };
         };
         if let (Some(a), Some(r)) = (seq, p.seq)
             && a != r
@@ -158,6 +168,20 @@ impl SerialPairing {
             elapsed: reply.elapsed,
             late: reply.overdue,
         }
+    }
+
+    /// A request that failed its CRC: it opens nothing, since its station, command and
+    /// address may be the broken bytes, and the next answer is shown unpaired. The request
+    /// waiting before it is over (the master sent something else): returned for its Timeout
+    /// row when it got no answer.
+    pub fn bad_request(&mut self) -> Option<(Outstanding, TimeoutWhy)> {
+        self.after_bad = true;
+        self.last.clear();
+        self.last_answered = true;
+        self.pending
+            .take()
+            .filter(Open::due)
+            .map(|p| (p, TimeoutWhy::NextRequest))
     }
 
     /// A broken answer (bad CRC) arrived for the pending request.

@@ -326,7 +326,7 @@ impl SerialCore {
 
     fn expire(&mut self, now: u64, out: &mut dyn RowOut) -> RowResult {
         if let Some(p) = self.pairing.expire(now) {
-            let at = p.time + self.pairing.timeout;
+            let at = p.time.saturating_add(self.pairing.timeout);
             self.timeout_row(&p, TimeoutWhy::Deadline, at, out)?;
         }
         Ok(())
@@ -435,7 +435,7 @@ impl SerialCore {
             } => {
                 let other = (unescaped != escaped).then_some(unescaped);
                 self.map.bad_crc(got, escaped, other);
-                self.bad_frame(f, t, timed, seq, out)
+                self.bad_frame(f, t, out)
             }
             CrcCheck::None => match f.tele {
                 Tele::AckNak { .. } => {
@@ -447,23 +447,17 @@ impl SerialCore {
         }
     }
 
-    fn bad_frame(
-        &mut self,
-        f: &Frame<'_>,
-        t: u64,
-        timed: bool,
-        seq: Option<u16>,
-        out: &mut dyn RowOut,
-    ) -> RowResult {
+    fn bad_frame(&mut self, f: &Frame<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
         let sc = &mut self.map.sc;
         let (id, sensor) = match f.tele {
             Tele::Request { station, cmd, body } => {
-                let text =
-                    telegram::describe_request(station, cmd, body, &mut sc.sensor_no, &mut sc.data);
+                telegram::describe_request(station, cmd, body, &mut sc.sensor_no, &mut sc.data);
                 self.per[station as usize].crc_errors += 1;
-                // Keep it as the outstanding request: the slave may have read it correctly.
-                let req = Outstanding::new(text.info, t, timed, seq);
-                self.request(station, cmd, body, req, out)?;
+                // It opens nothing: its station, command and address may be the broken bytes,
+                // and an answer paired with it would show them as read (M3, issue 32).
+                if let Some((p, why)) = self.pairing.bad_request() {
+                    self.timeout_row(&p, why, t, out)?;
+                }
                 (Some(station), telegram::command_name(cmd))
             }
             Tele::Response { .. } | Tele::AckNak { .. } => {

@@ -3,7 +3,6 @@
 mod fit;
 pub mod output;
 pub(crate) use fit::fallback_size;
-pub(crate) use output::{check_folder, create_file};
 mod spool;
 mod tap;
 pub mod wide;
@@ -191,8 +190,8 @@ impl Table {
 
     /// Writes the wide table ([`wide`]) instead of the long one: CSV and TSV only (the caller
     /// checks); `live`: write lines as they come rather than at the end.
-    pub fn set_wide(&mut self, step: wide::Step, live: bool) {
-        let mut w = wide::Wide::new(self.opts.format, step, self.opts.utc, live);
+    pub fn set_wide(&mut self, step: wide::Step, live: bool, max_columns: usize) {
+        let mut w = wide::Wide::new(self.opts.format, step, self.opts.utc, live, max_columns);
         w.port_column(self.port_column);
         self.wide = Some(w);
     }
@@ -360,6 +359,13 @@ impl Table {
                     "busnoop: note: --wide: no row carried a number, so the table has no columns"
                 );
             }
+            if let Some((max, n)) = w.left_out() {
+                eprintln!(
+                    "busnoop: note: --wide: the table keeps the first {max} columns; {n} {} of \
+                     later columns left out (--max-columns N for more)",
+                    if n == 1 { "number" } else { "numbers" }
+                );
+            }
         }
         self.out.close()
     }
@@ -372,19 +378,14 @@ impl Table {
 
     fn wall_time(&mut self, micros: Option<u64>) -> &str {
         self.scratch.clear();
-        if let (Some(anchor), Some(us)) = (self.anchor, micros) {
-            let delta = chrono::Duration::microseconds(us as i64);
+        // Beyond the calendar (a corrupt time stamp): an empty cell.
+        if let Some(at) = self.anchor.zip(micros).and_then(|(a, us)| a.plus(us)) {
             use std::fmt::Write as _;
-            match anchor {
+            match at {
                 Anchor::Naive(n) => {
-                    let _ = write!(
-                        self.scratch,
-                        "{}",
-                        (n + delta).format("%Y-%m-%dT%H:%M:%S%.3f")
-                    );
+                    let _ = write!(self.scratch, "{}", n.format("%Y-%m-%dT%H:%M:%S%.3f"));
                 }
                 Anchor::Instant(t) => {
-                    let t = t + delta;
                     if self.opts.utc {
                         let _ = write!(self.scratch, "{}", t.format("%Y-%m-%dT%H:%M:%S%.3fZ"));
                     } else {

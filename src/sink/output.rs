@@ -8,6 +8,7 @@ use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use crate::files::create_file;
 use crate::row::OutputError;
 use crate::row::line::{self, W};
 
@@ -24,63 +25,6 @@ enum Dest {
     },
     #[cfg(test)]
     Memory(Vec<u8>),
-}
-
-/// How often the wait for a FIFO's reader looks for a signal.
-const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
-
-/// Creates (truncates) `path` for writing: the table, a recording, an export. A FIFO is opened
-/// non-blocking, retried until a reader comes: a plain open waits for the reader inside the
-/// kernel, where no signal can end it (`-o FIFO` with no reader ignored Ctrl-C). SIGINT/SIGTERM
-/// end the wait with an `Interrupted` error ([`crate::exit::Failure::from_create`]); once open,
-/// the FIFO is written blocking like any file.
-pub(crate) fn create_file(path: &Path) -> io::Result<File> {
-    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
-    if !std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
-        return File::create(path);
-    }
-    loop {
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .custom_flags(libc::O_NONBLOCK)
-            .open(path)
-        {
-            Ok(f) => {
-                crate::source::set_blocking(&f)?;
-                return Ok(f);
-            }
-            // No reader yet.
-            Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
-                if crate::signal::Stop::received().is_some() {
-                    return Err(io::Error::new(
-                        io::ErrorKind::Interrupted,
-                        "stopped by a signal",
-                    ));
-                }
-                std::thread::sleep(SIGNAL_POLL);
-            }
-            Err(e) => return Err(e),
-        }
-    }
-}
-
-/// Refuses an output whose folder does not exist (or is no folder) before any output is
-/// created, with the message creating it would give: found only then, the outputs created
-/// before it (the recording, the export, the table) were left behind, an existing one emptied.
-pub(crate) fn check_folder(path: &Path) -> Result<(), crate::exit::Failure> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let problem = match std::fs::metadata(dir) {
-        Ok(m) if m.is_dir() => return Ok(()),
-        Ok(_) => format!("{} is not a directory", dir.display()),
-        Err(e) => e.to_string(),
-    };
-    Err(crate::exit::Failure::Output(format!(
-        "cannot create {}: {problem}",
-        path.display()
-    )))
 }
 
 /// A buffered destination that only ever writes complete rows (or records of a binary file:

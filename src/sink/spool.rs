@@ -5,9 +5,10 @@
 //! temporary file in [`std::env::temp_dir`] (`$TMPDIR`), which is read back once, in order, at
 //! the end.
 //!
-//! Each line is a record: its cell count (`u32`, little-endian; the line is padded to the final
-//! column count when written out), its length in bytes (`u32`) and its text without the line
-//! end. Nothing else is kept per line, so the bookkeeping does not grow with the capture either.
+//! A line is kept as a record of what changed since the line before (the wide table writes it,
+//! [`super::wide`]), so that the spool grows with the input, never with lines × columns. Each
+//! record is its length in bytes (`u32`, little-endian) and its bytes. Nothing else is kept per
+//! record, so the bookkeeping does not grow with the capture either.
 
 use std::fs::File;
 use std::io::{self, BufReader, Cursor, Read, Seek, SeekFrom, Write};
@@ -15,8 +16,8 @@ use std::io::{self, BufReader, Cursor, Read, Seek, SeekFrom, Write};
 /// Bytes of records kept in memory before they are written to the temporary file.
 pub const MEMORY: usize = 1 << 20;
 
-/// Bytes of a record before its text: the cell count and the text's length.
-const HEAD: usize = 8;
+/// Bytes of a record before its bytes: their length.
+const HEAD: usize = 4;
 
 /// The records of the wide table's lines, in memory and then in a temporary file.
 pub struct Spool {
@@ -28,6 +29,8 @@ pub struct Spool {
     /// Records pushed and not yet read back: the reader expects exactly this many, so a file
     /// cut short is an error, never a short table.
     count: u64,
+    /// Bytes of records pushed in all (tests check that the spool grows with the input).
+    total: u64,
     /// The records being read back (after [`Spool::rewind`]).
     reader: Option<Box<dyn Read>>,
 }
@@ -40,19 +43,19 @@ impl Spool {
             limit,
             file: None,
             count: 0,
+            total: 0,
             reader: None,
         }
     }
 
-    /// Adds a line of `cells` cells (its text without the line end).
-    pub fn push(&mut self, cells: usize, line: &[u8]) -> io::Result<()> {
-        let too_long = |_| io::Error::new(io::ErrorKind::InvalidInput, "a line is over 4 GiB");
-        let cells = u32::try_from(cells).map_err(too_long)?;
-        let len = u32::try_from(line.len()).map_err(too_long)?;
-        self.mem.extend_from_slice(&cells.to_le_bytes());
+    /// Adds a record.
+    pub fn push(&mut self, record: &[u8]) -> io::Result<()> {
+        let len = u32::try_from(record.len())
+            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "a line is over 4 GiB"))?;
         self.mem.extend_from_slice(&len.to_le_bytes());
-        self.mem.extend_from_slice(line);
+        self.mem.extend_from_slice(record);
         self.count += 1;
+        self.total += (HEAD + record.len()) as u64;
         if self.mem.len() >= self.limit {
             let file = match &mut self.file {
                 Some(f) => f,
@@ -69,6 +72,12 @@ impl Spool {
     #[cfg(test)]
     pub fn in_memory(&self) -> usize {
         self.mem.len()
+    }
+
+    /// Bytes of records pushed in all, in memory and in the file (tests).
+    #[cfg(test)]
+    pub fn total(&self) -> u64 {
+        self.total
     }
 
     /// Whether records went to the temporary file (tests).
@@ -92,15 +101,15 @@ impl Spool {
         Ok(())
     }
 
-    /// The next line read back into `line` (replacing its content), with its cell count;
-    /// `None` after the last.
-    pub fn next(&mut self, line: &mut Vec<u8>) -> io::Result<Option<usize>> {
+    /// The next record read back into `record` (replacing its content); `false` after the
+    /// last.
+    pub fn next(&mut self, record: &mut Vec<u8>) -> io::Result<bool> {
         let Some(reader) = &mut self.reader else {
-            return Ok(None);
+            return Ok(false);
         };
         if self.count == 0 {
             self.reader = None;
-            return Ok(None);
+            return Ok(false);
         }
         let short = |e: io::Error| match e.kind() {
             io::ErrorKind::UnexpectedEof => io::Error::new(
@@ -111,17 +120,14 @@ impl Spool {
         };
         let mut head = [0; HEAD];
         reader.read_exact(&mut head).map_err(short)?;
-        let [c0, c1, c2, c3, l0, l1, l2, l3] = head;
-        let cells = u32::from_le_bytes([c0, c1, c2, c3]);
-        let len = u32::from_le_bytes([l0, l1, l2, l3]);
-        line.clear();
-        line.resize(len as usize, 0);
-        reader.read_exact(line).map_err(short)?;
+        record.clear();
+        record.resize(u32::from_le_bytes(head) as usize, 0);
+        reader.read_exact(record).map_err(short)?;
         self.count -= 1;
-        Ok(Some(cells as usize))
+        Ok(true)
     }
 
-    /// Whether lines remain to be read back.
+    /// Whether records remain to be read back.
     pub fn has_more(&self) -> bool {
         self.count > 0
     }
@@ -173,17 +179,17 @@ mod tests {
         for limit in [MEMORY, 64] {
             let mut s = Spool::new(limit);
             for i in 0..1000usize {
-                s.push(i % 7, format!("line {i}").as_bytes()).unwrap();
+                s.push(format!("line {i}").as_bytes()).unwrap();
                 assert!(s.in_memory() < limit + 64, "memory stays bounded");
             }
             assert_eq!(s.spilled(), limit == 64);
             s.rewind().unwrap();
             let mut line = Vec::new();
             for i in 0..1000usize {
-                assert_eq!(s.next(&mut line).unwrap(), Some(i % 7));
+                assert!(s.next(&mut line).unwrap());
                 assert_eq!(line, format!("line {i}").as_bytes());
             }
-            assert_eq!(s.next(&mut line).unwrap(), None);
+            assert!(!s.next(&mut line).unwrap());
             assert!(!s.has_more());
         }
     }

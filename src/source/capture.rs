@@ -35,6 +35,8 @@ pub struct CaptureReader {
     /// the wrong-protocol check after the run).
     keep_input: u64,
     anchored: bool,
+    /// The last packet was stamped outside the calendar (a `TimeJump` row said so).
+    out_of_range: bool,
     /// A parse failure to send before anything else.
     error: Option<PcapError>,
 }
@@ -51,6 +53,7 @@ impl CaptureReader {
             buf: vec![0; READ_SIZE],
             keep_input,
             anchored: false,
+            out_of_range: false,
             error: None,
         }
     }
@@ -82,19 +85,51 @@ impl ChunkReader for CaptureReader {
                 if let Err(e) = self.stream.finish() {
                     let _ = tx.send(Message::CaptureError(e));
                 }
+                if let Some(w) = super::skipped_warning(&self.name, self.stream.skipped()) {
+                    let _ = tx.send(w);
+                }
                 return Ok(None);
             }
             let mut packets = Packets::for_input(n);
             let input = &self.buf[..n];
-            self.error = self.stream.push(input, &mut |p| packets.push(&p)).err();
-            if !self.anchored
-                && let Some(start) = self.stream.start()
-            {
-                self.anchored = true;
-                if let Some(a) = pcap::anchor(start) {
-                    let _ = tx.send(Message::Anchor(a));
+            let (anchored, out_of_range) = (&mut self.anchored, &mut self.out_of_range);
+            let link_type = self.stream.link_type();
+            let mut each = |p: pcap::Packet<'_>| {
+                let stamped = pcap::in_calendar(p.ts_micros);
+                // The first packet in the calendar starts the capture (PcapStream::start).
+                if stamped && !*anchored {
+                    *anchored = true;
+                    if let Some(a) = pcap::anchor(p.ts_micros) {
+                        let _ = tx.send(Message::Anchor(a));
+                    }
                 }
-            }
+                if p.skipped > 0 {
+                    if !packets.is_empty() {
+                        let before = std::mem::replace(&mut packets, Packets::for_input(n));
+                        let _ = tx.send(Message::Packets(Captured {
+                            packets: before,
+                            input: Vec::new(),
+                            link_type,
+                        }));
+                    }
+                    let _ = tx.send(super::skipped_note(p.skipped, Some(p.time)));
+                }
+                if !stamped && !*out_of_range {
+                    // The row goes between the packets before and after it.
+                    if !packets.is_empty() {
+                        let before = std::mem::replace(&mut packets, Packets::for_input(n));
+                        let _ = tx.send(Message::Packets(Captured {
+                            packets: before,
+                            input: Vec::new(),
+                            link_type,
+                        }));
+                    }
+                    let _ = tx.send(super::time_out_of_range(p.ts_micros, Some(p.time)));
+                }
+                *out_of_range = !stamped;
+                packets.push(&p);
+            };
+            self.error = self.stream.push(input, &mut each).err();
             if !packets.is_empty() || self.keep_input > 0 {
                 let keep = usize::try_from(self.keep_input).map_or(n, |k| k.min(n));
                 self.keep_input -= keep as u64;

@@ -21,6 +21,9 @@ const STAMP_LEN: usize = 24;
 const MAX_LINE: usize = 4096;
 /// A batch is sent once it holds this many bytes, or when the input has nothing more buffered.
 const BATCH_BYTES: usize = 64 * 1024;
+/// Time marks per batch at most (one per line with bytes): a log of one byte per line sends
+/// batches of 256 KiB of marks, not 16 bytes of marks per byte up to [`BATCH_BYTES`].
+const BATCH_MARKS: usize = 16 * 1024;
 
 /// `Some(true)` when `prefix` starts like a log line, `Some(false)` when it cannot be one,
 /// `None` when more bytes are needed to tell.
@@ -166,9 +169,12 @@ impl EdgeTxReader {
                         self.held = true;
                         return true;
                     }
-                    let before = anchor + chrono::Duration::microseconds(self.last as i64);
+                    // `last` is at most the span of the log's own years: these cannot leave
+                    // chrono's range, but stay checked all the same.
+                    let last = chrono::Duration::microseconds(self.last as i64);
+                    let before = anchor.checked_add_signed(last).unwrap_or(anchor);
                     let back = (before - l.time).num_microseconds().unwrap_or(i64::MAX);
-                    let new_anchor = l.time - chrono::Duration::microseconds(self.last as i64);
+                    let new_anchor = l.time.checked_sub_signed(last).unwrap_or(l.time);
                     self.anchor = Some(new_anchor);
                     let _ = tx.send(Message::Note {
                         micros: Some(self.last),
@@ -188,7 +194,12 @@ impl EdgeTxReader {
                     self.last
                 };
                 self.last = micros;
-                batch.marks.push((batch.bytes.len(), Some(micros)));
+                // A line with no bytes leaves a mark with none after it: the next line's time
+                // replaces it, so that a run of such lines costs nothing (M1, issue 32).
+                match batch.marks.last_mut() {
+                    Some(m) if m.0 == batch.bytes.len() => m.1 = Some(micros),
+                    _ => batch.marks.push((batch.bytes.len(), Some(micros))),
+                }
                 batch.bytes.extend_from_slice(&l.bytes);
             }
             None => {
@@ -251,7 +262,10 @@ impl ChunkReader for EdgeTxReader {
                         self.overlong = true;
                     }
                     self.pos += i + 1;
-                    if self.take_line(&mut batch, tx) || batch.bytes.len() >= BATCH_BYTES {
+                    if self.take_line(&mut batch, tx)
+                        || batch.bytes.len() >= BATCH_BYTES
+                        || batch.marks.len() >= BATCH_MARKS
+                    {
                         break;
                     }
                 }
@@ -319,6 +333,46 @@ mod tests {
         let msgs: Vec<Message> = rx.try_iter().collect();
         assert!(matches!(msgs[0], Message::Anchor(_)));
         assert!(matches!(&msgs[1], Message::Warning(w) if w.contains("line 3")));
+    }
+
+    /// M1 (issue 32): lines with a time and no bytes added a mark each until 256 KiB of bytes
+    /// came (memory about the size of the input; a pipe into `detect -` grew ~70 MB/s). A mark
+    /// with no bytes after it now takes the later time instead.
+    #[test]
+    fn lines_without_bytes_add_no_marks() {
+        let mut text = Vec::new();
+        for i in 0..100_000u32 {
+            let t = chrono::NaiveDate::from_ymd_opt(2014, 7, 11)
+                .unwrap()
+                .and_hms_opt(22, 0, 0)
+                .unwrap()
+                + chrono::Duration::milliseconds(i64::from(i));
+            text.extend_from_slice(t.format("%Y-%m-%d,%H:%M:%S%.3f:\n").to_string().as_bytes());
+        }
+        text.extend_from_slice(b"2014-07-11,22:05:00.000: 7E 00\n");
+        let msgs = messages(&text);
+        let batches: Vec<&Batch> = msgs
+            .iter()
+            .filter_map(|m| match m {
+                Message::Data(b) => Some(b),
+                _ => None,
+            })
+            .collect();
+        let marks = batches.iter().map(|b| b.marks.len()).max().unwrap();
+        assert!(marks <= 2, "{marks} marks in one batch");
+        let segments: Vec<_> = batches.iter().flat_map(|b| b.segments()).collect();
+        assert_eq!(
+            segments.last().unwrap(),
+            &(&[0x7E, 0x00][..], Some(300_000_000))
+        );
+        // One byte per line: a mark per byte, in batches of at most BATCH_MARKS marks.
+        let text = "2014-07-11,22:41:01.340: 7E\n".repeat(40_000);
+        let msgs = messages(text.as_bytes());
+        let marks = msgs.iter().filter_map(|m| match m {
+            Message::Data(b) => Some(b.marks.len()),
+            _ => None,
+        });
+        assert!(marks.max().unwrap() <= BATCH_MARKS);
     }
 
     /// Every message the reader sends, batches included, in order.

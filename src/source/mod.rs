@@ -143,6 +143,53 @@ pub enum Message {
     Failed(Failure),
 }
 
+/// The row for the first of a run of packets or records stamped outside the calendar
+/// ([`crate::pcap::in_calendar`]: a flipped bit, a wrong `if_tsresol`): it says so, at the time
+/// of the packet before, which those packets get too.
+pub fn time_out_of_range(ts_micros: i64, micros: Option<u64>) -> Message {
+    Message::Note {
+        micros,
+        kind: crate::row::kind::TIME_JUMP,
+        class: crate::row::Class::Warning,
+        data: format!(
+            "time stamp out of range ({} s since 1970, outside the years 1 to 9999): a corrupt \
+             capture; its packets are shown at the time of the packet before",
+            ts_micros.div_euclid(1_000_000)
+        ),
+        gap: false,
+    }
+}
+
+/// The row for bytes of a capture the reader skipped right before a packet
+/// ([`crate::pcap::Packet::skipped`]): a damaged record header, after which it resynchronised
+/// at the next plausible record, or a packet it could not place.
+pub fn skipped_note(bytes: u64, micros: Option<u64>) -> Message {
+    Message::Note {
+        micros,
+        kind: crate::row::kind::GARBAGE,
+        class: crate::row::Class::Error,
+        data: format!(
+            "{} of the capture skipped: a damaged record (or a packet of an interface that \
+             cannot be placed); read on from the next plausible record",
+            crate::exit::count(bytes, "byte", "bytes")
+        ),
+        // What was skipped may have held the rest of an open frame.
+        gap: true,
+    }
+}
+
+/// The warning at the end of a capture the reader had to skip parts of.
+pub fn skipped_warning(name: &str, (bytes, times): (u64, u64)) -> Option<Message> {
+    (bytes > 0).then(|| {
+        Message::Warning(format!(
+            "{name}: damaged capture: {} skipped in {}, each time read on from the next \
+             plausible record",
+            crate::exit::count(bytes, "byte", "bytes"),
+            crate::exit::count(times, "place", "places")
+        ))
+    })
+}
+
 /// Something that yields batches; runs inside the reader thread.
 pub trait ChunkReader: Send {
     /// The next batch, or `None` at the end of the input. Other messages (the anchor, notes,
@@ -283,19 +330,24 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
     let dup = |fd: std::os::fd::BorrowedFd<'_>| fd.try_clone_to_owned().ok();
     let (reader, name, path, size, fd): (Box<dyn Read + Send>, String, Option<&Path>, _, _) =
         match input {
-            Input::Stdin => (
-                Box::new(io::stdin()),
-                "standard input".into(),
-                None,
-                regular_size(io::stdin().as_fd()),
-                dup(io::stdin().as_fd()),
-            ),
+            Input::Stdin => {
+                crate::files::protect(io::stdin().as_fd());
+                (
+                    Box::new(io::stdin()),
+                    "standard input".into(),
+                    None,
+                    regular_size(io::stdin().as_fd()),
+                    dup(io::stdin().as_fd()),
+                )
+            }
             Input::File(p) | Input::Device(p) => {
                 let meta = std::fs::metadata(p).map_err(|e| Failure::from_input_io(p, &e))?;
                 if meta.is_dir() {
                     return Err(Failure::IsDirectory(p.clone()));
                 }
                 let f = open_file(p, &meta).map_err(|e| Failure::from_input_io(p, &e))?;
+                // No output may be opened onto it, whatever its name by then.
+                crate::files::protect(&f);
                 let size = meta.is_file().then_some(meta.len());
                 let fd = if meta.is_file() { None } else { dup(f.as_fd()) };
                 (
@@ -375,16 +427,8 @@ fn open_file(path: &Path, meta: &std::fs::Metadata) -> io::Result<File> {
         .read(true)
         .custom_flags(libc::O_NONBLOCK)
         .open(path)?;
-    set_blocking(&f)?;
+    crate::files::set_blocking(&f)?;
     Ok(f)
-}
-
-/// Clears `O_NONBLOCK` on `fd` (opened non-blocking so that the open itself cannot hang).
-pub(crate) fn set_blocking(fd: impl std::os::fd::AsFd) -> io::Result<()> {
-    use nix::fcntl::{FcntlArg, OFlag, fcntl};
-    let flags = OFlag::from_bits_truncate(fcntl(&fd, FcntlArg::F_GETFL)?);
-    fcntl(&fd, FcntlArg::F_SETFL(flags - OFlag::O_NONBLOCK))?;
-    Ok(())
 }
 
 /// How often a wait for input looks for a signal.

@@ -74,6 +74,10 @@ pub struct RecordingReader {
     eof: bool,
     anchored: bool,
     untimed: bool,
+    /// The last record was stamped outside the calendar (a `TimeJump` row said so).
+    out_of_range: bool,
+    /// The bytes skipped before the current record were told (it may be taken twice).
+    skip_told: bool,
     pending: Option<Message>,
     /// A failure met after some records were read; reported on the next call.
     failure: Option<Failure>,
@@ -143,6 +147,8 @@ impl RecordingReader {
             eof: false,
             anchored: false,
             untimed: false,
+            out_of_range: false,
+            skip_told: false,
             pending: None,
             failure: None,
             counts: EventCounts::default(),
@@ -213,10 +219,15 @@ impl RecordingReader {
         }
     }
 
-    /// At the end of the input: a warning when it stopped inside a record.
+    /// At the end of the input: a warning when it stopped inside a record, or had to skip
+    /// damaged parts.
     fn end(&mut self, tx: &SyncSender<Message>) {
         let have = self.stream.buffered();
-        let Err(PcapError::Truncated { missing, .. }) = self.stream.finish() else {
+        let finished = self.stream.finish();
+        if let Some(w) = super::skipped_warning(&self.name, self.stream.skipped()) {
+            let _ = tx.send(w);
+        }
+        let Err(PcapError::Truncated { missing, .. }) = finished else {
             return;
         };
         let msg = if have < 16 {
@@ -299,7 +310,27 @@ impl RecordingReader {
                 return Ok(());
             };
             let micros = p.time;
-            if !self.anchored {
+            if p.skipped > 0 && !self.skip_told {
+                if !batch.bytes.is_empty() {
+                    // The row goes between the bytes before and after: take the record again.
+                    return Ok(());
+                }
+                self.skip_told = true;
+                let time = (!self.untimed).then_some(micros);
+                let _ = tx.send(super::skipped_note(p.skipped, time));
+            }
+            let stamped = pcap::in_calendar(p.ts_micros);
+            if !stamped && !self.out_of_range {
+                if !batch.bytes.is_empty() {
+                    // The row goes between the bytes before and after: take the record again.
+                    return Ok(());
+                }
+                let time = (!self.untimed).then_some(micros);
+                let _ = tx.send(super::time_out_of_range(p.ts_micros, time));
+            }
+            self.out_of_range = !stamped;
+            // The first record in the calendar starts the capture (PcapStream::start).
+            if !self.anchored && stamped {
                 self.anchored = true;
                 if let Some(a) = pcap::anchor(p.ts_micros) {
                     let _ = tx.send(Message::Anchor(a));
@@ -334,6 +365,7 @@ impl RecordingReader {
                 let _ = tx.send(note);
             }
             self.next += 1;
+            self.skip_told = false;
             match event {
                 EVENT_TX_START..=EVENT_RX_END => {
                     let time = (!self.untimed).then_some(micros);
@@ -349,9 +381,9 @@ impl RecordingReader {
                             None
                         }
                         LINK_DOWN => Some(Message::LinkDown { micros }),
-                        LINK_UP => Some(Message::LinkUp {
+                        p if p.starts_with(LINK_UP) => Some(Message::LinkUp {
                             micros,
-                            path: PathBuf::from(&self.name),
+                            path: link_up_device(p).unwrap_or_else(|| PathBuf::from(&self.name)),
                         }),
                         _ => None,
                     };
@@ -393,7 +425,8 @@ impl RecordingReader {
         let (kind, class, data, gap) = match event {
             EVENT_TX_START..=EVENT_RX_END => return None,
             EVENT_STATUS => match payload {
-                START | START_UNTIMED | LINK_DOWN | LINK_UP => return None,
+                START | START_UNTIMED | LINK_DOWN => return None,
+                p if p.starts_with(LINK_UP) => return None,
                 _ => (
                     "Status",
                     Class::Info,
@@ -431,6 +464,15 @@ impl RecordingReader {
             gap,
         })
     }
+}
+
+/// The device a link-up record names (`busnoop link up at /dev/ttyUSB0`), if it names one.
+fn link_up_device(payload: &[u8]) -> Option<PathBuf> {
+    use std::os::unix::ffi::OsStrExt;
+    let device = payload
+        .strip_prefix(LINK_UP)?
+        .strip_prefix(crate::pcap::rtac::LINK_UP_AT)?;
+    (!device.is_empty()).then(|| PathBuf::from(std::ffi::OsStr::from_bytes(device)))
 }
 
 impl EventCounts {
@@ -510,6 +552,30 @@ mod tests {
             ]
         );
         assert_eq!(links, [(false, 20_000, 2), (true, 3_020_000, 2)]);
+    }
+
+    /// L9 (issue 32): a replayed `--reconnect` recording named the recording in its LinkUp row
+    /// (`adapter back at rec.pcap`) instead of the device. The record names the device now.
+    #[test]
+    fn a_replayed_reconnect_names_the_device() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["r.pcap", "r.pcapng"] {
+            let path = dir.path().join(name);
+            let mut rec = Recorder::create(&path, Content::Line { timed: true }).unwrap();
+            rec.describe("/dev/ttyUSB0", "FrSky S.Port, 57600 baud 8N1");
+            rec.data(&[0x7E, 0x00], Some(1_000)).unwrap();
+            rec.link(false, 20_000).unwrap();
+            rec.link(true, 3_020_000).unwrap();
+            rec.flush().unwrap();
+            let ups: Vec<PathBuf> = replay(std::fs::read(&path).unwrap())
+                .into_iter()
+                .filter_map(|m| match m {
+                    Message::LinkUp { path, .. } => Some(path),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(ups, [PathBuf::from("/dev/ttyUSB0")], "{name}");
+        }
     }
 
     #[test]

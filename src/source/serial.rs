@@ -275,7 +275,7 @@ pub fn open(path: &Path, cfg: &SerialConfig) -> Result<Box<dyn SerialPort>, seri
     t.input_flags
         .remove(InputFlags::IXON | InputFlags::IXOFF | InputFlags::IXANY);
     termios::tcsetattr(&fd, SetArg::TCSANOW, &t).map_err(|e| os("tcsetattr", e))?;
-    super::set_blocking(&fd).map_err(|e| {
+    crate::files::set_blocking(&fd).map_err(|e| {
         os(
             "fcntl",
             Errno::from_raw(e.raw_os_error().unwrap_or(libc::EIO)),

@@ -346,7 +346,11 @@ impl Mapper {
                 }
             }
         };
-        if !wire::header_ok(s.header) {
+        // The CRC does not cover the header byte: with its check bits wrong, the physical ID
+        // is not to be trusted, so the frame carries no number (wide, plot, JSON parts); its
+        // row still shows the decoded text and the note (M6, issue 32).
+        let trusted = wire::header_ok(s.header);
+        if !trusted {
             st.check_bits += 1;
             let note = crate::row::note_part(&mut sc.note);
             note.push_str("non-standard check bits (header ");
@@ -386,7 +390,11 @@ impl Mapper {
                 sensor,
                 data,
                 extra: &extra,
-                parts: parts.into(),
+                parts: if trusted {
+                    parts.into()
+                } else {
+                    crate::row::Parts::NONE
+                },
                 raw: s.wire(),
             })
         })

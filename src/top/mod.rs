@@ -7,13 +7,14 @@
 //! batch and on every idle tick (20 ms), which is when keys are read and the screen redrawn (at
 //! most 10 times a second). The table (`-o FILE`) is written as without the view.
 
+mod keys;
 pub mod model;
 mod term;
 pub mod view;
 
 use std::time::{Duration, Instant};
 
-use ratatui::crossterm::event::{self, Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
 use crate::pace::Pacer;
 use crate::row::{OutputError, Row, RowOut, RowResult};
@@ -27,6 +28,16 @@ const FRAME: Duration = Duration::from_millis(100);
 /// busnoop's own messages shown at the bottom.
 const MESSAGES: usize = 3;
 
+/// Why the view closed before the run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Closed {
+    /// The terminal gave end of file or an error: gone without a SIGHUP (a dying supervisor
+    /// pty, `nohup`).
+    Gone,
+    /// `q` in a replay with a table.
+    Quit,
+}
+
 /// The live view as the driver's sink.
 pub struct Top<'a> {
     model: Model,
@@ -36,7 +47,10 @@ pub struct Top<'a> {
     info: Info,
     table: Option<&'a mut Table>,
     pacer: Option<Pacer>,
-    screen: term::Screen,
+    /// `None` once the view is closed (its terminal gone, or `q` in a replay with `-o`): the
+    /// rows go on into the table.
+    screen: Option<term::Screen>,
+    keys: keys::Keys,
     /// The newest row time and when it came, to run the clock between rows.
     latest: Option<(u64, Instant)>,
     floor: u64,
@@ -55,7 +69,8 @@ impl<'a> Top<'a> {
         info: Info,
         pacer: Option<Pacer>,
     ) -> std::io::Result<Top<'a>> {
-        let screen = term::Screen::open()?;
+        let screen = Some(term::Screen::open()?);
+        let keys = keys::Keys::new(term::input_fd());
         Ok(Top {
             model: Model::new(columns),
             frozen: None,
@@ -64,6 +79,7 @@ impl<'a> Top<'a> {
             table,
             pacer,
             screen,
+            keys,
             latest: None,
             floor: 0,
             start: Instant::now(),
@@ -91,7 +107,7 @@ impl<'a> Top<'a> {
             self.pacer.as_ref().map_or(0.0, Pacer::speed)
         };
         let t = match self.latest {
-            Some((m, at)) => m + (at.elapsed().as_micros() as f64 * factor) as u64,
+            Some((m, at)) => m.saturating_add((at.elapsed().as_micros() as f64 * factor) as u64),
             None if self.info.live => self.start.elapsed().as_micros() as u64,
             None => 0,
         };
@@ -101,32 +117,52 @@ impl<'a> Top<'a> {
 
     /// Reads the keys that came and redraws when due. `wait`: how long to wait for a key.
     fn tick(&mut self, wait: Duration) -> std::io::Result<()> {
-        let mut wait = wait;
-        while event::poll(wait)? {
-            wait = Duration::ZERO;
-            match event::read()? {
-                Event::Key(k) => self.key(k),
-                Event::Resize(..) => self.dirty = true,
-                _ => {}
+        let Some(screen) = self.screen.as_mut() else {
+            return Ok(());
+        };
+        if term::resumed() {
+            // Continued after a stop (SIGTSTP): the terminal was put back for the shell.
+            if screen.resume().is_err() {
+                self.close_view(Closed::Gone);
+                return Ok(());
+            }
+            self.dirty = true;
+        }
+        match self.keys.read(wait) {
+            keys::Read::Keys(keys) => {
+                for k in keys {
+                    self.key(k);
+                    if self.screen.is_none() {
+                        return Ok(());
+                    }
+                }
+            }
+            keys::Read::Gone => {
+                self.close_view(Closed::Gone);
+                return Ok(());
             }
         }
         let due = self.last_draw.is_none_or(|t| t.elapsed() >= FRAME);
-        if self.dirty || due {
-            self.draw()?;
+        if (self.dirty || due) && self.draw().is_err() {
+            // A terminal that takes no more output is gone, as one that gives no more input.
+            self.close_view(Closed::Gone);
         }
         Ok(())
     }
 
     fn draw(&mut self) -> std::io::Result<()> {
         let now = self.now();
-        self.ui.messages = self.screen.messages(MESSAGES);
+        let Some(screen) = self.screen.as_mut() else {
+            return Ok(());
+        };
+        screen.fit()?;
+        self.ui.messages = screen.messages(MESSAGES);
         let (model, now) = match &self.frozen {
             Some((m, t)) => (m, *t),
             None => (&self.model, now),
         };
         let (ui, info) = (&mut self.ui, &self.info);
-        self.screen.fit()?;
-        self.screen
+        screen
             .terminal
             .draw(|f| view::draw(f, model, ui, info, now))?;
         self.last_draw = Some(Instant::now());
@@ -134,11 +170,47 @@ impl<'a> Top<'a> {
         Ok(())
     }
 
+    /// Closes the view: the terminal is put back (stderr too, with what was said meanwhile),
+    /// and the rows go on into the table without pacing, nobody watching. Without a table
+    /// there is nothing left to do: the run ends.
+    fn close_view(&mut self, why: Closed) {
+        let Some(screen) = self.screen.take() else {
+            return;
+        };
+        drop(screen);
+        self.stop_pacing();
+        if why == Closed::Gone {
+            // Its output goes nowhere now: a message written there would fail.
+            term::detach_from_terminal();
+        }
+        match (&self.table, why) {
+            (None, _) => self.quit = true,
+            (Some(_), Closed::Quit) => eprintln!(
+                "busnoop: q: the view is closed; the rest of the replay goes on into the table \
+                 at full speed (Ctrl-C stops it)"
+            ),
+            (Some(_), Closed::Gone) => {}
+        }
+    }
+
     fn key(&mut self, k: KeyEvent) {
         if k.kind == KeyEventKind::Release {
             return;
         }
         self.dirty = true;
+        if k.modifiers.contains(KeyModifiers::CONTROL)
+            && let KeyCode::Char(c @ ('z' | 'Z' | '\\')) = k.code
+        {
+            // Ctrl-Z and Ctrl-\ as a shell gives them: the handlers put the terminal back.
+            let sig = if c == '\\' {
+                libc::SIGQUIT
+            } else {
+                libc::SIGTSTP
+            };
+            // SAFETY: raise runs the process's own handlers (term::install_stop_and_quit).
+            unsafe { libc::raise(sig) };
+            return;
+        }
         if k.modifiers.contains(KeyModifiers::CONTROL)
             && matches!(k.code, KeyCode::Char('c') | KeyCode::Char('C'))
         {
@@ -171,8 +243,14 @@ impl<'a> Top<'a> {
         }
         match k.code {
             KeyCode::Char('q') | KeyCode::Char('Q') | KeyCode::Esc => {
-                self.quit = true;
-                self.stop_pacing();
+                if self.table.is_some() && !self.info.live && !self.ui.ended {
+                    // A replay into a table: the view closes and the rest of the replay still
+                    // goes into the table, so that it is whole.
+                    self.close_view(Closed::Quit);
+                } else {
+                    self.quit = true;
+                    self.stop_pacing();
+                }
             }
             KeyCode::Char('p') | KeyCode::Char('P') => self.pause(),
             KeyCode::Char('s') | KeyCode::Char('S') => self.ui.sort = self.ui.sort.next(),
@@ -240,12 +318,12 @@ impl<'a> Top<'a> {
 
     /// Keeps the view up after the input ended, until the user quits or a signal comes.
     pub fn hold(&mut self) {
-        if self.stopping() {
+        if self.stopping() || self.screen.is_none() {
             return;
         }
         self.ui.ended = true;
         self.dirty = true;
-        while !self.stopping() {
+        while !self.stopping() && self.screen.is_some() {
             if self.tick(Duration::from_millis(100)).is_err() {
                 return;
             }
@@ -264,7 +342,7 @@ impl RowOut for Top<'_> {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         // Replays wait here for the row's time (and while paused), the view live meanwhile.
         loop {
-            if self.stopping() {
+            if self.stopping() || self.screen.is_none() {
                 break;
             }
             let wait = if self.ui.paused && !self.info.live {

@@ -7,13 +7,14 @@ use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Arc, Mutex, Once, OnceLock};
 
 use crate::sink::fallback_size;
-use ratatui::Terminal;
-use ratatui::backend::CrosstermBackend;
+use ratatui::backend::{Backend, CrosstermBackend};
 use ratatui::crossterm::cursor::{Hide, Show};
 use ratatui::crossterm::execute;
 use ratatui::crossterm::terminal::{
     EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
 };
+use ratatui::layout::Rect;
+use ratatui::{Terminal, TerminalOptions, Viewport};
 
 /// The terminal is in raw mode on the alternate screen.
 static ACTIVE: AtomicBool = AtomicBool::new(false);
@@ -27,6 +28,104 @@ static TTY_SETTINGS: OnceLock<libc::termios> = OnceLock::new();
 
 /// Lines of stderr kept while the view runs; more are counted.
 const KEPT_LINES: usize = 1000;
+
+/// The view draws into at most this many columns and rows of the terminal: its buffers are
+/// allocated by the area (a 5000×5000 terminal took 2 GB and froze, 65535×65535 aborted with the
+/// terminal left raw). Far more than the view's lines fill.
+const MAX_COLS: u16 = 512;
+const MAX_ROWS: u16 = 256;
+
+/// The view was stopped (SIGTSTP, Ctrl-Z) with the terminal put back, and continued since:
+/// raw mode and the alternate screen are to be set up again.
+static RESUMED: AtomicBool = AtomicBool::new(false);
+
+/// The descriptor keys are read from: the one raw mode is set on (standard input when it is a
+/// terminal, else `/dev/tty`); -1 before the view opened.
+pub fn input_fd() -> RawFd {
+    TTY_FD.load(Ordering::SeqCst)
+}
+
+/// Whether the view was continued after a stop since the last call.
+pub fn resumed() -> bool {
+    RESUMED.swap(false, Ordering::SeqCst)
+}
+
+/// The terminal put back as it was (from a signal handler: only tcsetattr and write), the
+/// view left active: for a stop, after which it is set up again.
+fn suspend_at_signal() {
+    let fd = TTY_FD.load(Ordering::SeqCst);
+    if let (true, Some(t)) = (fd >= 0, TTY_SETTINGS.get()) {
+        // SAFETY: see `restore_at_exit`.
+        unsafe { libc::tcsetattr(fd, libc::TCSANOW, t) };
+    }
+    const BACK: &[u8] = b"\x1b[?1049l\x1b[?25h";
+    // SAFETY: writes a constant buffer to descriptor 1; write is async-signal-safe.
+    unsafe { libc::write(1, BACK.as_ptr().cast(), BACK.len()) };
+}
+
+/// SIGTSTP (an external `kill -TSTP`, or Ctrl-Z typed in the view) and SIGQUIT put the
+/// terminal back first, so that the shell gets a cooked terminal. A stop then stops the process as the
+/// default action would, and marks the view to be set up again when it continues; SIGQUIT
+/// ends it as SIGQUIT does.
+fn install_stop_and_quit() -> io::Result<()> {
+    // SAFETY: the actions only load and store atomics and call async-signal-safe functions
+    // (tcsetattr, write, dup2, raise, sigaction through emulate_default_handler).
+    unsafe {
+        signal_hook::low_level::register(libc::SIGTSTP, || {
+            let active = ACTIVE.load(Ordering::SeqCst);
+            if active {
+                suspend_at_signal();
+            }
+            let _ = signal_hook::low_level::raise(libc::SIGSTOP);
+            if active {
+                RESUMED.store(true, Ordering::SeqCst);
+            }
+        })?;
+        signal_hook::low_level::register(libc::SIGQUIT, || {
+            restore_at_exit();
+            let _ = signal_hook::low_level::emulate_default_handler(libc::SIGQUIT);
+        })?;
+    }
+    Ok(())
+}
+
+/// The terminal is gone: standard output and error, where they are that terminal, go to
+/// /dev/null, so that the messages still to come (the summary line) do not fail. (A hung-up
+/// terminal is no terminal to `isatty` any more: the device numbers tell.)
+pub fn detach_from_terminal() {
+    let device = |fd: RawFd| {
+        // SAFETY: a zeroed stat (plain integers) is a valid value to read into.
+        let mut st: libc::stat = unsafe { std::mem::zeroed() };
+        // SAFETY: fstat on a descriptor number into our own stat; a closed one fails.
+        let ok = fd >= 0 && unsafe { libc::fstat(fd, &mut st) } == 0;
+        (ok && st.st_mode & libc::S_IFMT == libc::S_IFCHR).then_some(st.st_rdev)
+    };
+    let Some(tty) = device(TTY_FD.load(Ordering::SeqCst)) else {
+        return;
+    };
+    let Ok(null) = std::fs::OpenOptions::new().write(true).open("/dev/null") else {
+        return;
+    };
+    for fd in [1, 2] {
+        if device(fd) == Some(tty) {
+            // SAFETY: dup2 onto a standard descriptor, open for the whole process.
+            unsafe { libc::dup2(null.as_raw_fd(), fd) };
+        }
+    }
+}
+
+/// The area the view draws into: the terminal's, at most [`MAX_COLS`] × [`MAX_ROWS`].
+fn bounded(size: ratatui::layout::Size) -> Rect {
+    // A terminal that reports no size (0x0: some serial consoles and containers) is drawn at
+    // COLUMNS x LINES, else 80x24 (at 0x0 the screen stayed empty).
+    let (w, h) = if size.width == 0 || size.height == 0 {
+        let var = |name: &str| std::env::var(name).ok();
+        fallback_size(var("COLUMNS").as_deref(), var("LINES").as_deref())
+    } else {
+        (size.width, size.height)
+    };
+    Rect::new(0, 0, w.min(MAX_COLS), h.min(MAX_ROWS))
+}
 
 /// Puts the terminal back: leaves raw mode and the alternate screen, shows the cursor, and
 /// gives stderr back. Safe to call more than once.
@@ -202,8 +301,6 @@ impl Capture {
 pub struct Screen {
     pub terminal: Terminal<CrosstermBackend<Stdout>>,
     capture: Option<Capture>,
-    /// Drawn at a fixed size ([`fallback_size`]): the terminal reports none.
-    fixed: bool,
 }
 
 impl Screen {
@@ -216,6 +313,7 @@ impl Screen {
                 restore();
                 previous(info);
             }));
+            let _ = install_stop_and_quit();
         });
         let capture = Capture::start().ok();
         let opened = (|| {
@@ -224,15 +322,13 @@ impl Screen {
             enable_raw_mode()?;
             ACTIVE.store(true, Ordering::SeqCst);
             execute!(io::stdout(), EnterAlternateScreen, Hide)?;
-            Terminal::new(CrosstermBackend::new(io::stdout()))
+            let backend = CrosstermBackend::new(io::stdout());
+            let viewport = Viewport::Fixed(bounded(backend.size().unwrap_or_default()));
+            Terminal::with_options(backend, TerminalOptions { viewport })
         })();
         match opened {
             Ok(terminal) => {
-                let mut screen = Screen {
-                    terminal,
-                    capture,
-                    fixed: false,
-                };
+                let mut screen = Screen { terminal, capture };
                 screen.fit()?;
                 Ok(screen)
             }
@@ -246,27 +342,24 @@ impl Screen {
         }
     }
 
-    /// Before a draw: a terminal that reports no size (0x0) is drawn at [`fallback_size`]
-    /// (it was drawn at 0x0: an empty screen); once it reports one, at that.
+    /// Follows the terminal's size (within the bound) before a frame is drawn.
     pub fn fit(&mut self) -> io::Result<()> {
-        let (w, h) = ratatui::crossterm::terminal::size().unwrap_or((0, 0));
-        let none = w == 0 || h == 0;
-        if none && !self.fixed {
-            let var = |name: &str| std::env::var(name).ok();
-            let (w, h) = fallback_size(var("COLUMNS").as_deref(), var("LINES").as_deref());
-            let viewport = ratatui::Viewport::Fixed(ratatui::layout::Rect::new(0, 0, w, h));
-            self.terminal = Terminal::with_options(
-                CrosstermBackend::new(io::stdout()),
-                ratatui::TerminalOptions { viewport },
-            )?;
-            self.fixed = true;
-            self.terminal.clear()?;
-        } else if !none && self.fixed {
-            self.terminal = Terminal::new(CrosstermBackend::new(io::stdout()))?;
-            self.fixed = false;
-            self.terminal.clear()?;
+        let area = bounded(self.terminal.backend().size().unwrap_or_default());
+        if area != self.terminal.get_frame().area() {
+            self.terminal.resize(area)?;
         }
         Ok(())
+    }
+
+    /// Sets raw mode and the alternate screen up again after a stop ([`resumed`]); the next
+    /// frame is drawn whole.
+    pub fn resume(&mut self) -> io::Result<()> {
+        // crossterm still thinks raw mode is on (the handler put the settings back behind its
+        // back) and would do nothing: off first, then on.
+        disable_raw_mode()?;
+        enable_raw_mode()?;
+        execute!(io::stdout(), EnterAlternateScreen, Hide)?;
+        self.terminal.clear()
     }
 
     /// The last `n` lines written to stderr while the view runs.

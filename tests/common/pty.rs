@@ -71,15 +71,15 @@ pub fn spawn(args: &[&str], device: &Path) -> (Child, Receiver<(Instant, String)
     (child, rx)
 }
 
-/// The next stdout line and when it arrived; fails after 10 s of silence.
+/// The next stdout line and when it arrived; fails after [`super::PATIENCE`] of silence.
 pub fn next_line(rx: &Receiver<(Instant, String)>) -> (Instant, String) {
-    rx.recv_timeout(Duration::from_secs(10))
-        .expect("busnoop printed nothing for 10 s")
+    rx.recv_timeout(super::PATIENCE)
+        .expect("busnoop printed nothing for a long time")
 }
 
-/// Waits up to 10 s for the child to exit.
+/// Waits up to [`super::PATIENCE`] for the child to exit.
 pub fn wait_exit(child: &mut Child) -> std::process::ExitStatus {
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + super::PATIENCE;
     loop {
         if let Some(s) = child.try_wait().unwrap() {
             return s;

@@ -674,3 +674,29 @@ proptest! {
         prop_assert_eq!(&decode_chunks(&o, &bytes).0, &whole);
     }
 }
+
+/// Found by `stray_sync_in_front_of_a_frame_is_never_lost`: a 32-byte payload holding a valid
+/// frame start by chance whose frame reaches past the frame's end, then a stray 0x54, then two
+/// frames. The chance frame ends right where a valid frame starts, the real one is followed
+/// by the stray byte: the real frame must stand (a stray 0x54 after a frame is not the
+/// signature of a lost byte, whose next byte would be a LENGTH, never 0x54).
+#[test]
+fn a_stray_sync_after_a_frame_keeps_it_against_a_chance_frame_inside() {
+    let mut payload = vec![13, 190, 32, 84, 126, 109, 84, 84, 32];
+    payload.resize(32, 0);
+    let frames = vec![
+        (0, 0, vec![]),
+        (231, 84, payload),
+        (0, 0, vec![0; 5]),
+        (0, 0, vec![]),
+    ];
+    let noise = vec![vec![], vec![], vec![sync::SYNC], vec![], vec![]];
+    let (w, spans) = encode_all(Framing::Sync, &frames, &noise);
+    let evs = reassemble(Framing::Sync, 32, &w);
+    let got: Vec<(u64, u64)> = evs
+        .iter()
+        .filter(|e| e.kind == EventKind::Frame)
+        .map(|e| (e.start_pos, e.end_pos))
+        .collect();
+    assert_eq!(got, spans);
+}
