@@ -485,7 +485,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.p.line.dec(n.unsigned_abs());
     }
 
-    /// In place: `raw / 10^prec` as [`crate::numbers::push_decimal`] writes it (`6543, 2` →
+    /// In place: `raw / 10^prec` as [`crate::fmt::push_fixed`] writes it (`6543, 2` →
     /// `65.43`).
     #[inline(always)]
     pub fn fixed(&mut self, raw: i64, prec: u8) {

@@ -335,7 +335,7 @@ impl W<'_> {
     ) -> Option<(u32, u32)> {
         let cell = self.buf.get(at..self.pos).unwrap_or_default();
         if numeric {
-            if crate::row::text::is_json_number(cell) {
+            if is_json_number(cell) {
                 return None;
             }
             return self.rewrite(at, scratch, |w, text| w.json_bytes(text));
@@ -410,7 +410,7 @@ impl W<'_> {
         self.pos += n.saturating_sub(1);
     }
 
-    /// `raw / 10^prec` as [`crate::numbers::push_decimal`] writes it (`6543, 2` → `65.43`,
+    /// `raw / 10^prec` as [`crate::fmt::push_fixed`] writes it (`6543, 2` → `65.43`,
     /// `-150, 2` → `-1.50`, `5, 3` → `0.005`): its digits written straight into the line.
     #[inline(always)]
     pub fn fixed(&mut self, raw: i64, prec: u8) {
@@ -428,7 +428,7 @@ impl W<'_> {
     #[inline(never)]
     fn fixed_slow(&mut self, raw: i64, prec: u8) {
         let mut s = String::new();
-        crate::numbers::push_decimal(&mut s, raw, prec);
+        crate::fmt::push_fixed(&mut s, raw, prec);
         self.put(s.as_bytes());
     }
 
@@ -659,6 +659,17 @@ pub(crate) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
             acc
         }
     }
+}
+
+/// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
+pub(crate) fn is_json_number(s: &[u8]) -> bool {
+    let b = s.strip_prefix(b"-").unwrap_or(s);
+    let (int, frac) = match b.iter().position(|&c| c == b'.') {
+        Some(i) => (&b[..i], Some(&b[i + 1..])),
+        None => (b, None),
+    };
+    let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
+    digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
 }
 
 #[cfg(test)]

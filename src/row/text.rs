@@ -171,16 +171,7 @@ pub(crate) fn json_key(name: &str) -> Vec<u8> {
     key
 }
 
-/// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
-pub(crate) fn is_json_number(s: &[u8]) -> bool {
-    let b = s.strip_prefix(b"-").unwrap_or(s);
-    let (int, frac) = match b.iter().position(|&c| c == b'.') {
-        Some(i) => (&b[..i], Some(&b[i + 1..])),
-        None => (b, None),
-    };
-    let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
-    digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
-}
+pub(crate) use super::line::is_json_number;
 
 #[cfg(test)]
 mod tests {
