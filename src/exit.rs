@@ -1,11 +1,11 @@
 //! Failures the user can meet, each with a one-line message and its own exit code.
 //!
-//! The table of exit codes is documented in README.md ("Exit codes"); keep the two in step.
+//! The table of exit codes is documented in docs/usage.md ("Exit codes") and busnoop(1); keep the two in step.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// Exit codes (README.md, "Exit codes").
+/// Exit codes (docs/usage.md, "Exit codes").
 pub mod code {
     /// Everything was read; rows may still include bad frames (see the summary line).
     pub const OK: u8 = 0;
@@ -35,6 +35,10 @@ pub mod code {
     /// The project file (`busnoop.toml`, `--config`) cannot be used: bad TOML, an unknown key,
     /// a value out of range.
     pub const CONFIG: u8 = 12;
+    /// A file or stream decoded, but mostly not as valid frames of the protocol: another
+    /// protocol fits much better, or fewer than half of the bytes examined are in valid frames
+    /// (`detect::advise::POOR_SHARE`); the rows were written. `--lenient` accepts such a run.
+    pub const POOR: u8 = 13;
     /// Hung up (SIGHUP: the SSH session or the terminal gone): 128 + 1.
     pub const SIGHUP: u8 = 129;
     /// Interrupted by Ctrl-C (SIGINT): 128 + 2.
@@ -74,6 +78,8 @@ pub enum Failure {
     NothingDecoded(String),
     /// `detect` recognised no protocol.
     NoProtocol(String),
+    /// Decoded, but mostly not valid frames of the protocol (the rows were written).
+    Poor(String),
     /// A combination of options that cannot work (clap reports the other usage errors).
     Usage(String),
     /// Anything else.
@@ -121,6 +127,7 @@ impl Failure {
             Failure::Input(_) => code::INPUT,
             Failure::NothingDecoded(_) => code::NOTHING_DECODED,
             Failure::NoProtocol(_) => code::NO_PROTOCOL,
+            Failure::Poor(_) => code::POOR,
             Failure::Signal(i) if i.signal == libc::SIGTERM => code::SIGTERM,
             Failure::Signal(i) if i.signal == libc::SIGHUP => code::SIGHUP,
             Failure::Signal(_) => code::SIGINT,
@@ -204,6 +211,7 @@ impl fmt::Display for Failure {
             | Failure::Usage(m)
             | Failure::NothingDecoded(m)
             | Failure::NoProtocol(m)
+            | Failure::Poor(m)
             | Failure::Config(m) => f.write_str(m),
             Failure::Signal(i) => write!(f, "stopped by signal {}", i.signal),
             Failure::BrokenPipe => f.write_str("output closed"),

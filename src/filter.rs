@@ -122,8 +122,14 @@ impl Names {
             if name.is_empty() {
                 return Err(format!("{option} {v:?}: the name is empty"));
             }
-            let id = parse_number(id.trim())
-                .ok_or_else(|| format!("{option} {v:?}: {id:?} is not a number (10 or 0x0A)"))?;
+            let id = parse_number(id.trim()).ok_or_else(|| match parse_number(name) {
+                // `--name 1=Pack`: the two the other way round.
+                Some(_) => format!(
+                    "{option} {v:?}: the name comes first, then the ID: {option} {}={name}",
+                    id.trim()
+                ),
+                None => format!("{option} {v:?}: {id:?} is not a number (10 or 0x0A)"),
+            })?;
             check_id(id, v, option, vocab)?;
             names.set(name, id);
         }

@@ -19,7 +19,9 @@
 //!   and the capture clock [`time::Anchor`];
 //! * one module per protocol, each with its decoder, its options and its wire format:
 //!   [`sport`] (FrSky S.Port), [`fport`] (FrSky F.Port, F.Port 2 and FBUS), [`sbus`] (Saia
-//!   S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB v1 and SAB2);
+//!   S-Bus serial and Ether-S-Bus), [`sab`] (modm SAB v1 and SAB2), [`crsf`], [`ghst`],
+//!   [`futaba`], [`ibus`], and [`logs`] (telemetry logs other tools wrote: a radio's SD-card
+//!   CSV, S-Port_Snoop's table);
 //! * capture files: [`pcap`] (reading pcap/pcapng, writing pcap and per-frame exports),
 //!   [`Recorder`] (busnoop's recordings of a line's bytes or a capture's packets,
 //!   [`RecordContent`]), [`edgetx`] (EdgeTX/OpenTX debug-log lines);
@@ -58,6 +60,7 @@ pub mod fport;
 pub mod futaba;
 pub mod ghst;
 pub mod ibus;
+pub mod logs;
 mod merge;
 pub mod modbus;
 mod numbers;

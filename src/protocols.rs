@@ -13,6 +13,7 @@ pub const PROTOCOLS: &[&Protocol] = &[
     &crate::ghst::PROTOCOL,
     &crate::futaba::PROTOCOL,
     &crate::ibus::PROTOCOL,
+    &crate::logs::PROTOCOL,
     &crate::modbus::PROTOCOL,
 ];
 

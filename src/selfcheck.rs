@@ -649,6 +649,36 @@ pub fn ibus(data: &[u8]) {
     }
 }
 
+/// Telemetry logs: chunking invariance, every byte in at most one row (blank bytes at the end
+/// and a header without lines are in none), rows of at most one line, garbage rows of at most
+/// `GARBAGE_ROW_MAX` bytes, and every number part a plain decimal of the row's line.
+pub fn logs(data: &[u8]) {
+    let rows = same_rows_however_chunked(&crate::logs::decoder, data);
+    let total: usize = rows.iter().map(|r| r.raw.len()).sum();
+    assert!(total <= data.len(), "bytes duplicated");
+    let mut at = 0;
+    for r in &rows {
+        // Rows are the input's bytes in order.
+        let found = data[at..]
+            .windows(r.raw.len().max(1))
+            .position(|w| r.raw.is_empty() || w == &r.raw[..]);
+        let found = found.unwrap_or_else(|| panic!("row bytes not in the input: {r:?}"));
+        at += found + r.raw.len();
+        if r.kind == crate::row::kind::GARBAGE {
+            assert_eq!(r.class, Class::Error, "{r:?}");
+            continue;
+        }
+        let line = String::from_utf8_lossy(&r.raw);
+        for (name, _, text) in &r.parts {
+            assert!(
+                text.parse::<f64>().is_ok(),
+                "part {name}={text} not a number: {r:?}"
+            );
+            assert!(line.contains(text.as_str()), "{r:?}");
+        }
+    }
+}
+
 /// Modbus, RTU and ASCII framing: chunking invariance (untimed, and timed with the data's own
 /// split points as read times), every byte in exactly one row, every frame shown as a request,
 /// response or exception passes its check, and every `BadCRC` row fails it.

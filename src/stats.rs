@@ -234,6 +234,15 @@ pub struct Problems {
     notes: Vec<String>,
 }
 
+/// `12 bytes in 3 runs`, `1 byte in 1 run`: garbage in a statistics line.
+pub fn garbage(bytes: u64, runs: u64) -> String {
+    format!(
+        "{} in {}",
+        crate::exit::count(bytes, "byte", "bytes"),
+        crate::exit::count(runs, "run", "runs")
+    )
+}
+
 impl Problems {
     /// No problems yet, for `subject` (the protocol's name).
     pub fn new(subject: &'static str) -> Self {

@@ -329,7 +329,7 @@ fn help_names_only_the_sources_each_protocol_reads() {
     );
     let top = text(&busnoop().arg("--help").output().unwrap().stdout);
     assert!(top.contains("10 nothing decoded"), "{top}");
-    assert!(top.contains("11 detect: no known protocol"), "{top}");
+    assert!(top.contains("11 no known protocol (detect)"), "{top}");
 }
 
 #[test]
@@ -469,7 +469,7 @@ fn man_pages() {
     assert_eq!(out.status.code(), Some(0));
     let page = text(&out.stdout);
     assert!(page.contains(".TH busnoop 1"), "{}", &page[..200]);
-    assert!(page.contains("Exit codes"));
+    assert!(page.contains("EXIT STATUS"));
     let dir = tempfile::tempdir().unwrap();
     let out = busnoop()
         .args(["man", "--dir"])

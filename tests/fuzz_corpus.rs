@@ -79,6 +79,11 @@ fn futaba_corpus() {
 }
 
 #[test]
+fn logs_corpus() {
+    replay("logs", busnoop::selfcheck::logs);
+}
+
+#[test]
 fn ibus_corpus() {
     replay("ibus", busnoop::selfcheck::ibus);
 }

@@ -29,6 +29,8 @@ fn traffic(command: &str) -> Vec<u8> {
         "ibus" => std::fs::read(fixture("ibus-sensors.bin")).unwrap(),
         "fport" => std::fs::read(fixture("fport-v1-session.bin")).unwrap(),
         "modbus" => std::fs::read(fixture("modbus-gen.bin")).unwrap(),
+        // S-Port_Snoop prints its table on the Arduino's serial port.
+        "log" => std::fs::read(fixture("sport-snoop-sample.tsv")).unwrap(),
         other => panic!("no traffic for {other}: add a byte file of it to traffic()"),
     }
 }

@@ -257,13 +257,13 @@ fn out_of_range(args: &[&str], range: &str) {
 #[test]
 fn numeric_options_out_of_range_are_refused() {
     for t in ["0", "18446744073709552", "3600001"] {
-        out_of_range(&["sbus", "--timeout-ms", t], "1..=3600000");
-        out_of_range(&["sbus", "--gap-ms", t], "1..=3600000");
-        out_of_range(&["sab2", "--timeout-ms", t], "1..=3600000");
+        out_of_range(&["sbus", "--timeout-ms", t], "from 1 to 3600000");
+        out_of_range(&["sbus", "--gap-ms", t], "from 1 to 3600000");
+        out_of_range(&["sab2", "--timeout-ms", t], "from 1 to 3600000");
     }
-    out_of_range(&["sbus", "--udp-port", "0"], "1..=65535");
-    out_of_range(&["sbus", "--port", "0"], "1..=65535");
-    out_of_range(&["sab2", "--max-payload", "0"], "1..=255");
+    out_of_range(&["sbus", "--udp-port", "0"], "from 1 to 65535");
+    out_of_range(&["sbus", "--port", "0"], "from 1 to 65535");
+    out_of_range(&["sab2", "--max-payload", "0"], "from 1 to 255");
     // --speed: 0, or 0.001 to 1000. A tiny speed (1e-300) panicked turning the first delay
     // into a Duration; 1e-10 would wait centuries per second of capture.
     for s in ["1e-300", "1e-10", "0.0009", "-1", "1001", "NaN"] {
@@ -271,7 +271,7 @@ fn numeric_options_out_of_range_are_refused() {
     }
     for cmd in ["sport", "sbus", "sab2"] {
         for b in ["0", "49", "12000001", "99999999999"] {
-            out_of_range(&[cmd, "--baud", b], "50..=12000000");
+            out_of_range(&[cmd, "--baud", b], "from 50 to 12000000");
         }
     }
     // The limits themselves are accepted.
@@ -284,6 +284,8 @@ fn numeric_options_out_of_range_are_refused() {
             "1",
             "--baud",
             "50",
+            // S.Port bytes through sbus: a poor run, accepted here.
+            "--lenient",
         ])
         .arg(fixture("sport-sample.bin"))
         .output()

@@ -84,19 +84,20 @@ fn random_bytes() {
     std::fs::write(&p, &bytes).unwrap();
     let out = busnoop().args(["sport", "--raw"]).arg(&p).output().unwrap();
     no_panic(&out);
-    // A valid frame or two turn up in noise by chance: exit 0, the summary line, and a note
-    // that almost nothing decodes and no protocol fits.
-    assert_eq!(out.status.code(), Some(0));
+    // A valid frame or two turn up in noise by chance: the rows, the summary line, that
+    // almost nothing decodes and no protocol fits, and exit 13 (README, "Exit codes").
+    assert_eq!(out.status.code(), Some(13));
     let err = text(&out.stderr);
     let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 2, "{err}");
+    assert_eq!(lines.len(), 3, "{err}");
     assert!(lines[0].starts_with("busnoop: S.Port: "), "{err}");
     assert!(lines[0].contains("garbage bytes skipped"), "{err}");
     assert!(
-        lines[1].starts_with("busnoop: note: only <0.1% of the bytes are in valid S.Port frames")
+        lines[1].starts_with("busnoop: only <0.1% of the bytes are in valid S.Port frames")
             && lines[1].ends_with("finds no known protocol in it"),
         "{err}"
     );
+    assert!(lines[2].contains("exit code 13"), "{err}");
     // Every input byte is in the Raw column of exactly one row.
     let stdout = text(&out.stdout);
     let raw_bytes: usize = stdout
@@ -421,12 +422,12 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
             "{p}"
         );
         // Random bytes: rows, the summary line naming what went wrong, and the word that no
-        // protocol fits: a note (exit 0) when a frame turned up by chance, else exit 10.
+        // protocol fits: exit 13 when a frame turned up by chance, else exit 10.
         let out = busnoop().arg(p).arg(&noisy).output().unwrap();
         no_panic(&out);
         let err = text(&out.stderr);
         let lines: Vec<&str> = err.lines().collect();
-        assert_eq!(lines.len(), 2, "{p}: {err}");
+        assert!((2..=3).contains(&lines.len()), "{p}: {err}");
         assert!(
             lines[0].starts_with("busnoop: ") && lines[0].contains("garbage"),
             "{p}: {err}"
@@ -435,12 +436,14 @@ fn every_protocol_empty_random_missing_directory_full_disk() {
             lines[1].ends_with("finds no known protocol in it"),
             "{p}: {err}"
         );
-        // No row of a whole frame at all: "no … frame"; some by chance: a note.
+        // No row of a whole frame at all: "no … frame"; some by chance: a poor run.
         let expected = if lines[1].starts_with("busnoop: no ") {
+            assert_eq!(lines.len(), 2, "{p}: {err}");
             10
         } else {
-            assert!(lines[1].starts_with("busnoop: note: "), "{p}: {err}");
-            0
+            assert!(lines[1].starts_with("busnoop: only "), "{p}: {err}");
+            assert!(lines[2].contains("(exit code 13;"), "{p}: {err}");
+            13
         };
         assert_eq!(out.status.code(), Some(expected), "{p}: {err}");
         assert!(text(&out.stdout).lines().count() > 10, "{p}");
@@ -554,8 +557,8 @@ fn pcap_with_a_link_type_that_is_not_network_traffic() {
 #[test]
 fn wrong_protocol_for_every_decoder() {
     // Each protocol's own sample given to the other decoders: no panic, the summary line, then
-    // the protocol that fits with the command to run: exit 10 when nothing decoded, else a
-    // note and exit 0 (S-Bus break mode reads S.Port's zero keep-alives as telegrams).
+    // the protocol that fits with the command to run: exit 10 when nothing decoded, else
+    // exit 13 (S-Bus break mode reads S.Port's zero keep-alives as telegrams).
     let samples = [
         ("sport", fixture("sport-sample.bin"), "busnoop sport"),
         ("sab2", fixture("sab2-session.bin"), "busnoop sab2"),
@@ -574,15 +577,16 @@ fn wrong_protocol_for_every_decoder() {
                 continue;
             }
             let lines: Vec<&str> = err.lines().collect();
-            assert_eq!(lines.len(), 2, "{p} on {own}: {err}");
             let suggestion = format!("; try: {command} {}", file.display());
             assert!(lines[1].ends_with(&suggestion), "{p} on {own}: {err}");
             if lines[1].starts_with("busnoop: no ") {
+                assert_eq!(lines.len(), 2, "{p} on {own}: {err}");
                 assert_eq!(code, Some(10), "{p} on {own}: {err}");
             } else {
-                assert_eq!(code, Some(0), "{p} on {own}: {err}");
+                assert_eq!(lines.len(), 3, "{p} on {own}: {err}");
+                assert_eq!(code, Some(13), "{p} on {own}: {err}");
                 assert!(
-                    lines[1].starts_with("busnoop: note: "),
+                    lines[1].starts_with("busnoop: only "),
                     "{p} on {own}: {err}"
                 );
             }
@@ -596,13 +600,15 @@ fn sbus_on_an_sport_capture_names_sport() {
     let file = fixture("sport-sample.bin");
     let out = busnoop().arg("sbus").arg(&file).output().unwrap();
     no_panic(&out);
-    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(out.status.code(), Some(13));
     assert_eq!(
         text(&out.stderr),
         format!(
             "busnoop: S-Bus: 2 CRC errors, 97 garbage bytes skipped (17 runs), 1 timeout in 16 valid telegrams\n\
-             busnoop: note: only 49.1% of the bytes are in valid S-Bus frames; it looks like S.Port \
-             (100.0% of the bytes in 30 valid frames); try: busnoop sport {}\n",
+             busnoop: only 49.1% of the bytes are in valid S-Bus frames; it looks like S.Port \
+             (100.0% of the bytes in 30 valid frames); try: busnoop sport {}\n\
+             busnoop: most of the input is not valid S-Bus frames (exit code 13; --lenient \
+             accepts such a run)\n",
             file.display()
         )
     );

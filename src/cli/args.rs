@@ -18,10 +18,17 @@ use crate::source::serial;
     about = "Passive bus sniffer: listens to a serial bus (or replays a capture), reassembles \
              every frame and prints the S-Port_Snoop log table as coloured text, TSV, CSV or \
              JSON Lines.",
-    after_help = "Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
+    override_usage = "busnoop <SOURCE> [OPTIONS]            detect the protocol, then decode\n       \
+                      busnoop <PROTOCOL> <SOURCE> [OPTIONS] decode as PROTOCOL (sport, sbus …)\n       \
+                      busnoop <COMMAND> …",
+    after_help = "SOURCE: a serial device (/dev/ttyUSB0), a capture file, or - (standard input, \
+                  with a PROTOCOL). `busnoop PROTOCOL -h` lists its options.\n\n\
+                  Exit codes: 0 ok, 2 usage, 3 not found, 4 permission denied, 5 port busy, \
                   6 device error, 7 adapter disconnected, 8 output error, 9 input error, \
                   10 nothing decoded (empty input, or no frame of the protocol), \
-                  11 detect: no known protocol, 12 bad project file, 129 hangup, 130 Ctrl-C, 141 output closed, 143 SIGTERM."
+                  11 no known protocol (detect), 12 bad project file, 13 mostly not frames of \
+                  the protocol (--lenient accepts), 129 hangup, 130 Ctrl-C, 141 output closed, \
+                  143 SIGTERM."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -48,7 +55,7 @@ pub enum Command {
     /// Wireshark extcap interface: lets Wireshark capture an S.Port or SAB bus live (install:
     /// docs/wireshark.md). Wireshark runs it; by hand, `busnoop extcap --extcap-interfaces`.
     Extcap(super::extcap::ExtcapArgs),
-    /// Print the shell completion script for SHELL on standard output (see README, "Install").
+    /// Print the shell completion script for SHELL on standard output (see docs/usage.md, "Shell completions").
     Completions {
         /// The shell to complete in.
         #[arg(value_enum)]
@@ -146,14 +153,35 @@ pub fn command() -> clap::Command {
 /// The subcommand of `p`.
 fn protocol_command(p: &'static Protocol) -> clap::Command {
     let mut cmd = CaptureArgs::augment_args(clap::Command::new(p.command));
-    cmd = (p.front.args)(cmd);
+    let own_before: Vec<String> = cmd
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .collect();
+    cmd = (p.front.args)(cmd.next_help_heading("Protocol options"));
+    // The protocol's own options: the first words of their help in `-h`.
+    let own: Vec<String> = cmd
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .filter(|id| !own_before.contains(id))
+        .collect();
+    for id in own {
+        cmd = cmd.mut_arg(id, |a| {
+            let long = a.get_long_help().or(a.get_help()).cloned();
+            match long {
+                Some(long) => {
+                    let text = long.to_string();
+                    a.help(first_words(&text)).long_help(long)
+                }
+                None => a,
+            }
+        });
+    }
     let line = p.line;
     // After the protocol's options: a derived `Args` struct sets the help from its doc comment.
     cmd = cmd
         .about(p.summary)
         .long_about(p.about)
         .visible_aliases(p.aliases.iter().copied())
-        .after_help(p.examples)
         .mut_arg("source", |a| a.help(p.source_help))
         .mut_arg("record", |a| a.help(record_help(p)))
         .mut_arg("baud", |a| {
@@ -170,6 +198,7 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
                 line.format()
             ))
         });
+    cmd = protocol_help(cmd, p);
     // Filters that cannot apply to this protocol stay out of its help (and are refused with the
     // reason when given).
     let v = p.vocab;
@@ -187,7 +216,169 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
     if p.export.is_none() {
         cmd = cmd.mut_arg("export", |a| a.hide(true));
     }
+    if v.ids.is_none() && v.devices.is_none() {
+        cmd = cmd.mut_arg("device", |a| a.hide(true));
+    }
     cmd
+}
+
+/// The start of a help text, up to its first colon, parenthesis or sentence end (the text of
+/// an option in `-h`).
+fn first_words(text: &str) -> String {
+    let cut = [": ", " (", ". ", "; ", ", e.g."]
+        .iter()
+        .filter_map(|sep| text.find(sep))
+        .filter(|&i| i >= 12)
+        .min()
+        .unwrap_or(text.len());
+    text[..cut].trim_end_matches('.').to_string()
+}
+
+/// The shared options `-h` shows (one line each, with this text); `--help` shows every option
+/// with its long text. The protocol's own options are in both.
+fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
+    let v = p.vocab;
+    let mut out = vec![
+        (
+            "source",
+            "A serial device, a capture file, or - (standard input)".to_string(),
+        ),
+        (
+            "format",
+            "pretty, tsv, csv or jsonl [default: pretty on a terminal]".into(),
+        ),
+        (
+            "output",
+            "Write the table to FILE (.csv, .tsv, .jsonl pick the format)".into(),
+        ),
+        ("stats", "A summary per device on stderr at the end".into()),
+        (
+            "wide",
+            "One line per cycle, one column per number (CSV or TSV)".into(),
+        ),
+        (
+            "top",
+            "Full-screen live view: one line per device and sensor".into(),
+        ),
+        (
+            "baud",
+            format!("Line speed of a device [default: {}]", p.line.baud),
+        ),
+        (
+            "record",
+            "Keep the bytes from the wire: FILE.pcap, FILE.pcapng, FILE.bin".into(),
+        ),
+        ("types", "Only rows of these types (Data,BadCRC)".into()),
+        ("count", "Stop after N rows".into()),
+    ];
+    if v.ids.is_some() {
+        out.push((
+            "id",
+            format!("Only rows of these IDs ({}): 2,8 or 0-9", v.id_name),
+        ));
+        out.push((
+            "name",
+            format!(
+                "Name an ID ({}) in the Device column: --name Pack=1",
+                v.id_name
+            ),
+        ));
+    }
+    out.push((
+        "sensor",
+        "Only rows of these sensors, by name or number".into(),
+    ));
+    out
+}
+
+/// The protocol's own words in the shared options' help (its defaults, its ID, its types and
+/// sensors, its export), and the split between `-h` (a summary) and `--help` (everything).
+fn protocol_help(mut cmd: clap::Command, p: &'static Protocol) -> clap::Command {
+    let v = p.vocab;
+    let cycle = match (&v.ids, v.polls) {
+        (_, true) => format!("one line per poll cycle (each {}'s next poll)", v.id_name),
+        (Some(_), false) => format!("one line per cycle (each {}'s next frame)", v.id_name),
+        (None, false) => "one line per frame".to_string(),
+    };
+    let wide = format!(
+        "Wide table (CSV or TSV): {cycle}, one column per number seen, named `Name(unit)`, the \
+         last value held; Date and Time when the source has wall-clock time, else Millis. See \
+         docs/wide.md"
+    );
+    cmd = cmd.mut_arg("wide", |a| a.long_help(wide));
+    let types: Vec<&str> = v.types.iter().copied().take(6).collect();
+    cmd = cmd.mut_arg("types", |a| {
+        a.long_help(format!(
+            "Show only rows of these types, comma-separated and case-insensitive: {}{}",
+            types.join(", "),
+            if v.types.len() > types.len() {
+                " …"
+            } else {
+                ""
+            }
+        ))
+    });
+    if let Some(ids) = &v.ids {
+        let id = v.id_name;
+        cmd = cmd
+            .mut_arg("id", |a| {
+                a.long_help(format!(
+                    "Show only rows of these IDs ({id}, {} to {}): `2,8`, `0x1B`, ranges `0-9` \
+                     (repeatable)",
+                    ids.start(),
+                    ids.end()
+                ))
+            })
+            .mut_arg("name", |a| {
+                a.long_help(format!(
+                    "Name an ID ({id}) in the Device column (repeatable): `--name Pack=1`, \
+                     `--name Boiler=0x0A`; the name first, then the ID"
+                ))
+            });
+    }
+    // (Not from `vocab.sensors`, which S.Port builds from every app ID: too slow for a
+    // help text built at every start.)
+    cmd = cmd.mut_arg("sensor", |a| {
+        a.long_help(format!(
+            "Show only rows whose Sensor or Sensor # column is one of these, or that carry a \
+             number of that name, comma-separated and case-insensitive; Sensor # {}",
+            v.sensor_no_text
+        ))
+    });
+    if let Some(e) = &p.export {
+        cmd = cmd.mut_arg("export", |a| {
+            a.long_help(format!(
+                "Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with \
+                 its capture time, for Wireshark: link type {} ({}), decoded by {} (docs/\
+                 wireshark.md). Filters apply, as to the table",
+                e.linktype, e.linktype_name, e.dissector
+            ))
+        });
+    }
+    // `-h`: the short list; every other shared option only in `--help`.
+    let short = short_help(p);
+    let shared: Vec<String> = CaptureArgs::augment_args(clap::Command::new("x"))
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .collect();
+    for id in shared {
+        cmd = match short.iter().find(|(s, _)| *s == id) {
+            Some((_, text)) => cmd.mut_arg(id, |a| {
+                let long = a
+                    .get_long_help()
+                    .or(a.get_help())
+                    .cloned()
+                    .unwrap_or_default();
+                a.help(text.clone()).long_help(long)
+            }),
+            None => cmd.mut_arg(id, |a| a.hide_short_help(true)),
+        };
+    }
+    cmd.after_help(format!(
+        "{}\nEvery option, the defaults and the filters' values: busnoop {} --help",
+        p.examples, p.command
+    ))
+    .after_long_help(p.examples)
 }
 
 /// A parsed command line.
@@ -259,6 +450,70 @@ pub struct CaptureArgs {
 
     #[command(flatten)]
     pub select: project::SelectArgs,
+
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// When to stop, and what a script is told.
+#[derive(Args, Debug, Clone, Default)]
+#[command(next_help_heading = "Stopping and scripts")]
+pub struct RunArgs {
+    /// Stop after N rows are written (after the filters; busnoop's own notes not counted),
+    /// like candump -n and tshark -c.
+    #[arg(short = 'c', long, value_name = "N",
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 1, u64::MAX))]
+    pub count: Option<u64>,
+
+    /// Stop after this much capture time: on a serial port, seconds since the start; for a
+    /// file, its own time (Millis) [units: 1.5, 90, 500ms, 2m, 1h].
+    #[arg(long, value_name = "TIME", value_parser = parse_seconds)]
+    pub duration: Option<std::time::Duration>,
+
+    /// Stop when no row came for this long (a serial port: the bus went quiet; a file: a gap
+    /// in its times) [units as for --duration].
+    #[arg(long, value_name = "TIME", value_parser = parse_seconds)]
+    pub until_idle: Option<std::time::Duration>,
+
+    /// No table on standard output (it still goes to -o FILE); for --record, --export and
+    /// --stats runs, and for the exit code alone.
+    #[arg(short, long)]
+    pub quiet: bool,
+
+    /// Exit 0 even when most of a file's bytes are not valid frames of the protocol (exit code
+    /// 13 otherwise: the wrong protocol, or noise; the rows are written either way).
+    #[arg(long)]
+    pub lenient: bool,
+}
+
+/// A time as people write it: seconds (`1.5`, `90`), or with a unit: `500ms`, `30s`, `2m`,
+/// `1h`; more than 0, at most a week.
+pub fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
+    let t = s.trim();
+    let bad =
+        || "expected a time: seconds (1.5, 90) or with a unit (500ms, 30s, 2m, 1h)".to_string();
+    let (number, unit) = match t.find(|c: char| c.is_ascii_alphabetic()) {
+        Some(i) => (&t[..i], &t[i..]),
+        None => (t, "s"),
+    };
+    let factor = match unit {
+        "ms" => 0.001,
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        _ => return Err(bad()),
+    };
+    if number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit() || b == b'.') {
+        return Err(bad());
+    }
+    let v: f64 = number.parse().map_err(|_| bad())?;
+    let secs = v * factor;
+    if !(secs > 0.0 && secs <= 7.0 * 86_400.0) {
+        return Err(format!(
+            "{t} is out of range: more than 0, at most a week (168h)"
+        ));
+    }
+    Ok(std::time::Duration::from_secs_f64(secs))
 }
 
 impl CaptureArgs {
@@ -272,7 +527,7 @@ impl CaptureArgs {
 #[derive(Args, Debug, Clone, Default)]
 pub struct LiveArgs {
     // The help names the protocol's default (see `protocol_command`).
-    #[arg(long, value_name = "BAUD", value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
+    #[arg(long, value_name = "BAUD", value_parser = parse_baud)]
     pub baud: Option<u32>,
 
     // The help names the protocol's default (see `protocol_command`).
@@ -286,8 +541,9 @@ pub struct LiveArgs {
     #[arg(long, value_name = "NAME|N", value_delimiter = ',')]
     pub channel: Vec<String>,
 
-    /// When the adapter is unplugged, wait for it (by its /dev/serial/by-id name or USB serial
-    /// number), go on, and mark the gap with a row.
+    /// Wait for the adapter: when it is not plugged in yet, until it appears; when it is
+    /// unplugged, until it is back (by its /dev/serial/by-id name or USB serial number), and
+    /// mark the gap with rows.
     #[arg(long)]
     pub reconnect: bool,
 
@@ -340,8 +596,9 @@ pub enum TimeMode {
 /// Options shared by every protocol.
 #[derive(Args, Debug, Clone)]
 pub struct OutputArgs {
-    /// Output format [default: pretty on a terminal, tsv otherwise, or from the -o extension].
-    #[arg(short, long, value_enum)]
+    /// Output format: pretty, tsv, csv or jsonl [default: pretty on a terminal, tsv otherwise,
+    /// or from the -o extension].
+    #[arg(short, long, value_enum, hide_possible_values = true)]
     pub format: Option<Format>,
 
     /// Write the table to FILE instead of standard output (.csv, .tsv, .jsonl, .txt pick
@@ -404,7 +661,7 @@ pub struct OutputArgs {
 
     /// With --wide: one line per MS milliseconds of capture time instead of per poll cycle.
     #[arg(long, value_name = "MS", requires = "wide",
-          value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 1, 3_600_000))]
     pub every: Option<u64>,
 
     /// With --wide: at most N columns, the first N numbers to appear; the numbers of later
@@ -416,6 +673,10 @@ pub struct OutputArgs {
     /// `busnoop plot`: rows go to a plot instead.
     #[arg(skip)]
     pub plot: Option<crate::plot::PlotSpec>,
+
+    /// Pretty output: the line above the column names (what the project file sets).
+    #[arg(skip)]
+    pub preface: Option<String>,
 }
 
 /// `--speed`: 0, or a number from 0.001 to 1000. Below a thousandth of real time the pacer's
@@ -471,6 +732,43 @@ impl OutputArgs {
 /// bus busnoop reads runs above 12 Mbaud (the fastest USB adapters, FT232H).
 pub const BAUD_RANGE: std::ops::RangeInclusive<i64> = 50..=12_000_000;
 
+/// A line speed as people write it: `57600`, `57.6k`, `420k`, `1M`, `1.5M`; from 50 to
+/// 12000000 baud ([`BAUD_RANGE`]).
+pub fn parse_baud(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    let bad = || "expected a speed in baud: 57600, 57.6k or 1M".to_string();
+    let (number, scale) = match t.as_bytes().last() {
+        Some(b'k' | b'K') => (&t[..t.len() - 1], 1_000u64),
+        Some(b'M') => (&t[..t.len() - 1], 1_000_000),
+        _ => (t, 1),
+    };
+    let (whole, frac) = number.split_once('.').unwrap_or((number, ""));
+    let digits = |d: &str| d.bytes().all(|b| b.is_ascii_digit());
+    if whole.is_empty() || !digits(whole) || !digits(frac) || frac.len() > 6 {
+        return Err(bad());
+    }
+    let whole: u64 = whole.parse().map_err(|_| bad())?;
+    let frac_value: u64 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse().map_err(|_| bad())?
+    };
+    let denom = 10u64.pow(frac.len() as u32);
+    let scaled = frac_value * scale;
+    if !scaled.is_multiple_of(denom) {
+        return Err(format!("{t} is not a whole number of baud"));
+    }
+    let baud = whole.saturating_mul(scale).saturating_add(scaled / denom);
+    if !BAUD_RANGE.contains(&(baud.min(i64::MAX as u64) as i64)) {
+        return Err(format!(
+            "{t} is out of range: from {} to {} baud",
+            BAUD_RANGE.start(),
+            BAUD_RANGE.end()
+        ));
+    }
+    Ok(baud as u32)
+}
+
 /// `busnoop detect`.
 #[derive(Args, Debug)]
 pub struct DetectArgs {
@@ -481,13 +779,13 @@ pub struct DetectArgs {
 
     /// Serial devices: how long to listen at each baud rate.
     #[arg(long, value_name = "MS", default_value_t = 1500,
-          value_parser = clap::value_parser!(u64).range(10..=60_000))]
+          value_parser = |s: &str| crate::protocol::front::whole_in(s, 10, 60_000))]
     pub listen_ms: u64,
 
     /// Serial devices: the baud rates to try, comma-separated [default: 9600, 19200, 38400,
     /// 57600, 100000, 115200, 230400, 400000, 420000].
     #[arg(long = "baud", value_name = "BAUD", value_delimiter = ',',
-          value_parser = clap::value_parser!(u32).range(BAUD_RANGE))]
+          value_parser = parse_baud)]
     pub bauds: Vec<u32>,
 
     /// Serial devices: DTR and RTS, as for the protocol commands.

@@ -217,7 +217,14 @@ pub(super) fn run(
     let mut extra = vec![PORT_COLUMN];
     extra.extend_from_slice(ports[0].decoder.columns());
     let widths = pretty_widths(protocol.pretty_widths, &ports);
-    let mut table = open_table(out, &extra, &widths, live, protocol.vocab.polls)?;
+    let mut table = open_table(
+        out,
+        args.run.quiet,
+        &extra,
+        &widths,
+        live,
+        protocol.vocab.polls,
+    )?;
     if let Some(t) = &mut table {
         t.header().map_err(Failure::from)?;
     }
@@ -288,6 +295,7 @@ pub(super) fn run(
     // The wrong-protocol advice, per file: a note for a port that decoded nothing while another
     // did, "nothing decoded" (exit 10) only when no port decoded a frame.
     let mut nothing = Vec::new();
+    let mut poor = Vec::new();
     let mut advised = 0;
     for (i, p) in ports.iter().enumerate() {
         let frames = frames[i].max(p.decoder.valid_frames());
@@ -304,7 +312,13 @@ pub(super) fn run(
         let (kind, source) = &facts[i];
         match advise(protocol, *kind, &k, frames, source) {
             Advice::Fine => {}
-            Advice::Note(n) => eprintln!("busnoop: {}", named(&p.name, source, &n)),
+            Advice::Poor(m) if args.run.lenient => {
+                eprintln!("busnoop: note: {}", named(&p.name, source, &m));
+            }
+            Advice::Poor(m) => {
+                eprintln!("busnoop: {}", named(&p.name, source, &m));
+                poor.push(p.name.clone());
+            }
             Advice::NothingDecoded(m) => nothing.push(named(&p.name, source, &m)),
         }
     }
@@ -321,6 +335,14 @@ pub(super) fn run(
             return Err(f);
         }
         eprintln!("busnoop: {f}");
+    }
+    if result.is_ok() && !poor.is_empty() {
+        return Err(Failure::Poor(format!(
+            "most of the input of {} is not valid {} frames (exit code 13; --lenient accepts \
+             such a run)",
+            poor.join(", "),
+            protocol.name
+        )));
     }
     result
 }

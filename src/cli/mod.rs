@@ -11,6 +11,7 @@ use crate::protocol::{Decoder, InputKind, Line, Protocol, Setup};
 use crate::record::{Content, Recorder};
 use crate::run::{Context, drive};
 use crate::signal::Stop;
+use crate::sink::limit::{Limit, Stops};
 use crate::sink::{Format, Output, Table};
 use crate::source::serial::{self, SerialReader};
 use crate::source::{self, ChunkReader, Input};
@@ -18,6 +19,7 @@ use crate::top::Top;
 use crate::top::view::Info;
 
 mod args;
+mod bare;
 mod choices;
 mod extcap;
 mod manual;
@@ -40,6 +42,19 @@ pub fn main() -> ExitCode {
     {
         argv.insert(1, "extcap".into());
     }
+    // `busnoop FILE`: detect first, then decode as the protocol found.
+    let argv = match bare::arrange(argv) {
+        bare::Words::Clap(argv) => argv,
+        bare::Words::Bare { argv, at } => match bare::resolve(argv, at) {
+            Ok(argv) => argv,
+            Err(f) => {
+                if !f.is_quiet() {
+                    eprintln!("busnoop: {f}");
+                }
+                return ExitCode::from(f.exit_code());
+            }
+        },
+    };
     let (parsed, verbose) = match Parsed::from(argv) {
         Ok(c) => c,
         Err(e) => {
@@ -227,6 +242,13 @@ fn run_protocol(run: Box<Run>) -> Result<(), Failure> {
         &options.sensors(),
     )?;
     prepare(&mut capture, section);
+    // Say what the project file changes: it filters and names rows without a word otherwise.
+    if let Some(f) = &file
+        && let Some(set) = f.settings(protocol)
+    {
+        // Said on stderr once the outputs are checked (a refused -o is the only message).
+        capture.output.preface = Some(format!("project file {}: {set}", f.name().display()));
+    }
     if let Some(p) = &capture.output.stats_json {
         check_stats_file(p, &capture.source)?;
     }
@@ -289,8 +311,18 @@ fn unusable(kind: InputKind, protocol: &Protocol) -> Failure {
         InputKind::Raw | InputKind::Serial => "raw serial data",
         InputKind::Trace => "a logic-analyzer trace",
     };
+    // The subcommands that do read it (`busnoop sbus` for an Ether-S-Bus pcap).
+    let readers: Vec<String> = crate::protocols::PROTOCOLS
+        .iter()
+        .filter(|p| p.reads(kind))
+        .map(|p| format!("busnoop {}", p.command))
+        .collect();
+    let instead = match readers.len() {
+        0 => String::new(),
+        _ => format!("; {} reads it", readers.join(" or ")),
+    };
     Failure::Input(format!(
-        "this is {what}; {} captures are {}",
+        "this is {what}; {} captures are {}{instead}",
         protocol.name, protocol.accepts_text
     ))
 }
@@ -347,6 +379,12 @@ pub fn run_capture(
     if let Some(p) = args.live.record.as_deref().filter(|p| !is_dash(p)) {
         crate::record::RecordFormat::for_path(p)?;
     }
+    if let Some(line) = args.output.preface.as_deref()
+        && let Some(line) = line.strip_prefix("project file ")
+        && !QUIET_REPORT.load(std::sync::atomic::Ordering::Relaxed)
+    {
+        eprintln!("busnoop: using {line} (--no-config ignores it)");
+    }
     if let Some(p) = args.live.export.as_deref() {
         crate::export::check(p, protocol)?;
     }
@@ -386,7 +424,7 @@ pub fn run_capture(
             .map_err(|e| Failure::Usage(format!("--line {e}")))?;
         if !BAUD_RANGE.contains(&i64::from(line.baud)) {
             return Err(Failure::Usage(format!(
-                "--line {l}: the speed is out of range (50 to 12000000)"
+                "--line {l}: the speed is out of range: from 50 to 12000000 baud"
             )));
         }
         if line.baud != default_line.baud {
@@ -415,6 +453,14 @@ pub fn run_capture(
             &decoder_for,
             &stop,
         );
+    }
+    let input = match args.live.reconnect {
+        true => wait_for_adapter(&args.source)?.unwrap_or(input),
+        false => input,
+    };
+    if matches!(input, Input::Stdin) && std::io::stdin().is_terminal() {
+        // Nothing is piped in: the user would type the bytes, or wait forever without a word.
+        eprintln!("busnoop: reading standard input (Ctrl-D to end)");
     }
     // A capture reader hands on its first input bytes for the wrong-protocol check after the
     // run (which looks at the first ADVICE_BYTES only); a recording keeps its packets.
@@ -471,7 +517,10 @@ pub fn run_capture(
         }
         None => None,
     };
-    for note in option_notes(&args.output, kind) {
+    for note in option_notes(&args.output, kind)
+        .into_iter()
+        .chain(source_notes(args, kind))
+    {
         eprintln!("busnoop: note: {note}");
     }
     // Files and streams: keep their start, to tell a wrong protocol afterwards.
@@ -494,12 +543,18 @@ pub fn run_capture(
     let out = &args.output;
     let mut table = open_table(
         out,
+        args.run.quiet,
         decoder.columns(),
         protocol.pretty_widths,
         kind == InputKind::Serial,
         protocol.vocab.polls,
     )?;
     let live = kind == InputKind::Serial;
+    let stops = Stops {
+        count: args.run.count,
+        duration: args.run.duration,
+        idle: args.run.until_idle,
+    };
     let speed = out.speed.unwrap_or(if out.top { 1.0 } else { 0.0 });
     let pacer = if live { None } else { Pacer::new(speed) };
     let rx = source::spawn(reader, progress);
@@ -530,18 +585,23 @@ pub fn run_capture(
         let columns = decoder.columns().to_vec();
         let mut view = Top::open(table.as_mut(), &columns, info, pacer)
             .map_err(|e| Failure::Output(format!("cannot set up the terminal for --top: {e}")))?;
-        let result = match export.as_mut() {
-            Some(export) => drive(
-                decoder.as_mut(),
-                &rx,
-                &mut crate::export::Exporting {
+        let mut exporting;
+        let sink: &mut dyn crate::sink::Sink = match export.as_mut() {
+            Some(export) => {
+                exporting = crate::export::Exporting {
                     inner: &mut view,
                     tap: export,
-                },
-                ctx,
-            ),
-            None => drive(decoder.as_mut(), &rx, &mut view, ctx),
+                };
+                &mut exporting
+            }
+            None => &mut view,
         };
+        let result = drive(
+            decoder.as_mut(),
+            &rx,
+            &mut Limit::new(sink, stops, live),
+            ctx,
+        );
         if result.is_ok() {
             view.hold();
         }
@@ -562,18 +622,23 @@ pub fn run_capture(
             }
             None => &mut *table,
         };
-        let result = match pacer {
-            Some(pacer) => drive(
-                decoder.as_mut(),
-                &rx,
-                &mut Paced {
+        let mut paced;
+        let sink: &mut dyn crate::sink::Sink = match pacer {
+            Some(pacer) => {
+                paced = Paced {
                     inner: sink,
                     tap: pacer,
-                },
-                ctx,
-            ),
-            None => drive(decoder.as_mut(), &rx, sink, ctx),
+                };
+                &mut paced
+            }
+            None => sink,
         };
+        let result = drive(
+            decoder.as_mut(),
+            &rx,
+            &mut Limit::new(sink, stops, live),
+            ctx,
+        );
         (result, table.rows())
     };
     let stats = match (out.stats, out.stats_format) {
@@ -596,6 +661,7 @@ pub fn run_capture(
         .as_ref()
         .map_or(0, |t| t.frames())
         .max(decoder.valid_frames());
+    let mut poor = None;
     // A clean run, or one with a few bad frames among many good ones, needs no second look;
     // otherwise (nothing decoded, or a fifth or more of the rows are not frames: errors, garbage,
     // timeouts) the start of the input is scored against every protocol (`busnoop detect`'s
@@ -609,7 +675,15 @@ pub fn run_capture(
         use crate::detect::{Advice, advise};
         match advise(protocol, kind, &kept, frames, &args.source) {
             Advice::Fine => {}
-            Advice::Note(n) => eprintln!("busnoop: {n}"),
+            Advice::Poor(m) if args.run.lenient => eprintln!("busnoop: note: {m}"),
+            Advice::Poor(m) => {
+                eprintln!("busnoop: {m}");
+                poor = Some(Failure::Poor(format!(
+                    "most of the input is not valid {} frames (exit code 13; --lenient accepts \
+                     such a run)",
+                    protocol.name
+                )));
+            }
             Advice::NothingDecoded(m) => return Err(Failure::NothingDecoded(m)),
         }
     }
@@ -623,7 +697,10 @@ pub fn run_capture(
         }
         eprintln!("busnoop: {f}");
     }
-    result
+    match poor {
+        Some(f) if result.is_ok() => Err(f),
+        _ => result,
+    }
 }
 
 /// The table (`None` with `--top` and no `-o`: the view is the only output): `extra`, the
@@ -631,6 +708,7 @@ pub fn run_capture(
 /// pretty widths of the first columns; `live`: the source is a serial device.
 fn open_table(
     out: &OutputArgs,
+    quiet: bool,
     extra: &[&'static str],
     widths: &[usize],
     live: bool,
@@ -644,12 +722,16 @@ fn open_table(
                 Some(p) => Output::create(p).map_err(|e| {
                     Failure::from_create(&format!("cannot create {}", p.display()), &e)
                 })?,
+                // -q: the table is counted (the summary, the exit code) but written nowhere.
+                None if quiet => Output::create(Path::new("/dev/null"))
+                    .map_err(|e| Failure::Output(format!("cannot open /dev/null: {e}")))?,
                 None => Output::stdout(),
             };
-            let to_terminal = file.is_none() && std::io::stdout().is_terminal();
+            let to_terminal = file.is_none() && !quiet && std::io::stdout().is_terminal();
             let no_color_env = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
             let mut table = Table::new(output, out.table_options(to_terminal, no_color_env), extra);
             table.set_pretty_widths(widths);
+            table.set_preface(out.preface.clone());
             if to_terminal && !out.no_fit {
                 table.fit_terminal();
             }
@@ -719,6 +801,75 @@ fn option_notes(out: &OutputArgs, kind: InputKind) -> Vec<String> {
         ));
     }
     notes
+}
+
+/// Notes on the options of a serial line given for another source: they change nothing there,
+/// and a warning (not a usage error) lets one command line serve a device and its recordings.
+fn source_notes(args: &CaptureArgs, kind: InputKind) -> Vec<String> {
+    let mut notes = Vec::new();
+    let live = &args.live;
+    if kind == InputKind::Serial {
+        if args.output.speed.is_some() {
+            notes.push(
+                "--speed has no effect on a serial port: rows come as the bus sends them".into(),
+            );
+        }
+        return notes;
+    }
+    let what = match kind {
+        InputKind::Pcap | InputKind::Pcapng => "a network capture",
+        InputKind::Recording => "a recording",
+        InputKind::EdgeTxLog => "an EdgeTX log",
+        _ => "a file or pipe",
+    };
+    // Raw bytes carry no times: --baud and --line set the bits per byte they are given; a
+    // logic-analyzer trace is read through a UART they set.
+    let timed = !matches!(kind, InputKind::Raw | InputKind::Trace);
+    if timed && live.baud.is_some() {
+        notes.push(format!(
+            "--baud has no effect on {what}: its times are its own (only a serial port and raw \
+             bytes, whose times it sets, use it)"
+        ));
+    }
+    if timed && live.line.is_some() {
+        notes.push(format!(
+            "--line has no effect on {what}: its bytes were framed when they were captured"
+        ));
+    }
+    if live.reconnect {
+        notes.push(format!(
+            "--reconnect has no effect on {what}: only a serial adapter can be unplugged"
+        ));
+    }
+    if live.dtr_rts != serial::ModemLines::default() {
+        notes.push(format!(
+            "--dtr-rts has no effect on {what}: only a serial port has DTR and RTS lines"
+        ));
+    }
+    notes
+}
+
+/// `--reconnect` on an adapter that is not plugged in yet: waits for SOURCE to appear (a
+/// `/dev/serial/by-id/…` name, a `/dev/ttyUSB0`), saying so once; a signal ends the wait.
+/// `Some` with the input once it appeared, `None` when it was there.
+fn wait_for_adapter(source: &Path) -> Result<Option<Input>, Failure> {
+    if is_dash(source) || std::fs::metadata(source).is_ok() {
+        return Ok(None);
+    }
+    eprintln!(
+        "busnoop: waiting for {} to appear (--reconnect; Ctrl-C to stop)",
+        source.display()
+    );
+    loop {
+        if let Some(sig) = crate::signal::Stop::received() {
+            return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+        }
+        if std::fs::metadata(source).is_ok() {
+            eprintln!("busnoop: {} is there", source.display());
+            return Ok(Some(Input::parse(source)));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
 }
 
 /// `--top` draws on standard output, which must be a terminal and carry nothing else.

@@ -48,11 +48,11 @@ pub struct SelectArgs {
     #[arg(long = "not-type", value_name = "LIST")]
     pub not_types: Vec<String>,
 
-    /// Hide polls nobody answered (S.Port).
+    /// Hide polls nobody answered.
     #[arg(long)]
     pub hide_polls: bool,
 
-    /// Hide keep-alive rows (S.Port `Null`).
+    /// Hide keep-alive rows (`Null`).
     #[arg(long)]
     pub hide_null: bool,
 
@@ -66,8 +66,10 @@ pub struct SelectArgs {
     #[arg(long, value_name = "LIST")]
     pub sensor: Vec<String>,
 
-    /// Show only rows whose Device column is one of these names (case-insensitive). A value
-    /// with `=` names a device instead, like --name (`--device motor=5`).
+    /// Show only rows whose Device column is one of these names (case-insensitive), the names
+    /// --name gives included.
+    // A value with `=` names a device instead, as --name does (`--device motor=5`): the older
+    // way, kept working but no longer shown.
     #[arg(long, value_name = "LIST")]
     pub device: Vec<String>,
 
@@ -337,6 +339,46 @@ impl File {
     /// The file's name.
     pub fn name(&self) -> &Path {
         &self.path
+    }
+
+    /// What the file sets for `protocol`, in one line (`[sport] filter.id = [1], format =
+    /// "csv"`); `None` when it has no section for it.
+    pub fn settings(&self, protocol: &Protocol) -> Option<String> {
+        fn flatten(prefix: &str, v: &toml::Value, out: &mut Vec<String>) {
+            match v {
+                toml::Value::Table(t) => {
+                    for (k, v) in t {
+                        flatten(&format!("{prefix}{k}."), v, out);
+                    }
+                }
+                v => out.push(format!("{} = {}", prefix.trim_end_matches('.'), text(v))),
+            }
+        }
+        fn text(v: &toml::Value) -> String {
+            match v {
+                toml::Value::String(s) => format!("{s:?}"),
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::Float(f) => f.to_string(),
+                toml::Value::Boolean(b) => b.to_string(),
+                toml::Value::Datetime(d) => d.to_string(),
+                toml::Value::Array(a) => {
+                    let items: Vec<String> = a.iter().map(text).collect();
+                    format!("[{}]", items.join(", "))
+                }
+                toml::Value::Table(t) => {
+                    let items: Vec<String> = t
+                        .iter()
+                        .map(|(k, v)| format!("{k} = {}", text(v)))
+                        .collect();
+                    format!("{{ {} }}", items.join(", "))
+                }
+            }
+        }
+        let table: toml::Table = self.text.parse().ok()?;
+        let (name, section) = table.iter().find(|(k, _)| protocol.answers_to(k))?;
+        let mut parts = Vec::new();
+        flatten("", section, &mut parts);
+        Some(format!("[{name}] {}", parts.join(", ")))
     }
 
     /// The section of `protocol`, if the file has one.

@@ -242,10 +242,15 @@ impl<D: Dialect> Mapper<D> {
                 push_hex(&mut sc.data, ev.wire);
                 let note = sc.note();
                 push_u64(note, ev.wire.len() as u64);
-                note.push_str(if ev.before_first {
-                    " bytes before the first frame"
+                note.push_str(if ev.wire.len() == 1 {
+                    " byte"
                 } else {
-                    " bytes outside any frame"
+                    " bytes"
+                });
+                note.push_str(if ev.before_first {
+                    " before the first frame"
+                } else {
+                    " outside any frame"
                 });
                 if ev.false_starts > 0 {
                     let note = sc.note();
@@ -367,13 +372,12 @@ impl<D: Dialect> Decoder for LinkDecoder<D> {
             rate(st.valid_frames, first, st.last),
         ]);
         r.totals.push(format!(
-            "valid frames {}, CRC errors {}, truncated {}, garbage {} bytes in {} runs, \
+            "valid frames {}, CRC errors {}, truncated {}, garbage {}, \
              false frame starts {}, resyncs {}, command CRC errors {}",
             st.valid_frames,
             st.crc_errors,
             st.truncated,
-            st.garbage_bytes,
-            st.garbage_runs,
+            crate::stats::garbage(st.garbage_bytes, st.garbage_runs),
             st.false_starts,
             st.resyncs,
             st.inner_crc_errors

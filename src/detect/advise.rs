@@ -63,13 +63,19 @@ impl ChunkReader for Tee {
     }
 }
 
+/// Below this share of the examined bytes in valid frames of the protocol, a run of a file or
+/// stream ends with [`crate::exit::code::POOR`] (docs/usage.md, "Exit codes").
+pub const POOR_SHARE: f64 = 0.5;
+
 /// What to tell a user after a run of `protocol` on a file or stream.
 #[derive(Debug, PartialEq)]
 pub enum Advice {
     /// Nothing to say.
     Fine,
-    /// A note for stderr (the run still succeeded).
-    Note(String),
+    /// Most of the input is not valid frames of the protocol (another fits much better, or
+    /// fewer than [`POOR_SHARE`] of the bytes are in its valid frames): the message for the
+    /// failure, after the rows were written (`--lenient` makes it a note).
+    Poor(String),
     /// Nothing at all decoded: the message for the failure.
     NothingDecoded(String),
 }
@@ -190,18 +196,26 @@ pub fn advise(
         ));
     }
     if let Some(s) = suggestion {
-        return Advice::Note(format!(
-            "note: only {} of the bytes are in valid {} frames; {s}",
+        return Advice::Poor(format!(
+            "only {} of the bytes are in valid {} frames; {s}",
             percent(own_share),
             protocol.name
         ));
     }
     if own_share < MIN_SHARE && !ranked.first().is_some_and(|r| r.score.recognised()) {
-        return Advice::Note(format!(
-            "note: only {} of the bytes are in valid {} frames; {}",
+        return Advice::Poor(format!(
+            "only {} of the bytes are in valid {} frames; {}",
             percent(own_share),
             protocol.name,
             unknown()
+        ));
+    }
+    if own_share < POOR_SHARE {
+        return Advice::Poor(format!(
+            "only {} of the bytes are in valid {} frames (`busnoop detect {}` shows what fits)",
+            percent(own_share),
+            protocol.name,
+            shell_quote(source)
         ));
     }
     Advice::Fine

@@ -32,9 +32,15 @@ pub(super) fn listen_lines(bauds: &[u32]) -> Vec<Line> {
     out
 }
 
+/// What a live detection heard: the report `busnoop detect` prints, and the winner.
+pub(super) struct Heard {
+    pub(super) text: String,
+    pub(super) result: Result<Chosen, Failure>,
+}
+
 /// `busnoop detect /dev/ttyUSB0`: listens at each line setting in turn, passively (the device
 /// is opened read-only, as for a capture), and ranks every (setting, protocol) pair.
-pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
+pub(super) fn live(path: &Path, args: &Options) -> Result<Heard, LiveError> {
     let lines = listen_lines(&args.bauds);
     let listen = Duration::from_millis(args.listen_ms);
     // Ctrl-C, SIGTERM, SIGHUP and an unplug end the listening; what was heard is still judged.
@@ -116,8 +122,9 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
         ))),
         Some(i) => {
             let r = report.per_rate[*i].as_ref().expect("the winner's row");
-            found_text(&mut text, r, path, Some(listens[*i].line.baud));
-            Ok(())
+            let baud = listens[*i].line.baud;
+            found_text(&mut text, r, path, Some(baud));
+            Ok(Chosen::of(r, Some(baud)))
         }
         None => {
             text.push_str("verdict: no known protocol at any of these rates\n");
@@ -128,11 +135,12 @@ pub(super) fn live(path: &Path, args: &Options) -> Result<(), LiveError> {
             )))
         }
     };
-    crate::exit::write_stdout(text.as_bytes()).map_err(LiveError::Failed)?;
-    match ended {
-        Some(end) => Err(LiveError::Failed(end.failure(path, &listens, lines.len()))),
-        None => result.map_err(LiveError::Failed),
-    }
+    // Cut short (a signal, the adapter gone): the report of what was heard, then that failure.
+    let result = match ended {
+        Some(end) => Err(end.failure(path, &listens, lines.len())),
+        None => result,
+    };
+    Ok(Heard { text, result })
 }
 
 /// What ended the listening before every rate was heard.

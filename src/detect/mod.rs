@@ -546,16 +546,131 @@ pub fn run(args: &Options) -> Result<(), Failure> {
         match live(path, args) {
             Err(LiveError::NotATty) => {}
             Err(LiveError::Failed(f)) => return Err(f),
-            Ok(()) => return Ok(()),
+            Ok(heard) => {
+                crate::exit::write_stdout(heard.text.as_bytes())?;
+                return heard.result.map(|_| ());
+            }
         }
     }
+    let examined = examine(&input, &args.source, args.channel.as_deref())?;
+    crate::exit::write_stdout(examined.text.as_bytes())?;
+    if let Some(sig) = examined.signal {
+        eprintln!(
+            "busnoop: interrupted after {} bytes; the verdict is on them",
+            examined.bytes
+        );
+        return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+    }
+    examined.result.map(|_| ())
+}
+
+/// A detection's report (what `busnoop detect` prints) and its outcome: the winner, or the
+/// failure that says why there is none.
+struct Report {
+    text: String,
+    result: Result<Chosen, Failure>,
+    /// Files and pipes: the bytes examined, and the signal that cut the reading short.
+    bytes: u64,
+    signal: Option<i32>,
+}
+
+/// What `busnoop SOURCE` (no subcommand) decodes as: the detect verdict's winner.
+#[derive(Clone, Debug)]
+pub struct Chosen {
+    pub protocol: &'static Protocol,
+    /// The variant's options (`--mode parity`).
+    pub args: &'static [&'static str],
+    /// A live port: the speed it was heard at.
+    pub baud: Option<u32>,
+    /// Its label ("S-Bus parity mode").
+    pub label: String,
+    /// Why: "100.0% of the bytes in 30 valid frames".
+    pub why: String,
+    /// The bytes are inverted: not decodable as they are.
+    pub inverted: bool,
+    /// Another protocol fits about as well, or the input is mixed: the second one's label.
+    pub rival: Option<String>,
+}
+
+impl Chosen {
+    fn of(r: &Ranked, baud: Option<u32>) -> Chosen {
+        Chosen {
+            protocol: r.protocol,
+            args: r.args,
+            baud,
+            label: r.label.clone(),
+            why: format!(
+                "{} of the bytes in {}",
+                percent(r.score.share()),
+                crate::exit::count(r.score.frames, "valid frame", "valid frames")
+            ),
+            inverted: r.inverted,
+            rival: None,
+        }
+    }
+}
+
+/// A candidate of another protocol this close (share of the bytes) to the winner makes the
+/// verdict too weak for `busnoop SOURCE` to decode on its own.
+const RIVAL_MARGIN: f64 = 0.05;
+
+/// Detects the protocol of `source` for `busnoop SOURCE`: a file's first megabytes, or a serial
+/// port listened to at each usual speed (`bauds` when given). `Ok` with the winner, which
+/// may still be unusable as it is (inverted bytes, a rival); `Err` with the detect report
+/// printed on stderr when nothing fits.
+pub fn choose(source: &Path, bauds: &[u32], dtr_rts: ModemLines) -> Result<Chosen, Failure> {
+    let input = Input::parse(source);
+    let report = match &input {
+        Input::Device(path) => {
+            let args = Options {
+                source: source.to_owned(),
+                listen_ms: 1500,
+                bauds: bauds.to_vec(),
+                dtr_rts,
+                channel: None,
+            };
+            match live(path, &args) {
+                Ok(heard) => Some(Report {
+                    text: heard.text,
+                    result: heard.result,
+                    bytes: 0,
+                    signal: None,
+                }),
+                Err(LiveError::NotATty) => None,
+                Err(LiveError::Failed(f)) => return Err(f),
+            }
+        }
+        _ => None,
+    };
+    let report = match report {
+        Some(r) => r,
+        None => examine(&input, source, None)?,
+    };
+    if let Some(sig) = report.signal {
+        return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
+    }
+    let unusable = match &report.result {
+        Ok(c) => c.inverted || c.rival.is_some(),
+        Err(Failure::NoProtocol(_)) => true,
+        Err(_) => false,
+    };
+    if unusable {
+        use std::io::Write as _;
+        let _ = std::io::stderr().write_all(report.text.as_bytes());
+    }
+    report.result
+}
+
+/// `busnoop detect` on a file or pipe: reads its start, ranks the candidates, writes the
+/// report.
+fn examine(input: &Input, source: &Path, channel: Option<&str>) -> Result<Report, Failure> {
     let Scan {
         kind,
         ranked,
         examined,
         signal,
-    } = scan(&input, args.channel.as_deref())?;
-    let name = args.source.display();
+    } = scan(input, channel)?;
+    let name = source.display();
     let mut text = format!(
         "{name}: {}, {} examined{}\n",
         kind_text(kind),
@@ -598,7 +713,8 @@ pub fn run(args: &Options) -> Result<(), Failure> {
         }
         Verdict::Found(i, mixed) => {
             let best = &ranked[i];
-            found_text(&mut text, best, &args.source, None);
+            found_text(&mut text, best, source, None);
+            let mut chosen = Chosen::of(best, None);
             if let Some(j) = mixed {
                 let other = &ranked[j];
                 text.push_str(&format!(
@@ -606,18 +722,25 @@ pub fn run(args: &Options) -> Result<(), Failure> {
                     other.label,
                     percent(other.beyond(best) as f64 / other.score.total.max(1) as f64),
                     other.score.frames,
-                    other.command(&args.source, None)
+                    other.command(source, None)
                 ));
+                chosen.rival = Some(other.label.clone());
+            } else if let Some(r) = ranked.iter().find(|r| {
+                r.protocol.command != best.protocol.command
+                    && r.score.recognised()
+                    && r.score.share() + RIVAL_MARGIN >= best.score.share()
+            }) {
+                chosen.rival = Some(r.label.clone());
             }
-            Ok(())
+            Ok(chosen)
         }
     };
-    crate::exit::write_stdout(text.as_bytes())?;
-    if let Some(sig) = signal {
-        eprintln!("busnoop: interrupted after {examined} bytes; the verdict is on them");
-        return Err(Failure::Signal(crate::exit::Interrupt::new(sig)));
-    }
-    result
+    Ok(Report {
+        text,
+        result,
+        bytes: examined,
+        signal,
+    })
 }
 
 /// "verdict: …" and "run: …" for the winner.

@@ -348,7 +348,7 @@ fn advice_after_a_run() {
         ),
         Advice::Fine
     );
-    // S-Bus reads 16 telegrams in it: a note naming S.Port and the command.
+    // S-Bus reads 16 telegrams in it: a poor run, naming S.Port and the command.
     match advise(
         &crate::sbus::PROTOCOL,
         InputKind::Raw,
@@ -356,7 +356,7 @@ fn advice_after_a_run() {
         24,
         src,
     ) {
-        Advice::Note(n) => {
+        Advice::Poor(n) => {
             assert!(n.contains("it looks like S.Port"), "{n}");
             assert!(n.ends_with("try: busnoop sport cap.bin"), "{n}");
         }

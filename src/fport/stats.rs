@@ -122,13 +122,12 @@ impl Stats {
             self.unknown
         ));
         r.totals.push(format!(
-            "valid frames {}, CRC errors {}, truncated {}, garbage {} bytes in {} runs, \
+            "valid frames {}, CRC errors {}, truncated {}, garbage {}, \
              resyncs {}, guessed directions {}, unusual escapes {}, non-standard check bits {}",
             self.valid_frames,
             self.crc_errors,
             self.truncated,
-            self.garbage_bytes,
-            self.garbage_runs,
+            crate::stats::garbage(self.garbage_bytes, self.garbage_runs),
             self.resyncs,
             self.guessed,
             self.unusual_escapes,

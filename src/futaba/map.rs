@@ -409,14 +409,12 @@ impl Mapper {
             ]);
         }
         r.totals.push(format!(
-            "valid frames {}, slot answers {}, truncated {}, wrong end bytes {}, garbage {} bytes \
-             in {} runs, slots answered in another group's turn {}",
+            "valid frames {}, slot answers {}, truncated {}, wrong end bytes {}, garbage {}, slots answered in another group's turn {}",
             st.frames(),
             st.slot_answers(),
             st.truncated,
             st.wrong_end,
-            st.garbage_bytes,
-            st.garbage_runs,
+            crate::stats::garbage(st.garbage_bytes, st.garbage_runs),
             st.slot_mismatch
         ));
         r

@@ -515,15 +515,14 @@ impl Mapper {
         }
         r.totals.push(format!(
             "valid frames {}, unanswered polls {}, answers without their poll {}, unknown frames \
-             {}, bad checksums {}, truncated {}, garbage {} bytes in {} runs",
+             {}, bad checksums {}, truncated {}, garbage {}",
             st.valid_frames,
             st.unanswered(),
             st.stray_answers,
             st.unknown,
             st.bad_crc,
             st.truncated,
-            st.garbage_bytes,
-            st.garbage_runs
+            crate::stats::garbage(st.garbage_bytes, st.garbage_runs)
         ));
         r
     }

@@ -16,6 +16,33 @@ use crate::row::{Row, Unframed};
 /// project file): 1 ms to one hour.
 pub const MS_RANGE: std::ops::RangeInclusive<u64> = 1..=3_600_000;
 
+/// A whole number from `lo` to `hi`, the range said in words when it is not (clap's own
+/// message reads `0 is not in 1..=3600000`).
+pub fn whole_in(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
+    let t = s.trim();
+    match t.parse::<u64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        Ok(_) => Err(format!("{t} is out of range: from {lo} to {hi}")),
+        Err(_) if t.starts_with('-') => Err(format!("{t} is out of range: from {lo} to {hi}")),
+        Err(_) => Err(format!("expected a whole number from {lo} to {hi}")),
+    }
+}
+
+/// The millisecond options (`--timeout-ms`, `--gap-ms`): [`MS_RANGE`], in words.
+pub fn parse_ms(s: &str) -> Result<u64, String> {
+    whole_in(s, *MS_RANGE.start(), *MS_RANGE.end())
+}
+
+/// A byte count from 1 to 255 (`--max-payload`).
+pub fn parse_byte_count(s: &str) -> Result<u16, String> {
+    whole_in(s, 1, 255).map(|v| v as u16)
+}
+
+/// A UDP or TCP port, 1 to 65535.
+pub fn parse_port(s: &str) -> Result<u16, String> {
+    whole_in(s, 1, 65_535).map(|v| v as u16)
+}
+
 /// A protocol's own options: how to add them to its subcommand and how to read them back.
 #[derive(Clone, Copy)]
 pub struct Front {

@@ -5,7 +5,7 @@ use clap::ValueEnum;
 
 use super::{DEFAULT_TIMEOUT_MS, FramingChoice, hdlc};
 use crate::exit::Failure;
-use crate::protocol::front::{FileKeys, MS_RANGE};
+use crate::protocol::front::FileKeys;
 use crate::protocol::{Decoder, Options, Setup};
 
 /// The options of `busnoop sab2`.
@@ -22,23 +22,24 @@ pub struct Args {
     #[arg(long, value_name = "NAME=CODE", value_parser = super::parse_command)]
     pub command: Vec<(String, u8)>,
 
-    /// Read a command's payloads as numbers of a type (repeatable): `--value distance=u16*0.01:m`,
-    /// `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32 (little endian); SCALE multiplies
+    /// Read a command's payloads as numbers of a type (repeatable): CMD=TYPE[*SCALE][:UNIT], as
+    /// `--value distance=u16*0.01:m`, `--value 0x34=f32:deg`. TYPE: u8 i8 u16 i16 u32 i32 f32
+    /// (little endian); SCALE multiplies
     /// (a plain decimal); UNIT goes to the Unit column. CMD is a code or a --command name, with
     /// `.req` or `.ack` for one direction only. Undeclared payloads of 1, 2 or 4 bytes are
     /// unsigned integers.
-    #[arg(long, value_name = "CMD=TYPE[*SCALE][:UNIT]")]
+    #[arg(long, value_name = "CMD=TYPE")]
     pub value: Vec<String>,
 
     /// Master timeout: a request without a response within this time gets a `Timeout` row
     /// [default: 10].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
+    #[arg(long, value_name = "MS", value_parser = crate::protocol::front::parse_ms)]
     pub timeout_ms: Option<u64>,
 
     /// SAB2 payload limit (modm's template parameter `N` of `sab2::Interface`): longer frames
     /// are flagged as overlong.
     #[arg(long, value_name = "BYTES", default_value_t = hdlc::DEFAULT_MAX_PAYLOAD as u16,
-          value_parser = clap::value_parser!(u16).range(1..=255))]
+          value_parser = crate::protocol::front::parse_byte_count)]
     pub max_payload: u16,
 
     /// The project file's value declarations (`[sab2.values]`), before the command line's.

@@ -199,13 +199,12 @@ impl Stats {
         cells.extend(counts(&total));
         r.total_row(cells);
         r.totals.push(format!(
-            "bytes {}, valid frames {}, bad CRC {}, truncated {}, garbage {} bytes in {} runs",
+            "bytes {}, valid frames {}, bad CRC {}, truncated {}, garbage {}",
             self.bytes,
             self.valid_frames,
             self.bad_crc,
             self.truncated,
-            self.garbage_bytes,
-            self.garbage_runs
+            crate::stats::garbage(self.garbage_bytes, self.garbage_runs)
         ));
         r.totals.push(format!(
             "SAB v1 resync: false 0x54 rescanned {}, 0x54 with LENGTH > 32 {}",

@@ -4,7 +4,7 @@ use clap::ValueEnum;
 
 use super::{DEFAULT_PORT, Mode};
 use crate::exit::Failure;
-use crate::protocol::front::{FileKeys, MS_RANGE};
+use crate::protocol::front::FileKeys;
 use crate::protocol::{Decoder, Options, Setup};
 
 /// The options of `busnoop sbus`.
@@ -17,24 +17,26 @@ pub struct Args {
 
     /// Master timeout in ms for Timeout rows and late answers [default: by mode and baud rate
     /// (375 ms data mode, 250 ms break/parity mode at 9600), 1000 ms for Ether-S-Bus].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
+    #[arg(long, value_name = "MS", value_parser = crate::protocol::front::parse_ms)]
     pub timeout_ms: Option<u64>,
 
     /// Serial sources with time: a silence longer than this ends a telegram [default: 20
     /// character times, at least 20 ms].
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(MS_RANGE))]
+    #[arg(long, value_name = "MS", value_parser = crate::protocol::front::parse_ms)]
     pub gap_ms: Option<u64>,
 
     /// Name a station in the Device column (repeatable), e.g. `--station Boiler=10`; the same
     /// as --name.
-    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = super::parse_station)]
+    // Hidden: `--name` is the one way to name a device; this stays for older command lines.
+    #[arg(long = "station", value_name = "NAME=ADDR", value_parser = super::parse_station,
+          hide = true)]
     pub stations: Vec<(String, u8)>,
 
     /// Ether-S-Bus UDP port (datagrams to or from it are decoded).
     // `--port` was its name first; kept as a hidden alias.
     #[arg(long = "udp-port", alias = "port", value_name = "PORT",
           default_value_t = DEFAULT_PORT,
-          value_parser = clap::value_parser!(u16).range(1..=65_535))]
+          value_parser = crate::protocol::front::parse_port)]
     pub port: u16,
 }
 

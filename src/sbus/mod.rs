@@ -46,7 +46,7 @@ pub const PROTOCOL: Protocol = Protocol {
             with their answers and timed. Futaba SBUS, the RC receiver bus of a similar name, is \
             `busnoop futaba`.",
     examples: "Examples:\n  busnoop sbus /dev/ttyUSB0 --baud 19200\n  busnoop sbus plant.pcap \
-               --station Boiler=10\n  tcpdump -U -w - udp port 5050 | busnoop sbus -",
+               --name Boiler=10\n  tcpdump -U -w - udp port 5050 | busnoop sbus -",
     source_help: "What to read: a serial device (/dev/ttyUSB0, /dev/serial/by-id/…, COM3), a \
                   capture file (raw wire bytes, a busnoop .pcap or .pcapng recording, a pcap/pcapng \
                   capture of Ether-S-Bus traffic) or `-` for standard input (also a `tcpdump -U -w \

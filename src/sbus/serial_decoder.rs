@@ -307,7 +307,12 @@ impl SerialCore {
                 push_hex(&mut m.sc.data, g.bytes);
                 m.sc.note_with(|n| {
                     push_u64(n, g.bytes.len() as u64);
-                    n.push_str(" bytes outside any telegram");
+                    n.push_str(if g.bytes.len() == 1 {
+                        " byte"
+                    } else {
+                        " bytes"
+                    });
+                    n.push_str(" outside any telegram");
                 });
                 put_row(
                     out,

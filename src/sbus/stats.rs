@@ -191,14 +191,13 @@ pub(super) fn report<'a>(
         }
     }
     r.totals.push(format!(
-        "valid telegrams {}, CRC errors {}, cut/broken {}, garbage {} bytes in {} runs, \
+        "valid telegrams {}, CRC errors {}, cut/broken {}, garbage {}, \
          retries {}, timeouts {}, NAKs {}, answers without request {}, length mismatches {}, late {}, \
          unanswered at the end {}",
         t.valid,
         t.crc_errors,
         t.broken,
-        t.garbage_bytes,
-        t.garbage_runs,
+        crate::stats::garbage(t.garbage_bytes, t.garbage_runs),
         t.retries,
         t.timeouts,
         t.naks,
@@ -323,8 +322,7 @@ pub(super) fn problems(t: &Totals) -> Problems {
     if let Some(e) = &t.pcap_error {
         p.item(format!("capture error: {e}"));
     }
-    // "in 1 valid telegrams": the count is not made singular (as it always was).
-    p.in_valid(t.valid, "valid telegrams", "valid telegrams");
+    p.in_valid(t.valid, "valid telegram", "valid telegrams");
     p
 }
 
@@ -392,7 +390,7 @@ mod tests {
         assert_eq!(
             problems(&t).line().unwrap(),
             "S-Bus: 1 CRC error, 2 requests given up (more than 65536 waiting), capture error: cut \
-             in 1 valid telegrams"
+             in 1 valid telegram"
         );
     }
 }

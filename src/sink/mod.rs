@@ -1,6 +1,7 @@
 //! Sinks: the log table as pretty text, TSV, CSV or JSON Lines.
 
 mod fit;
+pub mod limit;
 pub mod output;
 pub(crate) use fit::fallback_size;
 mod spool;
@@ -50,6 +51,8 @@ pub struct Table {
     skipped: u64,
     anchor: Option<Anchor>,
     header_written: bool,
+    /// Pretty output: a line above the column names (what the project file changes).
+    preface: Option<String>,
     scratch: String,
     hex: Vec<u8>,
     error: Option<OutputError>,
@@ -101,6 +104,7 @@ impl Table {
             wide: None,
             plot: None,
             header_written: false,
+            preface: None,
             scratch: String::new(),
             hex: Vec::new(),
             error: None,
@@ -223,6 +227,12 @@ impl Table {
         false
     }
 
+    /// Pretty output: a line to write above the column names (TSV, CSV and JSON Lines are
+    /// for programs, which read only the table).
+    pub fn set_preface(&mut self, line: Option<String>) {
+        self.preface = line;
+    }
+
     /// Writes the header row (TSV, CSV, pretty); JSON Lines has none.
     pub fn header(&mut self) -> Result<(), OutputError> {
         if self.header_written {
@@ -262,6 +272,13 @@ impl Table {
                 self.fitted(&lines, self.opts.color.then_some(BOLD));
             }
             Format::Pretty => {
+                if let Some(p) = &self.preface {
+                    self.out.line(|w| {
+                        w.put(p.as_bytes());
+                        w.byte(b'\n');
+                    });
+                    self.out.row_done()?;
+                }
                 let style = self.opts.color.then_some(BOLD);
                 if self.text.widths.len() < cols.len() {
                     self.text.widths.resize(cols.len(), 4);

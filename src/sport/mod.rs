@@ -413,10 +413,15 @@ impl Mapper {
             sc.note.push_str("0x7E without a header byte");
         } else {
             push_u64(&mut sc.note, g.bytes().len() as u64);
-            sc.note.push_str(if g.after_slot.is_some() {
-                " bytes after a complete frame"
+            sc.note.push_str(if g.bytes().len() == 1 {
+                " byte"
             } else {
-                " bytes before the first 0x7E"
+                " bytes"
+            });
+            sc.note.push_str(if g.after_slot.is_some() {
+                " after a complete frame"
+            } else {
+                " before the first 0x7E"
             });
         }
         let extra = ["", sc.note.as_str()];
@@ -665,10 +670,9 @@ impl Decoder for SportDecoder {
         cells.extend(counts(&total));
         r.total_row(cells);
         r.totals.push(format!(
-            "valid frames {}, garbage {} bytes in {} runs, non-standard check bits {}, unusual escapes {}, repeated frames {}",
+            "valid frames {}, garbage {}, non-standard check bits {}, unusual escapes {}, repeated frames {}",
             st.valid_frames,
-            st.garbage_bytes,
-            st.garbage_runs,
+            crate::stats::garbage(st.garbage_bytes, st.garbage_runs),
             st.check_bits,
             st.unusual_escapes,
             st.repeats
@@ -701,8 +705,7 @@ impl Decoder for SportDecoder {
                 "unusual escape",
                 "unusual escapes",
             )
-            // "in 1 valid frames": the count is not made singular (as it always was).
-            .in_valid(st.valid_frames, "valid frames", "valid frames");
+            .in_valid(st.valid_frames, "valid frame", "valid frames");
         p
     }
 
@@ -715,6 +718,22 @@ impl Decoder for SportDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The problems line counts in words: "1 valid frame", not "1 valid frames".
+    #[test]
+    fn the_problems_line_says_one_valid_frame() {
+        let mut d = SportDecoder::new();
+        let mut bytes = Vec::new();
+        wire::encode_frame(&mut bytes, wire::header_for(8), 0x10, 0x0300, 1);
+        let mut body = [0x10, 0x00, 0x03, 1, 2, 3, 4, 0];
+        body[7] = wire::crc(&body[..7]) ^ 1;
+        wire::encode_raw(&mut bytes, wire::header_for(8), &body);
+        crate::testing::assert_stamps_hold(&mut d, &[&bytes]);
+        assert_eq!(
+            d.problems().line().unwrap(),
+            "S.Port: 1 CRC error in 1 valid frame"
+        );
+    }
 
     /// Every app ID range of the value tables, frame types with and without a name, bad CRCs,
     /// firmware frames, odd headers, truncated frames and noise, each app ID with several

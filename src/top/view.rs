@@ -842,15 +842,15 @@ mod tests {
         assert!(ui.filter_error.as_ref().unwrap().contains("outside"));
     }
 
-    /// The README's picture of `--top` is what the program draws (rendered here into a buffer of
+    /// docs/top.md's picture of `--top` is what the program draws (rendered here into a buffer of
     /// the same size and compared), so the two never drift apart.
     #[test]
-    fn the_readme_shows_what_top_draws() {
+    fn docs_top_shows_what_top_draws() {
         let readme =
-            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/top.md")).unwrap();
         let start = readme
             .find("<!-- top-screenshot -->")
-            .expect("the README's --top picture");
+            .expect("docs/top.md's --top picture");
         let block = &readme[start..];
         let from = block.find("```text\n").unwrap() + "```text\n".len();
         let to = block[from..].find("```").unwrap();
@@ -868,6 +868,6 @@ mod tests {
             ..Ui::default()
         };
         let got = render(&m, &mut ui, &info, m.last.unwrap(), 100, 14);
-        assert_eq!(shown, got, "README.md's --top picture:\n{got}");
+        assert_eq!(shown, got, "docs/top.md's --top picture:\n{got}");
     }
 }
