@@ -48,6 +48,56 @@ pub fn put_u32(w: &mut [u8], v: u32) -> usize {
     }
 }
 
+/// Writes `v` in decimal at the start of `w` (at least 24 bytes long; bytes after the number
+/// may be overwritten too); returns its length.
+#[inline]
+pub fn put_u64(w: &mut [u8], v: u64) -> usize {
+    if v <= u64::from(u32::MAX) {
+        return put_u32(w, v as u32);
+    }
+    let hi = v / 100_000_000;
+    let k = if hi <= u64::from(u32::MAX) {
+        put_u32(w, hi as u32)
+    } else {
+        let k = put_u32(w, (hi / 100_000_000) as u32);
+        let d = eight_digits((hi % 100_000_000) as u32) | ZEROS;
+        w[k..k + 8].copy_from_slice(&d.to_le_bytes());
+        k + 8
+    };
+    let d = eight_digits((v % 100_000_000) as u32) | ZEROS;
+    w[k..k + 8].copy_from_slice(&d.to_le_bytes());
+    k + 8
+}
+
+/// Writes `raw / 10^prec` in decimal at the start of `w` as
+/// [`crate::numbers::push_decimal`] writes it (`6543, 2` → `65.43`, `-150, 2` → `-1.50`,
+/// `5, 3` → `0.005`), for `prec` up to 7; `w` at least 32 bytes long (bytes after the number
+/// may be overwritten too). Returns its length, or `None` for a larger `prec`.
+#[inline]
+pub fn put_fixed(w: &mut [u8], raw: i64, prec: u8) -> Option<usize> {
+    let m = raw.unsigned_abs();
+    let sign = usize::from(raw < 0);
+    w[0] = b'-';
+    // The whole part and the fraction, by constants (no division instruction).
+    let (whole, frac) = match prec {
+        0 => return Some(sign + put_u64(&mut w[sign..], m)),
+        1 => (m / 10, m % 10),
+        2 => (m / 100, m % 100),
+        3 => (m / 1_000, m % 1_000),
+        4 => (m / 10_000, m % 10_000),
+        5 => (m / 100_000, m % 100_000),
+        6 => (m / 1_000_000, m % 1_000_000),
+        7 => (m / 10_000_000, m % 10_000_000),
+        _ => return None,
+    };
+    let k = sign + put_u64(&mut w[sign..], whole);
+    w[k] = b'.';
+    // The fraction's `prec` digits with their leading zeros: the last of its eight.
+    let d = eight_digits(frac as u32) >> (8 * (8 - u32::from(prec))) | ZEROS;
+    w[k + 1..k + 9].copy_from_slice(&d.to_le_bytes());
+    Some(k + 1 + usize::from(prec))
+}
+
 /// The eight decimal digits of `v` (below 10^8, leading zeros included) as the values 0-9 in
 /// the eight bytes of a `u64`, the first digit in the lowest byte: all digits at once with
 /// multiplications (after D. Lemire, "Converting integers to decimal strings faster").
@@ -87,6 +137,31 @@ mod tests {
             .chain(random)
             .chain((0..2000).map(|i| i * 7919))
             .chain([0, u32::MAX as u64, u32::MAX as u64 + 1, u64::MAX])
+    }
+
+    #[test]
+    fn fixed_is_push_decimal() {
+        for v in samples() {
+            for raw in [v as i64, -(v as i64), (v >> 1) as i64, -((v >> 33) as i64)] {
+                for prec in 0..=7u8 {
+                    let mut b = [b'#'; 32];
+                    let n = put_fixed(&mut b, raw, prec).unwrap();
+                    let mut s = String::new();
+                    crate::numbers::push_decimal(&mut s, raw, prec);
+                    assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), s, "{raw} {prec}");
+                }
+            }
+        }
+        assert_eq!(put_fixed(&mut [0; 32], 1, 8), None);
+    }
+
+    #[test]
+    fn u64_digits_are_the_decimal_text() {
+        for v in samples() {
+            let mut b = [b'#'; 24];
+            let n = put_u64(&mut b, v);
+            assert_eq!(std::str::from_utf8(&b[..n]).unwrap(), v.to_string());
+        }
     }
 
     #[test]

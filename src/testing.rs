@@ -92,3 +92,141 @@ pub(crate) fn memory_table(
     };
     crate::sink::Table::new(crate::sink::Output::memory(), opts, extra)
 }
+
+/// A boxed decoder as a [`crate::protocol::Decoder`] value (to wrap it in
+/// [`crate::protocol::PcapBytes`]).
+pub(crate) struct Boxed(pub Box<dyn crate::protocol::Decoder>);
+
+impl crate::protocol::Decoder for Boxed {
+    fn columns(&self) -> &'static [&'static str] {
+        self.0.columns()
+    }
+    fn push(
+        &mut self,
+        data: &[u8],
+        time: Option<u64>,
+        out: &mut dyn crate::row::RowOut,
+    ) -> crate::row::RowResult {
+        self.0.push(data, time, out)
+    }
+    fn packet(
+        &mut self,
+        p: &crate::pcap::Packet<'_>,
+        out: &mut dyn crate::row::RowOut,
+    ) -> crate::row::RowResult {
+        self.0.packet(p, out)
+    }
+    fn capture_error(
+        &mut self,
+        e: &crate::pcap::PcapError,
+        out: &mut dyn crate::row::RowOut,
+    ) -> crate::row::RowResult {
+        self.0.capture_error(e, out)
+    }
+    fn idle(&mut self, now: u64, out: &mut dyn crate::row::RowOut) -> crate::row::RowResult {
+        self.0.idle(now, out)
+    }
+    fn finish(&mut self, out: &mut dyn crate::row::RowOut) -> crate::row::RowResult {
+        self.0.finish(out)
+    }
+    fn valid_frames(&self) -> u64 {
+        self.0.valid_frames()
+    }
+    fn stats(&self) -> crate::stats::Report {
+        self.0.stats()
+    }
+    fn problems(&self) -> crate::stats::Problems {
+        self.0.problems()
+    }
+}
+
+/// Decodes `chunks` (bytes with their times) with a decoder from `make` into a table of every
+/// format, with and without `--raw`, twice: once as the driver does (the decoder writes the
+/// rows it can straight into the table, [`crate::row::Direct`]), once through a stage that
+/// lends no `Direct` (every row a [`crate::row::Row`], as behind a filter), and asserts that
+/// both tables are byte for byte the same, and so are the decoders' statistics. Returns how
+/// many rows went straight into a table (over all of them).
+pub(crate) fn assert_direct_rows_match(
+    make: &dyn Fn() -> Box<dyn crate::protocol::Decoder>,
+    chunks: &[(&[u8], Option<u64>)],
+    what: &str,
+) -> u64 {
+    use crate::row::{Direct, Row, RowOut, RowResult};
+    use crate::sink::{Format, Table};
+
+    /// Every row as a `Row`.
+    struct RowsOnly<'a>(&'a mut Table);
+    impl RowOut for RowsOnly<'_> {
+        fn row(&mut self, row: &Row<'_>) -> RowResult {
+            self.0.write(row)
+        }
+    }
+    /// The table itself, counting the rows that come as `Row`s.
+    struct Counting<'a>(&'a mut Table, u64);
+    impl RowOut for Counting<'_> {
+        fn row(&mut self, row: &Row<'_>) -> RowResult {
+            self.1 += 1;
+            self.0.write(row)
+        }
+        fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
+            self.0.direct(columns)
+        }
+    }
+    let decode = |out: &mut dyn RowOut| {
+        let mut d = make();
+        for &(chunk, time) in chunks {
+            d.push(chunk, time, out).unwrap();
+        }
+        d.finish(out).unwrap();
+        (d.stats().to_string(), d.problems().line())
+    };
+    let mut direct_rows = 0;
+    for format in [Format::Tsv, Format::Csv, Format::Jsonl, Format::Pretty] {
+        for color in [false, true] {
+            if color && format != Format::Pretty {
+                continue;
+            }
+            for raw in [false, true] {
+                let columns = make().columns();
+                let table = || {
+                    let opts = crate::sink::TableOptions {
+                        format,
+                        color,
+                        raw,
+                        time_abs: false,
+                        utc: false,
+                    };
+                    let mut t = Table::new(crate::sink::Output::memory(), opts, columns);
+                    t.header().unwrap();
+                    t
+                };
+                let (mut a, mut b) = (table(), table());
+                let stats_a = decode(&mut RowsOnly(&mut a));
+                let mut counting = Counting(&mut b, 0);
+                let stats_b = decode(&mut counting);
+                let as_rows = counting.1;
+                a.flush().unwrap();
+                b.flush().unwrap();
+                let (ta, tb) = (a.output().memory_contents(), b.output().memory_contents());
+                if ta != tb {
+                    let (la, lb) = (ta.split(|&c| c == b'\n'), tb.split(|&c| c == b'\n'));
+                    for (n, (x, y)) in la.zip(lb).enumerate() {
+                        assert_eq!(
+                            String::from_utf8_lossy(x),
+                            String::from_utf8_lossy(y),
+                            "{what}: {format:?} colour {color} raw {raw}: line {} differs \
+                             (left: every row as a Row, right: rows written straight)",
+                            n + 1
+                        );
+                    }
+                    assert_eq!(ta.len(), tb.len(), "{what}: {format:?}: lengths differ");
+                }
+                assert_eq!(stats_a, stats_b, "{what}: the statistics differ");
+                assert_eq!(a.rows(), b.rows(), "{what}: row counts");
+                assert_eq!(a.frames(), b.frames(), "{what}: frame counts");
+                direct_rows += b.rows() - as_rows;
+            }
+        }
+    }
+    direct_rows
+}

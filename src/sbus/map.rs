@@ -14,7 +14,7 @@ use super::pairing::{
 use super::stats::{StationStats, Totals, nak_slot};
 use super::telegram::{self, BROADCAST, ReqInfo};
 use crate::fmt::{push_fixed, push_hex, push_u64};
-use crate::row::{Class, Part, Parts, Row, RowOut, RowResult, Unframed};
+use crate::row::{Cells, Class, Fmt, Part, Parts, Row, RowOut, RowResult, Unframed, WriteRow};
 
 /// Scratch buffers reused for every row.
 #[derive(Default)]
@@ -83,7 +83,8 @@ impl Scratch {
     }
 }
 
-/// One row, from the scratch buffers.
+/// One row, from the scratch buffers: straight into the table when it lends its output
+/// ([`crate::row::Direct`]), else as a [`Row`].
 #[allow(clippy::too_many_arguments)]
 pub(super) fn put_row(
     out: &mut dyn RowOut,
@@ -96,31 +97,78 @@ pub(super) fn put_row(
     sensor: &str,
     raw: &[u8],
 ) -> RowResult {
-    let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
-    macro_rules! row {
-        ($parts:expr) => {
-            put(
-                out,
-                sc,
-                &Row {
-                    stamp: 0,
-                    micros: Some(micros),
-                    id,
-                    device,
-                    kind,
-                    class,
-                    sensor_no: &sc.sensor_no,
-                    sensor,
-                    data: &sc.data,
-                    extra: &extra,
-                    parts: $parts,
-                    raw,
-                },
-            )
+    with_parts(sc, class, |parts| {
+        let row = ScratchRow {
+            sc,
+            id,
+            device,
+            kind,
+            sensor,
+            parts,
         };
+        if let Some(d) = out.direct(super::COLUMNS) {
+            d.row(Some(micros), class, raw, &row);
+            return Ok(());
+        }
+        let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
+        put(
+            out,
+            sc,
+            &Row {
+                stamp: 0,
+                micros: Some(micros),
+                id,
+                device,
+                kind,
+                class,
+                sensor_no: &sc.sensor_no,
+                sensor,
+                data: &sc.data,
+                extra: &extra,
+                parts,
+                raw,
+            },
+        )
+    })
+}
+
+/// A row of the scratch buffers, written straight into the table: the cells the [`Row`] of
+/// [`put_row`] has.
+struct ScratchRow<'a> {
+    sc: &'a Scratch,
+    id: Option<u32>,
+    device: &'a str,
+    kind: &'a str,
+    sensor: &'a str,
+    parts: Parts<'a>,
+}
+
+impl WriteRow for ScratchRow<'_> {
+    #[inline]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let sc = self.sc;
+        if c.stamp(0) {
+            c.id(self.id);
+            c.text(self.device);
+            c.text(self.kind);
+            c.text(&sc.sensor_no);
+            c.text(self.sensor);
+            c.stamp_end();
+        }
+        c.text(&sc.data);
+        c.value_text(self.parts.first().map(|p| p.text));
+        c.text(&sc.resp);
+        c.text(&sc.seq);
+        c.text(&sc.note);
+        c.row_parts(self.parts);
     }
+}
+
+/// Calls `f` with the numbers of the row in the scratch buffers.
+#[inline]
+fn with_parts<R>(sc: &Scratch, class: Class, f: impl FnOnce(Parts<'_>) -> R) -> R {
     if class == Class::Error {
-        return row!(Parts::NONE);
+        return f(Parts::NONE);
     }
     // A media list recorded while the Data cell was written: its numbers where they were
     // formatted (the same parts as reading the text back, see `media_parts`), made into parts
@@ -128,9 +176,9 @@ pub(super) fn put_row(
     if sc.media.len == Some(sc.data.len()) {
         let spans = &sc.media.spans;
         if spans.is_empty() || spans.len() > MAX_PARTS {
-            return row!(Parts::NONE);
+            return f(Parts::NONE);
         }
-        return row!(Parts::Spans {
+        return f(Parts::Spans {
             text: &sc.data,
             spans,
         });
@@ -141,13 +189,13 @@ pub(super) fn put_row(
         if tokens <= FEW_PARTS {
             let mut buf = [Part::EMPTY; FEW_PARTS];
             let n = media_parts(&sc.data, &mut buf);
-            return row!(Parts::List(&buf[..n]));
+            return f(Parts::List(&buf[..n]));
         }
         let mut buf = [Part::EMPTY; MAX_PARTS];
         let n = media_parts(&sc.data, &mut buf);
-        return row!(Parts::List(&buf[..n]));
+        return f(Parts::List(&buf[..n]));
     }
-    row!(Parts::NONE)
+    f(Parts::NONE)
 }
 
 /// Hands the row on, with the telegram's content when the decoder kept it (the export).

@@ -2,59 +2,27 @@
 
 mod fit;
 pub mod limit;
-mod line;
 pub mod output;
-mod pretty;
 pub(crate) use fit::fallback_size;
-
-mod spans;
 mod spool;
 mod tap;
 pub mod wide;
-
-use std::path::Path;
 
 use chrono::{DateTime, Local};
 
 use crate::fmt::push_hex_bytes;
 use crate::row::RowOut;
-use crate::row::{BASE_COLUMNS, Class, Row};
+use crate::row::line::W;
+use crate::row::pretty::{BOLD, CYAN, DIMMED, PrettyLine, RED, YELLOW};
+use crate::row::spans::Spans;
+pub use crate::row::text::{Format, VALUE_COLUMN};
+use crate::row::text::{NUMERIC_EXTRA, Text, is_json_number};
+use crate::row::{BASE_COLUMNS, Class, Direct, Row};
 use crate::time::Anchor;
-use line::W;
 pub use output::Output;
-use pretty::{BOLD, CYAN, DIMMED, PrettyLine, RED, YELLOW};
-use spans::Spans;
 pub use tap::{Tap, Tapped};
 
 use crate::row::{OutputError, RowResult};
-
-/// Output format.
-/// (The command line's names for it are in `cli/choices.rs`.)
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    /// Aligned, coloured columns for a terminal.
-    Pretty,
-    /// Tab-separated values with a header row.
-    Tsv,
-    /// Comma-separated values (RFC 4180) with a header row.
-    Csv,
-    /// One JSON object per row.
-    Jsonl,
-}
-
-impl Format {
-    /// Format implied by a file name's extension, if any.
-    pub fn from_path(path: &Path) -> Option<Format> {
-        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        Some(match ext.as_str() {
-            "csv" => Format::Csv,
-            "tsv" | "tab" => Format::Tsv,
-            "jsonl" | "ndjson" | "json" => Format::Jsonl,
-            "txt" | "log" => Format::Pretty,
-            _ => return None,
-        })
-    }
-}
 
 /// How the table is written.
 #[derive(Clone, Debug)]
@@ -74,18 +42,11 @@ pub struct Table {
     opts: TableOptions,
     out: Output,
     columns: Vec<&'static str>,
-    /// Pretty output: the width of each column now (they only grow).
-    widths: Vec<usize>,
     /// Number of the decoder's extra columns.
     n_extra: usize,
-    counter: u64,
-    /// The Counter's decimal digits, incremented in place with `counter`.
-    digits: Digits,
-    /// JSON Lines: the key of each extra column (`,"resp_ms":`), built once, and whether
-    /// its cells are numbers.
-    json_keys: Vec<(Vec<u8>, bool)>,
-    /// Rows of whole frames (with wire bytes, not an error or a note).
-    frames: u64,
+    /// What rows written as [`Row`]s and rows written straight by a decoder ([`Direct`])
+    /// share: the Counter, the pretty widths, the JSON keys, the cells kept per stamp.
+    text: Text,
     /// Rows counted but not written (filtered out).
     skipped: u64,
     anchor: Option<Anchor>,
@@ -99,8 +60,9 @@ pub struct Table {
     wide: Option<wide::Wide>,
     /// `busnoop plot`: rows go to the plot, drawn at the end of the run ([`Table::take_plot`]).
     plot: Option<crate::plot::Plot>,
-    /// The cells ID to Sensor as written, per [`Row::stamp`].
-    spans: Spans,
+    /// The decoder's extra columns as last lent to it ([`Table::direct`]): the same slice
+    /// as the table's own, checked once.
+    direct_columns: Option<(usize, usize)>,
     /// Pretty output on a terminal: the width rows are fitted to ([`fit`]), asked again at
     /// every flush (the terminal may be resized).
     fit: Option<usize>,
@@ -108,53 +70,9 @@ pub struct Table {
     port_column: Option<usize>,
 }
 
-/// A row counter as decimal digits, incremented in place (no division per row).
-#[derive(Clone, Debug)]
-struct Digits {
-    buf: [u8; 20],
-    start: usize,
-}
-
-impl Digits {
-    fn zero() -> Self {
-        let mut buf = [b'0'; 20];
-        buf[19] = b'0';
-        Digits { buf, start: 19 }
-    }
-
-    fn increment(&mut self) {
-        let mut i = self.buf.len();
-        while i > 0 {
-            i -= 1;
-            if self.buf[i] == b'9' {
-                self.buf[i] = b'0';
-            } else {
-                self.buf[i] += 1;
-                self.start = self.start.min(i);
-                return;
-            }
-        }
-    }
-
-    fn as_bytes(&self) -> &[u8] {
-        &self.buf[self.start..]
-    }
-}
-
-/// The column after `Data` in TSV, CSV and JSON Lines (not in pretty output, where Data says
-/// the same): the row's first number ([`Row::value`]).
-pub const VALUE_COLUMN: &str = "Value";
-
-/// Extra columns whose cells are numbers (JSON writes them as numbers).
-const NUMERIC_EXTRA: [&str; 2] = ["Resp ms", "Seq"];
-
 /// Pretty-output column widths for the base columns, when the protocol gives none (see
 /// [`crate::protocol::Protocol::pretty_widths`]).
 const PRETTY_WIDTHS: [usize; 8] = [7, 8, 3, 10, 9, 8, 10, 30];
-
-/// A pretty column grows to fit a longer value (and stays that wide, so later rows stay
-/// aligned with each other) up to this many characters; a longer value overflows its row only.
-pub const PRETTY_GROW_MAX: usize = 60;
 
 impl Table {
     pub fn new(out: Output, opts: TableOptions, extra: &[&'static str]) -> Self {
@@ -169,25 +87,18 @@ impl Table {
         if opts.time_abs {
             columns.push("Time");
         }
-        let json_keys = extra
-            .iter()
-            .map(|name| (json_key(name), NUMERIC_EXTRA.contains(name)))
-            .collect();
         let widths = columns
             .iter()
             .enumerate()
             .map(|(i, c)| PRETTY_WIDTHS.get(i).copied().unwrap_or(c.len().max(4)))
             .collect();
+        let text = Text::new(opts.format, opts.color, opts.raw, extra, widths);
         Table {
             opts,
             out,
             columns,
-            widths,
             n_extra: extra.len(),
-            counter: 0,
-            digits: Digits::zero(),
-            json_keys,
-            frames: 0,
+            text,
             skipped: 0,
             anchor: None,
             wide: None,
@@ -197,7 +108,7 @@ impl Table {
             scratch: String::new(),
             hex: Vec::new(),
             error: None,
-            spans: Spans::new(),
+            direct_columns: None,
             fit: None,
             port_column: extra.iter().position(|c| *c == crate::row::PORT_COLUMN),
         }
@@ -235,7 +146,7 @@ impl Table {
                 }
                 w.put(l.as_bytes());
                 if style.is_some() {
-                    w.put(pretty::RESET);
+                    w.put(crate::row::pretty::RESET);
                 }
                 w.byte(b'\n');
             }
@@ -246,27 +157,26 @@ impl Table {
     /// columns, in order: the protocol descriptor's `pretty_widths`); never narrower than a
     /// column's name. Call before the header is written.
     pub fn set_pretty_widths(&mut self, widths: &[usize]) {
-        for ((w, &new), name) in self.widths.iter_mut().zip(widths).zip(&self.columns) {
+        for ((w, &new), name) in self.text.widths.iter_mut().zip(widths).zip(&self.columns) {
             *w = new.max(name.chars().count());
         }
     }
 
     /// Rows so far: written ones and skipped ones (the last Counter).
     pub fn rows(&self) -> u64 {
-        self.counter
+        self.text.counter
     }
 
     /// Rows of frames with a valid check written so far (polls, requests, answers, data; not
     /// errors, garbage, timeouts or notes): "did anything decode".
     pub fn frames(&self) -> u64 {
-        self.frames
+        self.text.frames
     }
 
     /// Counts a row a filter keeps out of the output, so that every row's Counter is its
     /// number in the unfiltered table.
     pub fn skip(&mut self) {
-        self.counter += 1;
-        self.digits.increment();
+        self.text.count();
         self.skipped += 1;
     }
 
@@ -300,6 +210,21 @@ impl Table {
     /// The plot's numbers, to draw at the end of the run (`busnoop plot`).
     pub fn take_plot(&mut self) -> Option<crate::plot::Plot> {
         self.plot.take()
+    }
+
+    /// Whether a decoder's extra `columns` are the table's (the slice is remembered once it
+    /// was found equal).
+    #[inline]
+    fn direct_columns(&mut self, columns: &'static [&'static str]) -> bool {
+        let key = (columns.as_ptr() as usize, columns.len());
+        if self.direct_columns == Some(key) {
+            return true;
+        }
+        if columns == &self.text.extra[..] {
+            self.direct_columns = Some(key);
+            return true;
+        }
+        false
     }
 
     /// Pretty output: a line to write above the column names (TSV, CSV and JSON Lines are
@@ -339,11 +264,11 @@ impl Table {
                 w.put(b"\r\n");
             }),
             Format::Pretty if self.fit.is_some() => {
-                if self.widths.len() < cols.len() {
-                    self.widths.resize(cols.len(), 4);
+                if self.text.widths.len() < cols.len() {
+                    self.text.widths.resize(cols.len(), 4);
                 }
                 let kinds = self.fit_kinds();
-                let lines = fit::lines(&cols, &self.widths, &kinds, self.fit.unwrap_or(80));
+                let lines = fit::lines(&cols, &self.text.widths, &kinds, self.fit.unwrap_or(80));
                 self.fitted(&lines, self.opts.color.then_some(BOLD));
             }
             Format::Pretty => {
@@ -355,10 +280,10 @@ impl Table {
                     self.out.row_done()?;
                 }
                 let style = self.opts.color.then_some(BOLD);
-                if self.widths.len() < cols.len() {
-                    self.widths.resize(cols.len(), 4);
+                if self.text.widths.len() < cols.len() {
+                    self.text.widths.resize(cols.len(), 4);
                 }
-                let widths = &mut self.widths[..];
+                let widths = &mut self.text.widths[..];
                 self.out.line(|w| {
                     let mut line = PrettyLine::start(w, style);
                     for (i, c) in cols.iter().enumerate() {
@@ -377,10 +302,9 @@ impl Table {
         if !self.header_written {
             self.header()?;
         }
-        self.counter += 1;
-        self.digits.increment();
+        self.text.count();
         if !row.raw.is_empty() && !matches!(row.class, Class::Error | Class::Info) {
-            self.frames += 1;
+            self.text.frames += 1;
         }
         if let Some(p) = &mut self.plot {
             p.row(row);
@@ -503,8 +427,8 @@ impl Table {
         let cell = |w: &mut W<'_>, field: &[u8]| {
             if CSV { w.csv(field) } else { w.tsv(field) }
         };
-        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.spans);
+        let (digits, opts, n_extra) = (&self.text.digits, &self.opts, self.n_extra);
+        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.text.spans);
         self.out.line(|w| {
             w.put(digits.as_bytes());
             w.byte(sep);
@@ -570,8 +494,8 @@ impl Table {
     }
 
     fn jsonl(&mut self, row: &Row<'_>) {
-        let (digits, opts, keys) = (&self.digits, &self.opts, &self.json_keys);
-        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.spans);
+        let (digits, opts, keys) = (&self.text.digits, &self.opts, &self.text.json_keys);
+        let (time, hex, spans) = (&self.scratch, &self.hex, &mut self.text.spans);
         self.out.line(|w| {
             w.put(b"{\"counter\":");
             w.put(digits.as_bytes());
@@ -605,7 +529,7 @@ impl Table {
             for (i, (key, numeric)) in keys.iter().enumerate() {
                 w.put(key);
                 let v = row.extra.get(i).copied().unwrap_or("");
-                if *numeric && is_json_number(v) {
+                if *numeric && is_json_number(v.as_bytes()) {
                     w.put(v.as_bytes());
                 } else {
                     w.json_str(v);
@@ -647,12 +571,12 @@ impl Table {
             ""
         };
         let n = 8 + self.n_extra + usize::from(self.opts.raw) + usize::from(self.opts.time_abs);
-        if self.widths.len() < n {
-            self.widths.resize(n, 4);
+        if self.text.widths.len() < n {
+            self.text.widths.resize(n, 4);
         }
         if let Some(width) = self.fit {
             let mut cells: Vec<&str> = vec![
-                std::str::from_utf8(self.digits.as_bytes()).unwrap_or(""),
+                std::str::from_utf8(self.text.digits.as_bytes()).unwrap_or(""),
                 millis,
                 id,
                 row.device,
@@ -669,15 +593,21 @@ impl Table {
                 cells.push(&self.scratch);
             }
             for (i, c) in cells.iter().enumerate() {
-                pretty::fit(&mut self.widths, i, c.chars().count(), true, i + 1 == n);
+                crate::row::pretty::fit(
+                    &mut self.text.widths,
+                    i,
+                    c.chars().count(),
+                    true,
+                    i + 1 == n,
+                );
             }
-            let lines = fit::lines(&cells, &self.widths, &self.fit_kinds(), width);
+            let lines = fit::lines(&cells, &self.text.widths, &self.fit_kinds(), width);
             self.fitted(&lines, style);
             return;
         }
-        let (digits, opts, n_extra) = (&self.digits, &self.opts, self.n_extra);
-        let (time, spans) = (&self.scratch, &mut self.spans);
-        let widths = &mut self.widths[..];
+        let (digits, opts, n_extra) = (&self.text.digits, &self.opts, self.n_extra);
+        let (time, spans) = (&self.scratch, &mut self.text.spans);
+        let widths = &mut self.text.widths[..];
         // The cells ID to Sensor (columns 2 to 6; never the last column).
         let cells = |line: &mut PrettyLine<'_, '_>, widths: &mut [usize]| {
             line.digits(widths, 2, id.as_bytes());
@@ -792,6 +722,31 @@ impl RowOut for Table {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         self.write(row)
     }
+
+    /// Lends the output for a row written straight from a decoded frame, when the table writes
+    /// rows as they come in the long format with what [`Direct`] writes: not for `--wide`, a
+    /// plot or `--time abs`, not before the header, not for a decoder with other extra columns
+    /// than the table's; and not when enough is buffered to be written out (the next row goes
+    /// as a [`Row`], whose write does that).
+    #[inline]
+    fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
+        if self.wide.is_some()
+            || self.plot.is_some()
+            || self.fit.is_some()
+            || self.opts.time_abs
+            || !self.header_written
+            || self.error.is_some()
+            || !self.direct_columns(columns)
+        {
+            return None;
+        }
+        let (buf, len) = self.out.room()?;
+        Some(Direct {
+            text: &mut self.text,
+            buf,
+            len,
+        })
+    }
 }
 
 /// Where the driver writes rows: the table, or the live view (which may also write the table).
@@ -824,36 +779,6 @@ impl Sink for Table {
     fn skip(&mut self) {
         Table::skip(self)
     }
-}
-
-/// The JSON key of a column, with its comma and colon: `,"sensor_no":` for `Sensor #`.
-fn json_key(name: &str) -> Vec<u8> {
-    let mut key = b",\"".to_vec();
-    for c in name.chars() {
-        match c {
-            ' ' => key.push(b'_'),
-            '#' => key.extend_from_slice(b"no"),
-            c => {
-                for l in c.to_lowercase() {
-                    let mut tmp = [0u8; 4];
-                    key.extend_from_slice(l.encode_utf8(&mut tmp).as_bytes());
-                }
-            }
-        }
-    }
-    key.extend_from_slice(b"\":");
-    key
-}
-
-/// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
-fn is_json_number(s: &str) -> bool {
-    let b = s.strip_prefix('-').unwrap_or(s).as_bytes();
-    let (int, frac) = match b.iter().position(|&c| c == b'.') {
-        Some(i) => (&b[..i], Some(&b[i + 1..])),
-        None => (b, None),
-    };
-    let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
-    digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
 }
 
 #[cfg(test)]

@@ -8,9 +8,9 @@ use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use super::line::{self, W};
 use crate::files::create_file;
 use crate::row::OutputError;
+use crate::row::line::{self, W};
 
 /// Flush the buffer once it holds this much.
 pub(super) const HIGH_WATER: usize = 64 * 1024;
@@ -93,6 +93,16 @@ impl Output {
     #[inline(always)]
     pub(super) fn line(&mut self, write: impl FnMut(&mut W<'_>)) {
         self.len += line::write_line(&mut self.buf, self.len, write);
+    }
+
+    /// The buffer and the length of the rows in it, for rows written straight into its room
+    /// ([`crate::row::Direct`]); `None` once enough is buffered to be written out.
+    #[inline]
+    pub(super) fn room(&mut self) -> Option<(&mut Vec<u8>, &mut usize)> {
+        if self.len >= HIGH_WATER {
+            return None;
+        }
+        Some((&mut self.buf, &mut self.len))
     }
 
     /// Appends one whole record of a binary file (a recording's packet, an export's block, or

@@ -3,6 +3,7 @@
 //! The table mapping and the timing rule are documented in `docs/sport.md`.
 
 mod args;
+mod direct;
 pub mod names;
 pub(crate) mod passthrough;
 pub(crate) mod values;
@@ -104,6 +105,23 @@ pub struct Stats {
     pub unusual_escapes: u64,
     pub repeats: u64,
     last_body: Option<[u8; BODY_LEN]>,
+}
+
+impl PhysStats {
+    /// Counts a poll of `phys` at `micros` (and the interval since its last one) in `per`.
+    #[inline]
+    fn poll(per: &mut [PhysStats], phys: u8, micros: u64) -> &mut PhysStats {
+        let ps = &mut per[usize::from(phys & 0x1F)];
+        ps.polls += 1;
+        if let Some(last) = ps.last_poll {
+            let d = micros.saturating_sub(last);
+            ps.interval_sum += d;
+            ps.intervals += 1;
+            ps.interval_max = ps.interval_max.max(d);
+        }
+        ps.last_poll = Some(micros);
+        ps
+    }
 }
 
 impl Default for Stats {
@@ -208,6 +226,7 @@ impl Mapper {
             return;
         }
         let _ = match ev {
+            Event::Slot(s) if direct::slot(self, s, out) => Ok(()),
             Event::Slot(s) => self.slot_row(s, out),
             Event::Garbage(g) => self.garbage_row(g, out),
         };
@@ -219,15 +238,7 @@ impl Mapper {
         let sc = &mut self.scratch;
         sc.clear();
         let st = &mut self.stats;
-        let ps = &mut st.per[phys as usize];
-        ps.polls += 1;
-        if let Some(last) = ps.last_poll {
-            let d = micros.saturating_sub(last);
-            ps.interval_sum += d;
-            ps.intervals += 1;
-            ps.interval_max = ps.interval_max.max(d);
-        }
-        ps.last_poll = Some(micros);
+        let ps = PhysStats::poll(&mut st.per, phys, micros);
 
         let mut class = Class::Plain;
         let mut cols = values::Decoded::built("");

@@ -101,6 +101,62 @@ fn scalar(base: u16) -> Option<Scalar> {
     })
 }
 
+/// A data frame's value as a table row shows the most common sensors, for rows written
+/// straight into the table (`super::direct`): a plain scalar (its Sensor, its number's name,
+/// unit, raw value and decimals, as [`decode_row`] reads them), FLVSS cells or a GPS
+/// coordinate; `None` for every other app ID.
+#[inline]
+pub(crate) fn common(phys: u8, app_id: u16, value: u32) -> Option<Common> {
+    let base = app_id & 0xFFF0;
+    if let Some(s) = scalar(base) {
+        let raw = match s.sign {
+            Sign::S32 => value as i32 as i64,
+            Sign::U32 => value as i64,
+        };
+        let prec = if matches!(base, 0x0700..=0x0720) {
+            acc_prec(phys)
+        } else {
+            s.prec
+        };
+        return Some(Common::Scalar {
+            sensor: s.label,
+            name: log_name(s.label),
+            unit: s.unit,
+            raw,
+            prec,
+        });
+    }
+    match base {
+        0x0300 => Some(Common::Cells),
+        0x0800 => Some(Common::Gps),
+        _ => None,
+    }
+}
+
+/// See [`common`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Common {
+    Scalar {
+        sensor: &'static str,
+        name: &'static str,
+        unit: &'static str,
+        raw: i64,
+        prec: u8,
+    },
+    Cells,
+    Gps,
+}
+
+/// `count=N`, as [`cells`] writes it.
+pub(crate) fn cell_count_text(value: u32) -> &'static str {
+    CELL_COUNTS[((value >> 4) & 0x0F) as usize]
+}
+
+/// ` cellN=` and `CellN` of the 0-based cell index `i`, as [`cells`] writes them.
+pub(crate) fn cell_key_name(i: u32) -> (&'static str, &'static str) {
+    (CELL_KEYS[(i & 0x0F) as usize], cell_name(i))
+}
+
 /// Two 16-bit halves of one value feeding two sensors (EdgeTX `subId` 0 and 1).
 struct Pair {
     label: &'static str,

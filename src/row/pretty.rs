@@ -1,31 +1,34 @@
 //! Pretty lines: cells padded to the column widths, trailing blanks trimmed, a row class's
 //! colour around the line (the table's default on a terminal and for `.txt`).
 
-use super::PRETTY_GROW_MAX;
 use super::line::{self, W};
 
+/// A pretty column grows to fit a longer value (and stays that wide, so later rows stay
+/// aligned with each other) up to this many characters; a longer value overflows its row only.
+pub const PRETTY_GROW_MAX: usize = 60;
+
 /// SGR codes of the row classes and the header, as owo-colors writes them.
-pub(super) const BOLD: &[u8] = b"\x1b[1m";
-pub(super) const DIMMED: &[u8] = b"\x1b[2m";
-pub(super) const YELLOW: &[u8] = b"\x1b[33m";
-pub(super) const RED: &[u8] = b"\x1b[31m";
-pub(super) const CYAN: &[u8] = b"\x1b[36m";
-pub(super) const RESET: &[u8] = b"\x1b[0m";
+pub(crate) const BOLD: &[u8] = b"\x1b[1m";
+pub(crate) const DIMMED: &[u8] = b"\x1b[2m";
+pub(crate) const YELLOW: &[u8] = b"\x1b[33m";
+pub(crate) const RED: &[u8] = b"\x1b[31m";
+pub(crate) const CYAN: &[u8] = b"\x1b[36m";
+pub(crate) const RESET: &[u8] = b"\x1b[0m";
 
 /// One pretty line: cells padded to the column widths (the first three right-aligned),
 /// trailing blanks trimmed, optionally wrapped in a colour. Blanks are held back until a cell
 /// with text follows them, so that the blanks at the end of a line are never written.
-pub(super) struct PrettyLine<'b, 'l> {
-    pub(super) line: &'b mut W<'l>,
+pub(crate) struct PrettyLine<'b, 'l> {
+    pub(crate) line: &'b mut W<'l>,
     style: Option<&'static [u8]>,
     /// Where the line's text starts (after the colour code).
     start: usize,
     /// Blanks owed before the next text.
-    pub(super) blanks: usize,
+    pub(crate) blanks: usize,
 }
 
 impl<'b, 'l> PrettyLine<'b, 'l> {
-    pub(super) fn start(line: &'b mut W<'l>, style: Option<&'static [u8]>) -> Self {
+    pub(crate) fn start(line: &'b mut W<'l>, style: Option<&'static [u8]>) -> Self {
         if let Some(s) = style {
             line.put(s);
         }
@@ -42,7 +45,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     /// [`PRETTY_GROW_MAX`]) widens for this row and every later one. Printable ASCII is one
     /// column per byte; any other text is written char by char, control characters as blanks.
     #[inline(always)]
-    pub(super) fn cell(
+    pub(crate) fn cell(
         &mut self,
         widths: &mut [usize],
         i: usize,
@@ -81,15 +84,68 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
         }
     }
 
+    /// A left-aligned cell (Sensor # or later) is written in place after this: the blanks
+    /// owed are paid. Returns where its text starts, where the line was before the blanks,
+    /// and the blanks owed then, for [`PrettyLine::end_cell`].
+    #[inline(always)]
+    pub(crate) fn begin_cell(&mut self) -> (usize, usize, usize) {
+        self.blanks += 2;
+        let (before, owed) = (self.line.len(), self.blanks);
+        self.pay_blanks();
+        (self.line.len(), before, owed)
+    }
+
+    /// The cell `i` written in place since [`PrettyLine::begin_cell`] (UTF-8 only) ends, as
+    /// [`PrettyLine::cell`] writes a text, with `grow`: an empty cell leaves the blanks owed,
+    /// and a cell that is not printable ASCII is written again from a copy in `scratch`.
+    #[inline(always)]
+    pub(crate) fn end_cell(
+        &mut self,
+        widths: &mut [usize],
+        i: usize,
+        last: bool,
+        (at, before, owed): (usize, usize, usize),
+        scratch: &mut Vec<u8>,
+    ) {
+        let cell = self.line.bytes().get(at..).unwrap_or_default();
+        let len = if cell.is_empty() {
+            self.line.truncate(before);
+            self.blanks = owed;
+            0
+        } else if line::scan(cell, line::not_printable) == 0 {
+            cell.len()
+        } else {
+            self.rewrite(at, scratch)
+        };
+        let pad = fit(widths, i, len, true, last);
+        if !last {
+            self.blanks += pad;
+        }
+    }
+
+    /// Writes the cell from `at` again char by char ([`PrettyLine::chars`]) from a copy in
+    /// `scratch`; returns its width.
+    #[cold]
+    #[inline(never)]
+    fn rewrite(&mut self, at: usize, scratch: &mut Vec<u8>) -> usize {
+        scratch.clear();
+        scratch.extend_from_slice(self.line.bytes().get(at..).unwrap_or_default());
+        self.line.truncate(at);
+        match std::str::from_utf8(scratch) {
+            Ok(text) => self.chars(text),
+            Err(_) => self.chars(&String::from_utf8_lossy(scratch)),
+        }
+    }
+
     /// A cell of ASCII digits (Counter, Millis, ID).
     #[inline(always)]
-    pub(super) fn digits(&mut self, widths: &mut [usize], i: usize, digits: &[u8]) {
+    pub(crate) fn digits(&mut self, widths: &mut [usize], i: usize, digits: &[u8]) {
         self.right(widths, i, digits, None, true, false);
     }
 
     /// A right-aligned cell: `bytes`, printable ASCII, or the `chars` of a cell that is not.
     #[inline(always)]
-    pub(super) fn right(
+    pub(crate) fn right(
         &mut self,
         widths: &mut [usize],
         i: usize,
@@ -117,7 +173,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     /// Writes cells kept from an earlier row ([`Spans`]): their text, after the blanks owed
     /// before it, and the blanks owed after it.
     #[inline(always)]
-    pub(super) fn copy(&mut self, bytes: &[u8], blanks: usize) {
+    pub(crate) fn copy(&mut self, bytes: &[u8], blanks: usize) {
         if bytes.is_empty() {
             self.blanks += blanks;
         } else {
@@ -150,7 +206,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     /// Trims the line's trailing whitespace (as `str::trim_end`), closes the colour, ends
     /// the line.
     #[inline(always)]
-    pub(super) fn finish(self) {
+    pub(crate) fn finish(self) {
         let text = &self.line.bytes()[self.start..];
         // Blanks held back were never written; a line that ends in printable ASCII other than
         // a blank has nothing to trim.
@@ -173,7 +229,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
 /// longer cell up to [`PRETTY_GROW_MAX`] widens the column for this row and every later one.
 /// Returns the padding the cell needs.
 #[inline(always)]
-pub(super) fn fit(widths: &mut [usize], i: usize, len: usize, grow: bool, last: bool) -> usize {
+pub(crate) fn fit(widths: &mut [usize], i: usize, len: usize, grow: bool, last: bool) -> usize {
     let mut spare = 4;
     let width = widths.get_mut(i).unwrap_or(&mut spare);
     if grow && !last && len > *width && len <= PRETTY_GROW_MAX {

@@ -5,6 +5,14 @@
 //! [`crate::protocol::Decoder::columns`]); the sinks add `Raw` (with `--raw`) and `Time` (with
 //! `--time abs`) last.
 
+pub mod direct;
+pub(crate) mod line;
+pub(crate) mod pretty;
+pub(crate) mod spans;
+pub mod text;
+
+pub use direct::{Cells, Direct, Fmt, Mark, WriteRow};
+
 /// The eight fixed columns, in order.
 pub const BASE_COLUMNS: [&str; 8] = [
     "Counter", "Millis", "ID", "Device", "Type", "Sensor #", "Sensor", "Data",
@@ -291,6 +299,15 @@ pub type RowResult = Result<(), OutputError>;
 pub trait RowOut {
     fn row(&mut self, row: &Row<'_>) -> RowResult;
 
+    /// The table's output, lent for one row written straight from a decoded frame
+    /// ([`direct`]): only the table gives it, when nothing between the decoder and the table
+    /// needs the [`Row`] and the table has the decoder's extra `columns`; everything else
+    /// (filters, wrappers, `--wide`, plots) gives `None`, and the decoder writes a `Row`.
+    #[inline]
+    fn direct(&mut self, _columns: &'static [&'static str]) -> Option<Direct<'_>> {
+        None
+    }
+
     /// A row whose frame comes with its content re-read ([`Unframed`]), for a sink that
     /// re-wraps frames (the serial S-Bus export). Everything else takes the row alone.
     fn row_unframed(&mut self, row: &Row<'_>, _frame: &Unframed<'_>) -> RowResult {
@@ -431,6 +448,14 @@ impl Latch<'_> {
 }
 
 impl RowOut for Latch<'_> {
+    #[inline]
+    fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
+        if self.error.is_some() {
+            return None;
+        }
+        self.out.direct(columns)
+    }
+
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         if self.error.is_some() {
             return Ok(());
@@ -447,6 +472,10 @@ impl RowOut for Latch<'_> {
         self.keep(written)
     }
 }
+
+#[cfg(test)]
+#[path = "tests/direct.rs"]
+mod direct_tests;
 
 #[cfg(test)]
 mod tests {

@@ -16,7 +16,7 @@
 /// Number of slots (a power of two).
 const SLOTS: usize = 256;
 /// Longest span kept, in bytes.
-const SPAN_MAX: usize = 118;
+pub(crate) const SPAN_MAX: usize = 118;
 
 #[derive(Clone, Copy)]
 struct Slot {
@@ -39,7 +39,7 @@ const EMPTY: Slot = Slot {
 };
 
 /// The spans written so far: 256 slots of 128 bytes.
-pub(super) struct Spans {
+pub(crate) struct Spans {
     slots: Box<[Slot; SLOTS]>,
 }
 
@@ -62,6 +62,18 @@ impl Spans {
         let s = &self.slots[Self::index(stamp)];
         if s.stamp == stamp && stamp != 0 && s.widths == widths {
             Some((&s.bytes[..usize::from(s.len)], usize::from(s.blanks)))
+        } else {
+            None
+        }
+    }
+
+    /// [`Spans::get`] with the whole slot: its bytes (the span's, then what the slot held
+    /// before), the span's length and the blanks owed after it.
+    #[inline(always)]
+    pub fn get_slot(&self, stamp: u32, widths: u32) -> Option<(&[u8; SPAN_MAX], usize, usize)> {
+        let s = &self.slots[Self::index(stamp)];
+        if s.stamp == stamp && stamp != 0 && s.widths == widths {
+            Some((&s.bytes, usize::from(s.len), usize::from(s.blanks)))
         } else {
             None
         }

@@ -8,7 +8,7 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
-use crate::row::{Part, PartSpan, Parts};
+use super::{Part, PartSpan, Parts};
 
 const SPACES: [u8; 32] = [b' '; 32];
 
@@ -16,7 +16,7 @@ const SPACES: [u8; 32] = [b' '; 32];
 /// A line longer than the room is written again into more room (`buf` grows, and stays grown),
 /// until it fits: nothing is cut, and nothing can overrun.
 #[inline(always)]
-pub(super) fn write_line(
+pub(crate) fn write_line(
     buf: &mut Vec<u8>,
     len: usize,
     mut write: impl FnMut(&mut W<'_>),
@@ -35,6 +35,34 @@ pub(super) fn write_line(
     }
 }
 
+/// [`write_line`] for a row that almost always fits the room it has: `write` runs once
+/// inline, and only a line longer than the room goes the slow way (`write` again, through a
+/// call, into more room).
+#[inline(always)]
+pub(crate) fn write_once(
+    buf: &mut Vec<u8>,
+    len: usize,
+    mut write: impl FnMut(&mut W<'_>),
+) -> usize {
+    let mut w = W {
+        buf: buf.get_mut(len..).unwrap_or_default(),
+        pos: 0,
+        over: false,
+    };
+    write(&mut w);
+    if !w.over {
+        return w.pos;
+    }
+    again(buf, len, &mut write)
+}
+
+#[cold]
+#[inline(never)]
+fn again(buf: &mut Vec<u8>, len: usize, write: &mut dyn FnMut(&mut W<'_>)) -> usize {
+    grow(buf, len);
+    write_line(buf, len, write)
+}
+
 #[cold]
 #[inline(never)]
 fn grow(buf: &mut Vec<u8>, len: usize) {
@@ -43,11 +71,11 @@ fn grow(buf: &mut Vec<u8>, len: usize) {
 }
 
 /// Room a line gets at least when it did not fit.
-pub(super) const ROOM: usize = 1024;
+pub(crate) const ROOM: usize = 1024;
 
 /// A line being written into the room [`write_line`] gives: `buf[..pos]` is the text so far.
 /// A write that does not fit sets `over` (and is dropped); [`write_line`] then starts again.
-pub(super) struct W<'a> {
+pub(crate) struct W<'a> {
     buf: &'a mut [u8],
     pos: usize,
     over: bool,
@@ -89,6 +117,42 @@ impl W<'_> {
             }
             None => self.over = true,
         }
+    }
+
+    /// Appends the first `n` bytes of `src` with one fixed-size copy of all of it when there
+    /// is room for it (the bytes after the `n` are written over later, or lie beyond the line).
+    #[inline(always)]
+    pub fn put_prefix<const N: usize>(&mut self, src: &[u8; N], n: usize) {
+        if let Some(room) = self.buf.get_mut(self.pos..self.pos + N) {
+            room.copy_from_slice(src);
+            self.pos += n.min(N);
+        } else {
+            self.put(src.get(..n).unwrap_or(src));
+        }
+    }
+
+    /// Appends the first `n` bytes of a span slot ([`super::spans::Spans::get_slot`]): one
+    /// fixed-size copy of 32, 64 or all of the slot's bytes.
+    #[inline(always)]
+    pub fn put_span(&mut self, slot: &[u8; super::spans::SPAN_MAX], n: usize) {
+        if n <= 32 {
+            let mut head = [0u8; 32];
+            head.copy_from_slice(&slot[..32]);
+            self.put_prefix(&head, n);
+        } else if n <= 64 {
+            let mut head = [0u8; 64];
+            head.copy_from_slice(&slot[..64]);
+            self.put_prefix(&head, n);
+        } else {
+            self.put_prefix(slot, n);
+        }
+    }
+
+    /// Appends a byte as two upper-case hex digits.
+    #[inline(always)]
+    pub fn hex2(&mut self, b: u8) {
+        const HEX: &[u8; 16] = b"0123456789ABCDEF";
+        self.put(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
     }
 
     /// Appends one byte.
@@ -194,17 +258,178 @@ impl W<'_> {
         }
         // Written again, quoted.
         self.pos = at;
-        self.aside(|w| {
-            w.byte(b'"');
-            let mut rest = field;
-            while let Some(q) = rest.iter().position(|&b| b == b'"') {
-                w.put(&rest[..=q]);
-                w.byte(b'"');
-                rest = &rest[q + 1..];
+        self.aside(|w| w.csv_quoted(field));
+    }
+
+    /// `field` in double quotes, inner quotes doubled.
+    fn csv_quoted(&mut self, field: &[u8]) {
+        self.byte(b'"');
+        let mut rest = field;
+        while let Some(q) = rest.iter().position(|&b| b == b'"') {
+            self.put(&rest[..=q]);
+            self.byte(b'"');
+            rest = &rest[q + 1..];
+        }
+        self.put(rest);
+        self.byte(b'"');
+    }
+
+    /// Blanks the control characters of the TSV cell written since `at` (see [`W::tsv`]).
+    #[inline(always)]
+    pub fn tsv_fix(&mut self, at: usize) {
+        let cell = self.buf.get_mut(at..self.pos).unwrap_or_default();
+        if scan(cell, below_0x20) != 0 {
+            for b in cell {
+                if *b < 0x20 {
+                    *b = b' ';
+                }
             }
-            w.put(rest);
-            w.byte(b'"');
-        });
+        }
+    }
+
+    /// Quotes the CSV cell written since `at` when it needs it (see [`W::csv`]): then it is
+    /// written again from a copy in `scratch`, and its start and length come back.
+    #[inline(always)]
+    pub fn csv_fix(&mut self, at: usize, scratch: &mut Vec<u8>) -> Option<(u32, u32)> {
+        let cell = self.buf.get(at..self.pos).unwrap_or_default();
+        if scan(cell, |x| {
+            below_0x20(x) | zero_byte(x ^ rep(b',')) | zero_byte(x ^ rep(b'"'))
+        }) == 0
+            || !cell
+                .iter()
+                .any(|&b| matches!(b, b',' | b'"' | b'\r' | b'\n'))
+        {
+            return None;
+        }
+        self.rewrite(at, scratch, |w, text| w.csv_quoted(text))
+    }
+
+    /// Writes the text written since `at` again with `write`, from a copy in `scratch`;
+    /// returns where it started and its length.
+    #[cold]
+    #[inline(never)]
+    fn rewrite(
+        &mut self,
+        at: usize,
+        scratch: &mut Vec<u8>,
+        write: impl FnOnce(&mut W<'_>, &[u8]),
+    ) -> Option<(u32, u32)> {
+        scratch.clear();
+        scratch.extend_from_slice(self.buf.get(at..self.pos).unwrap_or_default());
+        self.pos = at.min(self.pos);
+        write(self, scratch);
+        Some((at as u32, scratch.len() as u32))
+    }
+
+    /// Ends a JSON cell written in place since `at`: a string (`null` when empty; its
+    /// opening quote before `at`) with what needs escaping escaped, or with `numeric` a number
+    /// as it is when it is one (else a string); as [`W::json_str`] and the table's numeric
+    /// extra columns write it. A cell written again from a copy in `scratch` gives its first
+    /// text's start and length.
+    #[inline(always)]
+    pub fn json_fix(
+        &mut self,
+        at: usize,
+        numeric: bool,
+        scratch: &mut Vec<u8>,
+    ) -> Option<(u32, u32)> {
+        let cell = self.buf.get(at..self.pos).unwrap_or_default();
+        if numeric {
+            if is_json_number(cell) {
+                return None;
+            }
+            return self.rewrite(at, scratch, |w, text| w.json_bytes(text));
+        }
+        if cell.is_empty() {
+            self.pos = at.saturating_sub(1);
+            self.put(b"null");
+            return None;
+        }
+        let rewritten = if scan(cell, |x| {
+            below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\'))
+        }) != 0
+        {
+            self.rewrite(at, scratch, |w, text| w.json_escaped(text))
+        } else {
+            None
+        };
+        self.byte(b'"');
+        rewritten
+    }
+
+    /// `bytes` (UTF-8) as a JSON string, or `null` when empty (as [`W::json_str`]).
+    fn json_bytes(&mut self, bytes: &[u8]) {
+        if bytes.is_empty() {
+            self.put(b"null");
+            return;
+        }
+        self.byte(b'"');
+        self.json_escaped(bytes);
+        self.byte(b'"');
+    }
+
+    /// Appends the line's own bytes `a..b` (before the end) again.
+    #[inline(always)]
+    pub fn copy_within(&mut self, a: usize, b: usize) {
+        if a > b || b > self.pos {
+            return;
+        }
+        let n = b - a;
+        if n <= 32 && self.pos + 32 <= self.buf.len() {
+            // One fixed-size copy (the bytes after the text are written over later, or lie
+            // beyond the line): `a + 32 <= pos + 32`, in the buffer.
+            let mut tmp = [0u8; 32];
+            tmp.copy_from_slice(&self.buf[a..a + 32]);
+            self.buf[self.pos..self.pos + 32].copy_from_slice(&tmp);
+            self.pos += n;
+            return;
+        }
+        if self.pos + n > self.buf.len() {
+            self.over = true;
+            return;
+        }
+        self.buf.copy_within(a..b, self.pos);
+        self.pos += n;
+    }
+
+    /// Bytes as upper-case hex pairs with a blank between them (`7E 1A 10`), as
+    /// [`crate::fmt::push_hex_bytes`].
+    #[inline]
+    pub fn hex_bytes(&mut self, bytes: &[u8]) {
+        const HEX: &[u8; 16] = b"0123456789ABCDEF";
+        let n = bytes.len() * 3;
+        let Some(room) = self.buf.get_mut(self.pos..self.pos + n) else {
+            self.over = true;
+            return;
+        };
+        for (i, b) in bytes.iter().enumerate() {
+            room[3 * i] = HEX[usize::from(b >> 4)];
+            room[3 * i + 1] = HEX[usize::from(b & 15)];
+            room[3 * i + 2] = b' ';
+        }
+        self.pos += n.saturating_sub(1);
+    }
+
+    /// `raw / 10^prec` as [`crate::fmt::push_fixed`] writes it (`6543, 2` → `65.43`,
+    /// `-150, 2` → `-1.50`, `5, 3` → `0.005`): its digits written straight into the line.
+    #[inline(always)]
+    pub fn fixed(&mut self, raw: i64, prec: u8) {
+        if let Some(room) = self.buf.get_mut(self.pos..self.pos + 32)
+            && let Some(n) = crate::digits::put_fixed(room, raw, prec)
+        {
+            self.pos += n;
+            return;
+        }
+        self.fixed_slow(raw, prec);
+    }
+
+    /// [`W::fixed`] near the end of the room, or with more than 7 decimals.
+    #[cold]
+    #[inline(never)]
+    fn fixed_slow(&mut self, raw: i64, prec: u8) {
+        let mut s = String::new();
+        crate::fmt::push_fixed(&mut s, raw, prec);
+        self.put(s.as_bytes());
     }
 
     /// Writes with `write` in a function of its own (for what is seldom written: quoting,
@@ -328,14 +553,13 @@ impl W<'_> {
         }
     }
 
-    /// A number in decimal. (`itoa`: the SWAR digits of [`crate::digits`] here took fewer
-    /// instructions but more time, docs/performance.md, fifth pass.)
+    /// A number in decimal, its digits written straight into the line (eight at a time,
+    /// [`crate::digits`]).
     #[inline(always)]
     pub fn dec(&mut self, n: u64) {
-        // `u32` arithmetic where it fits: cheaper than `u64`.
-        match u32::try_from(n) {
-            Ok(n) => self.put(itoa::Buffer::new().format(n).as_bytes()),
-            Err(_) => self.put(itoa::Buffer::new().format(n).as_bytes()),
+        match self.buf.get_mut(self.pos..self.pos + 24) {
+            Some(room) => self.pos += crate::digits::put_u64(room, n),
+            None => self.put(itoa::Buffer::new().format(n).as_bytes()),
         }
     }
 }
@@ -370,7 +594,7 @@ fn copy(dst: &mut [u8], src: &[u8]) {
 }
 
 /// `b` in every byte of a word.
-pub(super) const fn rep(b: u8) -> u64 {
+pub(crate) const fn rep(b: u8) -> u64 {
     u64::from_le_bytes([b; 8])
 }
 
@@ -379,14 +603,14 @@ const HIGH: u64 = rep(0x80);
 /// Non-zero when some byte of `x` is zero. Exact as to whether one is (a borrow can mark a
 /// byte above a zero byte, never a word without one).
 #[inline(always)]
-pub(super) fn zero_byte(x: u64) -> u64 {
+pub(crate) fn zero_byte(x: u64) -> u64 {
     x.wrapping_sub(rep(1)) & !x & HIGH
 }
 
 /// Whether `text` is ASCII without a byte that JSON strings escape (control characters, `"`,
 /// `\\`): what [`W::json_spans`] needs.
 #[inline]
-pub(super) fn json_plain(text: &str) -> bool {
+pub(crate) fn json_plain(text: &str) -> bool {
     scan(text.as_bytes(), |x| {
         below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\')) | x & HIGH
     }) == 0
@@ -394,13 +618,13 @@ pub(super) fn json_plain(text: &str) -> bool {
 
 /// Non-zero when some byte of `x` is below 0x20 (exact as to whether one is, as [`zero_byte`]).
 #[inline(always)]
-pub(super) fn below_0x20(x: u64) -> u64 {
+pub(crate) fn below_0x20(x: u64) -> u64 {
     x.wrapping_sub(rep(0x20)) & !x & HIGH
 }
 
 /// Non-zero when some byte of `x` is not printable ASCII (below 0x20, or 0x7F and above).
 #[inline(always)]
-pub(super) fn not_printable(x: u64) -> u64 {
+pub(crate) fn not_printable(x: u64) -> u64 {
     // x + 1 sets a byte's high bit for 0x7F; bytes of 0x80 and above have it already (and the
     // carry out of an 0xFF byte only reaches bytes above one that is marked anyway).
     below_0x20(x) | x & HIGH | x.wrapping_add(rep(1)) & HIGH
@@ -410,7 +634,7 @@ pub(super) fn not_printable(x: u64) -> u64 {
 /// long; short slices padded with `A`, which no test marks): zero when no byte of `s` is
 /// marked.
 #[inline(always)]
-pub(super) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
+pub(crate) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
     let n = s.len();
     let word = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([b'A'; 8]));
     let half = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([b'A'; 4])) as u64;
@@ -435,6 +659,17 @@ pub(super) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
             acc
         }
     }
+}
+
+/// A plain decimal JSON accepts as a number (`12`, `-1.50`, `0.5`; not `01`, `.5`, `1.`).
+pub(crate) fn is_json_number(s: &[u8]) -> bool {
+    let b = s.strip_prefix(b"-").unwrap_or(s);
+    let (int, frac) = match b.iter().position(|&c| c == b'.') {
+        Some(i) => (&b[..i], Some(&b[i + 1..])),
+        None => (b, None),
+    };
+    let digits = |d: &[u8]| !d.is_empty() && d.iter().all(u8::is_ascii_digit);
+    digits(int) && (int.len() == 1 || int[0] != b'0') && frac.is_none_or(digits)
 }
 
 #[cfg(test)]

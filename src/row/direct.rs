@@ -1,0 +1,733 @@
+//! Rows written straight from a decoded frame into the table's output, without a [`Row`].
+//!
+//! A [`Row`] is what every stage after the decoder understands (filters, names, `--wide`,
+//! plots, `--top`, exports, the pacer): the decoder formats its cells into scratch strings and
+//! its numbers into [`super::Parts`], and the table copies them into the output. When nothing
+//! but the plain table reads the rows, that is work twice over. Then the table lends the
+//! decoder a [`Direct`] ([`super::RowOut::direct`]), and the decoder writes its row's cells in
+//! order into [`Cells`], which puts each one into the output line in the table's format (TSV,
+//! CSV, JSON Lines, pretty), with the same escaping, quoting, padding, Counter, stamps' copied
+//! cells and raw bytes as the table writes for a [`Row`]. Anything else in between (a filter, a
+//! wrapper) lends no `Direct`, and the decoder builds its `Row` as always.
+//!
+//! One mechanism for every protocol: a decoder implements [`WriteRow`] for the rows it writes
+//! straight (usually its common rows; the rest go as [`Row`]s), asks `out.direct(COLUMNS)` for
+//! each row and, when it gets one, calls [`Direct::row`]. [`WriteRow::write`] is compiled once
+//! per format ([`Fmt`]), so that each cell's format is decided by the compiler, not per cell.
+//!
+//! A row's cells, in order: Counter and Millis (written by [`Direct::row`]); ID to Sensor,
+//! inside [`Cells::stamp`] (copied from the last row with the same stamp, when there was one);
+//! Data; [`Cells::value`]; one cell per extra column; optionally [`Cells::part`]s (JSON
+//! `parts`); then the raw bytes and the line's end (written by [`Direct::row`]). A cell is
+//! either a text ([`Cells::text`]) or written in place between [`Cells::begin`] and
+//! [`Cells::end`] with [`Cells::str`], [`Cells::dec`], [`Cells::fixed`] …, which take only
+//! UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8. A cell that turns out to
+//! need quoting or escaping (a comma in CSV, a quote in JSON, a control character, a character
+//! that is not printable ASCII in pretty text) is written again from a copy, exactly as the
+//! table writes a [`Row`]'s cell. Tests compare both ways of every protocol that writes rows
+//! straight, over every fixture and fuzz corpus, byte for byte
+//! (`testing::assert_direct_rows_match`).
+//!
+//! [`Row`]: super::Row
+
+use std::marker::PhantomData;
+
+use super::Class;
+use super::line;
+use super::pretty::{CYAN, DIMMED, PrettyLine, RED, YELLOW};
+use super::text::{Format, Text};
+
+/// The table's output buffer and its text state, lent for one row: `buf[..*len]` holds the
+/// rows not yet written out, the rest is room for the next line.
+pub struct Direct<'a> {
+    pub(crate) text: &'a mut Text,
+    pub(crate) buf: &'a mut Vec<u8>,
+    pub(crate) len: &'a mut usize,
+}
+
+/// A decoder's row, written straight into the table (see the module's text for the order of
+/// the cells). `write` may run more than once for one row (a line longer than the output's
+/// room is written again into more room), so it only reads.
+pub trait WriteRow {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>);
+}
+
+/// A format as a type: [`WriteRow::write`] is compiled once for each.
+pub trait Fmt: sealed::Sealed {
+    const FORMAT: Format;
+}
+
+mod sealed {
+    pub trait Sealed {}
+}
+
+macro_rules! formats {
+    ($($(#[$doc:meta])* $name:ident;)*) => {$(
+        $(#[$doc])*
+        pub enum $name {}
+        impl sealed::Sealed for $name {}
+        impl Fmt for $name {
+            const FORMAT: Format = Format::$name;
+        }
+    )*};
+}
+
+formats! {
+    /// Tab-separated values.
+    Tsv;
+    /// Comma-separated values (RFC 4180).
+    Csv;
+    /// JSON Lines.
+    Jsonl;
+    /// Pretty text.
+    Pretty;
+}
+
+/// The keys of the base columns and of Value in JSON Lines, by column.
+const JSON_KEYS: [&[u8]; 9] = [
+    b"{\"counter\":",
+    b",\"millis\":",
+    b",\"id\":",
+    b",\"device\":",
+    b",\"type\":",
+    b",\"sensor_no\":",
+    b",\"sensor\":",
+    b",\"data\":",
+    b",\"value\":",
+];
+
+/// Where a number's text is in the Data cell: from [`Cells::here`] before it to
+/// [`Cells::here`] after it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Mark {
+    start: u32,
+    end: u32,
+}
+
+impl Mark {
+    pub fn new(start: u32, end: u32) -> Self {
+        Mark { start, end }
+    }
+}
+
+impl Direct<'_> {
+    /// Writes one row: Counter, Millis (from `micros`), the cells `row` writes, the raw bytes
+    /// (with `--raw`), the end of the line. `class` styles a pretty line in colour; a row with
+    /// `raw` bytes that is not an error or a note counts as a frame, as in the table.
+    #[inline]
+    pub fn row(self, micros: Option<u64>, class: Class, raw: &[u8], row: &impl WriteRow) {
+        self.text.count();
+        if !raw.is_empty() && !matches!(class, Class::Error | Class::Info) {
+            self.text.frames += 1;
+        }
+        match self.text.format {
+            Format::Tsv => self.run::<Tsv>(micros, class, raw, row),
+            Format::Csv => self.run::<Csv>(micros, class, raw, row),
+            Format::Jsonl => self.run::<Jsonl>(micros, class, raw, row),
+            Format::Pretty => self.run::<Pretty>(micros, class, raw, row),
+        }
+    }
+
+    #[inline(always)]
+    fn run<F: Fmt>(self, micros: Option<u64>, class: Class, raw: &[u8], row: &impl WriteRow) {
+        let text = self.text;
+        let style = if F::FORMAT == Format::Pretty && text.color {
+            match class {
+                Class::Plain => None,
+                Class::Quiet => Some(DIMMED),
+                Class::Warning => Some(YELLOW),
+                Class::Error => Some(RED),
+                Class::Info => Some(CYAN),
+            }
+        } else {
+            None
+        };
+        if F::FORMAT == Format::Pretty {
+            let n = 8 + text.extra.len() + usize::from(text.raw);
+            if text.widths.len() < n {
+                text.widths.resize(n, 4);
+            }
+        }
+        *self.len += line::write_once(self.buf, *self.len, |w| {
+            let mut c = Cells::<F> {
+                p: PrettyLine::start(w, style),
+                t: &mut *text,
+                col: 0,
+                cell: (0, 0, 0),
+                span: (0, 0, 0),
+                rewritten: None,
+                parts: 0,
+                _f: PhantomData,
+            };
+            c.head(micros);
+            row.write(&mut c);
+            c.finish(raw);
+        });
+    }
+}
+
+/// The line of one row being written, in format `F`: the decoder's [`WriteRow`] writes its
+/// cells through it.
+pub struct Cells<'b, 'l, F: Fmt> {
+    /// The line (and, in pretty text, the blanks owed and where the text starts).
+    p: PrettyLine<'b, 'l>,
+    t: &'b mut Text,
+    /// The next column.
+    col: usize,
+    /// The cell being written in place: where its text starts, and (pretty text) where the
+    /// line was before its blanks, and the blanks owed then.
+    cell: (usize, usize, usize),
+    /// The cells ID to Sensor being written: where they start, the blanks owed before them,
+    /// and the stamp (0: not kept).
+    span: (usize, usize, u32),
+    /// The Data cell was written again (quoted, escaped) from its first text, kept in
+    /// `t.scratch`: where that text started in the line and its length (marks in it point
+    /// into the copy).
+    rewritten: Option<(u32, u32)>,
+    /// JSON members of `parts` written so far.
+    parts: usize,
+    _f: PhantomData<F>,
+}
+
+impl<F: Fmt> Cells<'_, '_, F> {
+    const SEP: u8 = if matches!(F::FORMAT, Format::Csv) {
+        b','
+    } else {
+        b'\t'
+    };
+
+    /// Counter and Millis.
+    #[inline(always)]
+    fn head(&mut self, micros: Option<u64>) {
+        let t = &mut *self.t;
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                let w = &mut *self.p.line;
+                t.digits.put(w);
+                w.byte(Self::SEP);
+                if let Some(us) = micros {
+                    w.dec(us / 1000);
+                }
+            }
+            Format::Jsonl => {
+                let w = &mut *self.p.line;
+                w.put(JSON_KEYS[0]);
+                t.digits.put(w);
+                w.put(JSON_KEYS[1]);
+                match micros {
+                    Some(us) => w.dec(us / 1000),
+                    None => w.put(b"null"),
+                }
+            }
+            Format::Pretty => {
+                self.p.digits(&mut t.widths, 0, t.digits.as_bytes());
+                let mut ib = itoa::Buffer::new();
+                let millis = micros.map_or("", |us| ib.format(us / 1000));
+                self.p.digits(&mut t.widths, 1, millis.as_bytes());
+            }
+        }
+        self.col = 2;
+    }
+
+    /// Whether pretty column `i` is the line's last (not padded).
+    #[inline(always)]
+    fn last(&self, i: usize) -> bool {
+        i + 1 == 8 + self.t.extra.len() + usize::from(self.t.raw)
+    }
+
+    /// The cells ID to Sensor: copied from the last row with the same non-zero `stamp` when
+    /// there was one (see [`super::Row::stamp`]: the decoder promises that rows with one stamp
+    /// have the same cells ID to Sensor), and then `false`; `true`: write them now (an
+    /// [`Cells::id`] and four cells), then call [`Cells::stamp_end`]. Debug builds write them
+    /// again after every copy and compare.
+    #[inline(always)]
+    pub fn stamp(&mut self, stamp: u32) -> bool {
+        debug_assert_eq!(self.col, 2, "the cells ID to Sensor come first");
+        let widths = if F::FORMAT == Format::Pretty {
+            span_widths(&self.t.widths)
+        } else {
+            0
+        };
+        if stamp != 0
+            && let Some((slot, len, blanks)) = self.t.spans.get_slot(stamp, widths)
+        {
+            let at = self.p.line.len();
+            if F::FORMAT == Format::Pretty {
+                let owed = self.p.blanks;
+                self.p.copy(&slot[..len], blanks);
+                if cfg!(debug_assertions) {
+                    // Written again in the copy's place, then compared (`stamp_end`).
+                    let blanks = self.p.blanks;
+                    let t = &mut *self.t;
+                    t.check.clear();
+                    t.check.extend_from_slice(&self.p.line.bytes()[at..]);
+                    t.check.extend_from_slice(&blanks.to_le_bytes());
+                    self.p.line.truncate(at);
+                    self.p.blanks = owed;
+                    self.span = (at, usize::MAX, stamp);
+                    return true;
+                }
+            } else {
+                self.p.line.put_span(slot, len);
+                if cfg!(debug_assertions) {
+                    let t = &mut *self.t;
+                    t.check.clear();
+                    t.check.extend_from_slice(&self.p.line.bytes()[at..]);
+                    self.p.line.truncate(at);
+                    self.span = (at, usize::MAX, stamp);
+                    return true;
+                }
+            }
+            self.col = 7;
+            return false;
+        }
+        self.span = (self.p.line.len(), self.p.blanks, stamp);
+        true
+    }
+
+    /// The cells ID to Sensor are written ([`Cells::stamp`]): kept for the next rows with the
+    /// stamp (pretty text: only when no blanks were owed before them, so that the span holds
+    /// exactly its own cells), or (debug builds) compared with the copy.
+    #[inline(always)]
+    pub fn stamp_end(&mut self) {
+        debug_assert_eq!(self.col, 7, "an ID and four cells");
+        let (at, owed, stamp) = self.span;
+        if stamp == 0 || self.p.line.over() {
+            return;
+        }
+        if owed == usize::MAX {
+            // Debug builds: the cells were copied, then written again.
+            let written = self.p.line.bytes()[at..].to_vec();
+            let mut copied = self.t.check.clone();
+            if F::FORMAT == Format::Pretty {
+                let n = std::mem::size_of::<usize>();
+                let tail = copied.split_off(copied.len().saturating_sub(n));
+                let blanks = usize::from_le_bytes(tail.try_into().unwrap_or_default());
+                assert_eq!(
+                    (String::from_utf8_lossy(&copied), blanks),
+                    (String::from_utf8_lossy(&written), self.p.blanks),
+                    "rows with stamp {stamp:#x} differ in the cells ID to Sensor"
+                );
+            } else {
+                assert_eq!(
+                    String::from_utf8_lossy(&copied),
+                    String::from_utf8_lossy(&written),
+                    "rows with stamp {stamp:#x} differ in the cells ID to Sensor"
+                );
+            }
+            return;
+        }
+        if F::FORMAT == Format::Pretty {
+            if owed == 0 {
+                let widths = span_widths(&self.t.widths);
+                let bytes = &self.p.line.bytes()[at..];
+                self.t.spans.put(stamp, widths, bytes, self.p.blanks);
+            }
+        } else {
+            self.t.spans.put(stamp, 0, &self.p.line.bytes()[at..], 0);
+        }
+    }
+
+    /// The ID cell (column 2).
+    #[inline(always)]
+    pub fn id(&mut self, id: Option<u32>) {
+        debug_assert_eq!(self.col, 2);
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                let w = &mut *self.p.line;
+                w.byte(Self::SEP);
+                if let Some(id) = id {
+                    w.dec(id.into());
+                }
+            }
+            Format::Jsonl => {
+                let w = &mut *self.p.line;
+                w.put(JSON_KEYS[2]);
+                match id {
+                    Some(id) => w.dec(id.into()),
+                    None => w.put(b"null"),
+                }
+            }
+            Format::Pretty => {
+                let mut ib = itoa::Buffer::new();
+                let id = id.map_or("", |i| ib.format(i));
+                self.p.digits(&mut self.t.widths, 2, id.as_bytes());
+            }
+        }
+        self.col = 3;
+    }
+
+    /// The next cell, from a text.
+    #[inline(always)]
+    pub fn text(&mut self, s: &str) {
+        let i = self.col;
+        self.col += 1;
+        match F::FORMAT {
+            Format::Tsv => {
+                let w = &mut *self.p.line;
+                w.byte(b'\t');
+                w.tsv(s.as_bytes());
+            }
+            Format::Csv => {
+                let w = &mut *self.p.line;
+                w.byte(b',');
+                w.csv(s.as_bytes());
+            }
+            Format::Jsonl => {
+                let (key, numeric) = json_key(self.t, i);
+                let w = &mut *self.p.line;
+                w.put(key);
+                if numeric && super::text::is_json_number(s.as_bytes()) {
+                    w.put(s.as_bytes());
+                } else {
+                    w.json_str(s);
+                }
+            }
+            Format::Pretty => {
+                // Pretty text has no Value column: the extra columns come one earlier.
+                let i = if i > 8 { i - 1 } else { i };
+                let last = self.last(i);
+                self.p.cell(&mut self.t.widths, i, s, true, last);
+            }
+        }
+    }
+
+    /// An empty cell.
+    #[inline(always)]
+    pub fn empty(&mut self) {
+        self.text("");
+    }
+
+    /// The next cell is written in place (Data from column 7, or an extra column) until
+    /// [`Cells::end`].
+    #[inline(always)]
+    pub fn begin(&mut self) {
+        let i = self.col;
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                self.p.line.byte(Self::SEP);
+                self.cell.0 = self.p.line.len();
+            }
+            Format::Jsonl => {
+                let (key, numeric) = json_key(self.t, i);
+                let w = &mut *self.p.line;
+                w.put(key);
+                if !numeric {
+                    w.byte(b'"');
+                }
+                self.cell.0 = w.len();
+            }
+            Format::Pretty => self.cell = self.p.begin_cell(),
+        }
+    }
+
+    /// The cell written in place since [`Cells::begin`] ends: quoted, escaped or padded as its
+    /// format wants.
+    #[inline(always)]
+    pub fn end(&mut self) {
+        let i = self.col;
+        self.col += 1;
+        let at = self.cell.0;
+        let rewritten = match F::FORMAT {
+            Format::Tsv => {
+                self.p.line.tsv_fix(at);
+                None
+            }
+            Format::Csv => self.p.line.csv_fix(at, &mut self.t.scratch),
+            Format::Jsonl => {
+                let numeric = json_key(self.t, i).1;
+                self.p.line.json_fix(at, numeric, &mut self.t.scratch)
+            }
+            Format::Pretty => {
+                let i = if i > 8 { i - 1 } else { i };
+                let last = self.last(i);
+                let t = &mut *self.t;
+                self.p
+                    .end_cell(&mut t.widths, i, last, self.cell, &mut t.scratch);
+                None
+            }
+        };
+        if i == 7 {
+            self.rewritten = rewritten;
+        }
+    }
+
+    /// Where the line is now (to mark a number: [`Mark::new`]).
+    #[inline(always)]
+    pub fn here(&self) -> u32 {
+        self.p.line.len() as u32
+    }
+
+    /// In place: a text.
+    #[inline(always)]
+    pub fn str(&mut self, s: &str) {
+        self.p.line.put(s.as_bytes());
+    }
+
+    /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
+    #[inline(always)]
+    pub fn ascii(&mut self, b: u8) {
+        self.p.line.byte(if b < 0x80 { b } else { b'?' });
+    }
+
+    /// In place: an integer in decimal.
+    #[inline(always)]
+    pub fn dec(&mut self, n: u64) {
+        self.p.line.dec(n);
+    }
+
+    /// In place: a signed integer in decimal.
+    #[inline(always)]
+    pub fn dec_i(&mut self, n: i64) {
+        if n < 0 {
+            self.p.line.byte(b'-');
+        }
+        self.p.line.dec(n.unsigned_abs());
+    }
+
+    /// In place: `raw / 10^prec` as [`crate::fmt::push_fixed`] writes it (`6543, 2` →
+    /// `65.43`).
+    #[inline(always)]
+    pub fn fixed(&mut self, raw: i64, prec: u8) {
+        self.p.line.fixed(raw, prec);
+    }
+
+    /// In place: a byte as two upper-case hex digits.
+    #[inline(always)]
+    pub fn hex2(&mut self, b: u8) {
+        self.p.line.hex2(b);
+    }
+
+    /// In place: bytes as upper-case hex pairs with a blank between them (`7E 1A 10`).
+    #[inline(always)]
+    pub fn hex_bytes(&mut self, b: &[u8]) {
+        self.p.line.hex_bytes(b);
+    }
+
+    /// Where a mark's text is: in the line, or in the copy of a Data cell written again.
+    #[inline(always)]
+    fn marked(&self, m: Mark) -> (bool, usize, usize) {
+        match self.rewritten {
+            Some((at, len)) if m.start >= at && m.end <= at + len => {
+                (true, (m.start - at) as usize, (m.end - at) as usize)
+            }
+            _ => (false, m.start as usize, m.end as usize),
+        }
+    }
+
+    /// Appends the marked text to the line.
+    #[inline(always)]
+    fn put_marked(&mut self, m: Mark) {
+        match self.marked(m) {
+            (false, a, b) => self.p.line.copy_within(a, b),
+            (true, a, b) => {
+                let s = self.t.scratch.get(a..b).unwrap_or_default();
+                self.p.line.put(s);
+            }
+        }
+    }
+
+    /// The Value column (not in pretty text): the number marked in the Data cell, or empty.
+    #[inline(always)]
+    pub fn value(&mut self, m: Option<Mark>) {
+        debug_assert_eq!(self.col, 8, "Value follows Data");
+        self.col = 9;
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                self.p.line.byte(Self::SEP);
+                if let Some(m) = m {
+                    // Digits, a sign and a point: nothing to escape or quote.
+                    self.put_marked(m);
+                }
+            }
+            Format::Jsonl => {
+                self.p.line.put(JSON_KEYS[8]);
+                match m {
+                    Some(m) => self.put_marked(m),
+                    None => self.p.line.put(b"null"),
+                }
+            }
+            Format::Pretty => {}
+        }
+    }
+
+    /// The Value column from a text (not in pretty text): a row's first number
+    /// ([`super::Row::value`]), `None` when it has none.
+    #[inline(always)]
+    pub fn value_text(&mut self, s: Option<&str>) {
+        debug_assert_eq!(self.col, 8, "Value follows Data");
+        self.col = 9;
+        match F::FORMAT {
+            Format::Tsv => {
+                self.p.line.byte(b'\t');
+                self.p.line.tsv(s.unwrap_or("").as_bytes());
+            }
+            Format::Csv => {
+                self.p.line.byte(b',');
+                self.p.line.csv(s.unwrap_or("").as_bytes());
+            }
+            Format::Jsonl => {
+                self.p.line.put(JSON_KEYS[8]);
+                self.p.line.put(s.unwrap_or("null").as_bytes());
+            }
+            Format::Pretty => {}
+        }
+    }
+
+    /// JSON Lines only (nothing in the other formats): a row's numbers as the table writes a
+    /// [`super::Row::parts`] (`,"parts":{…}`, nothing when there are none). Not together with
+    /// [`Cells::part`].
+    #[inline(always)]
+    pub fn row_parts(&mut self, parts: super::Parts<'_>) {
+        if F::FORMAT == Format::Jsonl && !parts.is_empty() {
+            self.p.line.json_parts(parts);
+        }
+    }
+
+    /// JSON Lines only (nothing in the other formats): a member of `parts`, the number named
+    /// `name` marked in the Data cell. After the extra columns.
+    #[inline(always)]
+    pub fn part(&mut self, name: &str, m: Mark) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        self.part_name(name);
+        self.put_marked(m);
+    }
+
+    /// JSON Lines only: a member of `parts` with its number's text.
+    #[inline(always)]
+    pub fn part_text(&mut self, name: &str, text: &str) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        self.part_name(name);
+        self.p.line.put(text.as_bytes());
+    }
+
+    #[inline(always)]
+    fn part_name(&mut self, name: &str) {
+        let w = &mut *self.p.line;
+        w.put(if self.parts == 0 {
+            b",\"parts\":{"
+        } else {
+            b","
+        });
+        self.parts += 1;
+        w.json_str(name);
+        w.byte(b':');
+    }
+
+    /// JSON Lines only: the `name=number` pairs, separated by blanks, of the marked text in
+    /// the Data cell (an S-Bus media list `R57=-8 R58=12`), each a member of `parts`, name and
+    /// number cut from the text, as the table writes the [`super::Parts::Spans`] of such a
+    /// list. For texts of plain ASCII names and numbers.
+    #[inline]
+    pub fn pairs(&mut self, list: Mark) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        let (in_scratch, a, b) = self.marked(list);
+        let mut i = a;
+        while i < b {
+            let src: &[u8] = if in_scratch {
+                &self.t.scratch
+            } else {
+                self.p.line.bytes()
+            };
+            let tok = src.get(i..b).unwrap_or_default();
+            let end = i + tok.iter().position(|&c| c == b' ').unwrap_or(tok.len());
+            let eq = i + tok[..end - i]
+                .iter()
+                .position(|&c| c == b'=')
+                .unwrap_or(end - i);
+            let num = (eq + 1).min(end);
+            let w = &mut *self.p.line;
+            w.put(if self.parts == 0 {
+                b",\"parts\":{"
+            } else {
+                b","
+            });
+            self.parts += 1;
+            if eq == i {
+                w.put(b"null");
+            } else {
+                w.byte(b'"');
+                if in_scratch {
+                    w.put(&self.t.scratch[i..eq]);
+                } else {
+                    w.copy_within(i, eq);
+                }
+                w.byte(b'"');
+            }
+            w.byte(b':');
+            if in_scratch {
+                w.put(&self.t.scratch[num..end]);
+            } else {
+                w.copy_within(num, end);
+            }
+            i = end + 1;
+        }
+    }
+
+    /// The raw bytes (with `--raw`) and the end of the line.
+    #[inline(always)]
+    fn finish(mut self, raw: &[u8]) {
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                let w = &mut *self.p.line;
+                if self.t.raw {
+                    w.byte(Self::SEP);
+                    w.hex_bytes(raw);
+                }
+                w.put(if F::FORMAT == Format::Csv {
+                    b"\r\n"
+                } else {
+                    b"\n"
+                });
+            }
+            Format::Jsonl => {
+                let w = &mut *self.p.line;
+                if self.parts > 0 {
+                    w.byte(b'}');
+                }
+                if self.t.raw {
+                    w.put(b",\"raw\":\"");
+                    w.hex_bytes(raw);
+                    w.byte(b'"');
+                }
+                w.put(b"}\n");
+            }
+            Format::Pretty => {
+                if self.t.raw {
+                    // The last column: hex digits and blanks.
+                    self.col = 9 + self.t.extra.len();
+                    self.begin();
+                    self.p.line.hex_bytes(raw);
+                    self.end();
+                }
+                self.p.finish();
+            }
+        }
+    }
+}
+
+/// The sum of the pretty widths of the columns ID to Sensor: spans are kept per widths.
+#[inline(always)]
+fn span_widths(widths: &[usize]) -> u32 {
+    widths
+        .get(2..7)
+        .map_or(0, |w| w.iter().sum::<usize>() as u32)
+}
+
+/// Column `i`'s JSON key, and whether its cells are numbers.
+#[inline(always)]
+fn json_key(t: &Text, i: usize) -> (&[u8], bool) {
+    if i < JSON_KEYS.len() {
+        return (JSON_KEYS[i], false);
+    }
+    match t.json_keys.get(i - JSON_KEYS.len()) {
+        Some((k, n)) => (k, *n),
+        None => (&[], false),
+    }
+}
