@@ -343,9 +343,16 @@ proptest! {
             match framing {
                 // Every 0x7E ends a frame: noise can never hide a real frame.
                 Framing::Hdlc => prop_assert!(found, "lost the frame at {s}..{e}: {evs:?}"),
-                // Only a CRC-valid false frame that starts earlier and overlaps can.
+                // Only a CRC-valid false frame that overlaps it can: one that starts earlier,
+                // or one that starts inside it and reaches past its end, followed by a frame
+                // where it is not (docs/sab.md, rule 1: a chance CRC pass either way, the
+                // traffic decides).
                 Framing::Sync => prop_assert!(
-                    found || valid.iter().any(|v| v.start_pos < s && v.end_pos > s),
+                    found
+                        || valid.iter().any(|v| {
+                            (v.start_pos < s && v.end_pos > s)
+                                || (v.start_pos > s && v.start_pos < e && v.end_pos > e)
+                        }),
                     "lost the frame at {s}..{e}: {evs:?}"
                 ),
             }
