@@ -502,13 +502,22 @@ fn bytes_read(pid: u32) -> u64 {
 /// at the first one.
 fn detect_hearing_sport(b: &mut Bus) -> std::process::Child {
     use std::io::BufRead;
-    let mut child = Command::new(bin())
-        .args(["detect", "--listen-ms", "4000", "--baud", "57600,115200"])
+    let mut cmd = Command::new(bin());
+    cmd.args(["detect", "--listen-ms", "4000", "--baud", "57600,115200"])
         .arg(&b.path)
         .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(std::process::Stdio::piped());
+    // SIGHUP as a terminal would start it, also when the tests run under `nohup` (which
+    // passes it on ignored, and busnoop then keeps ignoring it).
+    // SAFETY: only signal() in the child before exec.
+    unsafe {
+        use std::os::unix::process::CommandExt;
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGHUP, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let mut child = cmd.spawn().unwrap();
     let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
     let mut line = String::new();
     err.read_line(&mut line).unwrap();

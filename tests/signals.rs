@@ -107,14 +107,19 @@ fn endless_replay(
     };
     let mut cmd = busnoop();
     cmd.args(["sport", "-f", "tsv", "-o"]).arg(out).arg(fifo);
-    if ignore_hup {
-        // SAFETY: only signal() in the child before exec.
-        unsafe {
-            cmd.pre_exec(|| {
-                libc::signal(libc::SIGHUP, libc::SIG_IGN);
-                Ok(())
-            });
-        }
+    // Ignored as `nohup` starts it, or as a terminal would start it whatever started the
+    // tests (a suite run under `nohup` passes SIGHUP ignored on).
+    let hup = if ignore_hup {
+        libc::SIG_IGN
+    } else {
+        libc::SIG_DFL
+    };
+    // SAFETY: only signal() in the child before exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            libc::signal(libc::SIGHUP, hup);
+            Ok(())
+        });
     }
     let guard = Guard(cmd.spawn().unwrap());
     wait_for_rows(out, 1000);
