@@ -86,52 +86,6 @@ pub fn frame_type(ty: u8) -> Option<&'static str> {
     })
 }
 
-/// Every Type name [`frame_type`] can give (for the filter vocabulary).
-pub const FRAME_TYPES: &[&str] = &[
-    "GPS",
-    "GPSTime",
-    "GPSExt",
-    "Vario",
-    "Battery",
-    "Baro",
-    "Airspeed",
-    "Heartbeat",
-    "RPM",
-    "Temp",
-    "Voltages",
-    "VTX",
-    "LinkStats",
-    "RC",
-    "RCSubset",
-    "RC11",
-    "LinkRX",
-    "LinkTX",
-    "Attitude",
-    "MAVLinkFC",
-    "FlightMode",
-    "ESPNow",
-    "Ping",
-    "DeviceInfo",
-    "ParamEntry",
-    "ParamRead",
-    "ParamWrite",
-    "ELRSStatus",
-    "Command",
-    "Logging",
-    "Radio",
-    "Game",
-    "KISS",
-    "MSPReq",
-    "MSPResp",
-    "MSPWrite",
-    "APLegacy",
-    "APPassthru",
-    "mLRS",
-    "MAVLink",
-    "MAVSysStatus",
-    "Unknown",
-];
-
 /// Whether frames of type `ty` carry `[destination][origin]` after the type ("extended": 0x28
 /// and up, except the logging frame 0x34, which the TBS text says has the short header; and
 /// the ArduPilot, mLRS and MAVLink broadcast frames 0x7F-0x82, 0xAA and 0xAC).
@@ -281,7 +235,7 @@ mod tests {
     fn every_known_type_is_in_the_vocabulary() {
         for ty in 0..=255u8 {
             if let Some(n) = frame_type(ty) {
-                assert!(FRAME_TYPES.contains(&n), "{n}");
+                assert!(super::super::vocab::TYPES.contains(&n), "{n}");
             }
         }
         assert_eq!(frame_type(0x16), Some("RC"));

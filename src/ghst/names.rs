@@ -46,25 +46,6 @@ pub fn frame_type(addr: u8, ty: u8) -> Option<&'static str> {
     })
 }
 
-/// Every Type name [`frame_type`] can give.
-pub const FRAME_TYPES: &[&str] = &[
-    "RC",
-    "RCLink",
-    "MenuCtrl",
-    "Sync",
-    "MSPReq",
-    "MSPWrite",
-    "LinkStats",
-    "VTXStats",
-    "Battery",
-    "Menu",
-    "GPS",
-    "GPS2",
-    "MagBaro",
-    "MSPResp",
-    "Unknown",
-];
-
 /// EdgeTX's names of the link statistics' RF modes.
 pub fn rf_mode(m: u8) -> &'static str {
     [
@@ -114,7 +95,7 @@ mod tests {
         for a in 0..=255u8 {
             for t in 0..=255u8 {
                 if let Some(n) = frame_type(a, t) {
-                    assert!(FRAME_TYPES.contains(&n));
+                    assert!(super::super::vocab::TYPES.contains(&n));
                 }
             }
         }
