@@ -375,25 +375,12 @@ fn gps_time(r: &mut Reader<'_>, data: &mut String) {
     if let Some(y) = r.be_i16() {
         crate::fmt::push_i64(data, y.into());
     }
-    if let Some(m) = r.u8() {
-        data.push('-');
-        two(data, m);
-    }
-    if let Some(d) = r.u8() {
-        data.push('-');
-        two(data, d);
-    }
-    if let Some(h) = r.u8() {
-        data.push(' ');
-        two(data, h);
-    }
-    if let Some(m) = r.u8() {
-        data.push(':');
-        two(data, m);
-    }
-    if let Some(s) = r.u8() {
-        data.push(':');
-        two(data, s);
+    // Month, day, hour, minute, second, each after its separator.
+    for sep in ['-', '-', ' ', ':', ':'] {
+        if let Some(v) = r.u8() {
+            data.push(sep);
+            two(data, v);
+        }
     }
     if let Some(ms) = r.be_u16() {
         data.push('.');
