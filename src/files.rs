@@ -90,20 +90,64 @@ pub(crate) fn stdout_was_closed() -> bool {
 /// The inputs being read, by device and inode ([`protect`]).
 static INPUTS: std::sync::Mutex<Vec<(u64, u64)>> = std::sync::Mutex::new(Vec::new());
 
-/// Marks an open input (a regular file or a FIFO) as never to be written: [`create_file`]
-/// refuses to open it, whatever name leads there by then.
-pub(crate) fn protect(file: impl std::os::fd::AsFd) {
+/// Marks standard input (a regular file or a FIFO behind it) as never to be written: it stays
+/// open as long as busnoop runs, so the mark does too.
+pub(crate) fn protect_stdin() {
+    mark(std::io::stdin());
+}
+
+/// Marks an open input file (a regular file or a FIFO) as never to be written: [`create_file`]
+/// refuses to open it, whatever name leads there by then. The mark lasts as long as the
+/// returned file is open: a closed file's inode may be given to a new file, which must not be
+/// taken for the input (a test's temporary output was refused that way, 1 run in 5 under load).
+pub(crate) fn protect(file: File) -> Protected {
+    let key = mark(&file);
+    Protected { file, key }
+}
+
+fn mark(file: impl std::os::fd::AsFd) -> Option<(u64, u64)> {
     use std::os::unix::fs::MetadataExt;
-    let Ok(file) = file.as_fd().try_clone_to_owned().map(File::from) else {
-        return;
-    };
-    if let Ok(m) = file.metadata()
-        && (m.is_file() || m.file_type().is_fifo())
-    {
-        INPUTS
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push((m.dev(), m.ino()));
+    let m = file
+        .as_fd()
+        .try_clone_to_owned()
+        .map(File::from)
+        .ok()?
+        .metadata()
+        .ok()?;
+    if !(m.is_file() || m.file_type().is_fifo()) {
+        return None;
+    }
+    let key = (m.dev(), m.ino());
+    INPUTS.lock().unwrap_or_else(|e| e.into_inner()).push(key);
+    Some(key)
+}
+
+/// An input file marked by [`protect`]; closing it lifts the mark.
+pub(crate) struct Protected {
+    file: File,
+    key: Option<(u64, u64)>,
+}
+
+impl io::Read for Protected {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.file.read(buf)
+    }
+}
+
+impl std::os::fd::AsFd for Protected {
+    fn as_fd(&self) -> std::os::fd::BorrowedFd<'_> {
+        self.file.as_fd()
+    }
+}
+
+impl Drop for Protected {
+    fn drop(&mut self) {
+        let Some(key) = self.key else { return };
+        let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
+        // One mark: the same file may be read twice at once.
+        if let Some(i) = inputs.iter().position(|k| *k == key) {
+            inputs.swap_remove(i);
+        }
     }
 }
 
@@ -154,7 +198,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("capture.bin");
         std::fs::write(&input, b"precious capture").unwrap();
-        protect(File::open(&input).unwrap());
+        let _input = protect(File::open(&input).unwrap());
         // The race's outcome: `-o out.tsv` is now a link to the input.
         let out = dir.path().join("out.tsv");
         std::os::unix::fs::symlink(&input, &out).unwrap();
@@ -172,5 +216,23 @@ mod tests {
         create_file(&other).unwrap();
         assert_eq!(std::fs::read(&other).unwrap(), b"");
         create_file(&dir.path().join("new.tsv")).unwrap();
+    }
+
+    /// A closed input's mark stayed for the life of the process, and its inode could be given
+    /// to a new file: `cargo test` refused a test's fresh recording as "the input file" (run 21
+    /// of the CI loop). The mark goes when the input is closed.
+    #[test]
+    fn a_closed_input_is_no_longer_protected() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("capture.bin");
+        std::fs::write(&input, b"capture").unwrap();
+        let opened = protect(File::open(&input).unwrap());
+        let again = protect(File::open(&input).unwrap());
+        let meta = std::fs::metadata(&input).unwrap();
+        assert!(is_input(&meta));
+        drop(opened);
+        assert!(is_input(&meta), "still open once");
+        drop(again);
+        assert!(!is_input(&meta));
     }
 }

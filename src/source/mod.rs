@@ -331,7 +331,7 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
     let (reader, name, path, size, fd): (Box<dyn Read + Send>, String, Option<&Path>, _, _) =
         match input {
             Input::Stdin => {
-                crate::files::protect(io::stdin().as_fd());
+                crate::files::protect_stdin();
                 (
                     Box::new(io::stdin()),
                     "standard input".into(),
@@ -347,7 +347,7 @@ pub fn open(input: &Input) -> Result<(Opened, Progress), Failure> {
                 }
                 let f = open_file(p, &meta).map_err(|e| Failure::from_input_io(p, &e))?;
                 // No output may be opened onto it, whatever its name by then.
-                crate::files::protect(&f);
+                let f = crate::files::protect(f);
                 let size = meta.is_file().then_some(meta.len());
                 let fd = if meta.is_file() { None } else { dup(f.as_fd()) };
                 (
