@@ -11,13 +11,13 @@ use crate::stats::{Column, Problems, Report};
 const PARTS: usize = CHANNELS + 4;
 
 /// Part names of the 16 proportional channels.
-const CH_NAMES: [&str; CHANNELS] = [
+pub(super) const CH_NAMES: [&str; CHANNELS] = [
     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11", "CH12", "CH13",
     "CH14", "CH15", "CH16",
 ];
 
 /// Part names of the slots' raw values.
-const SLOT_NAMES: [&str; 32] = [
+pub(super) const SLOT_NAMES: [&str; 32] = [
     "Slot0", "Slot1", "Slot2", "Slot3", "Slot4", "Slot5", "Slot6", "Slot7", "Slot8", "Slot9",
     "Slot10", "Slot11", "Slot12", "Slot13", "Slot14", "Slot15", "Slot16", "Slot17", "Slot18",
     "Slot19", "Slot20", "Slot21", "Slot22", "Slot23", "Slot24", "Slot25", "Slot26", "Slot27",
@@ -37,7 +37,7 @@ pub fn device(slot: u32) -> &'static str {
 }
 
 /// The slots of a group, as the Note names them.
-fn group_text(group: u8) -> &'static str {
+pub(super) fn group_text(group: u8) -> &'static str {
     ["slots 0-7", "slots 8-15", "slots 16-23", "slots 24-31"][usize::from(group & 3)]
 }
 
@@ -121,14 +121,30 @@ impl Mapper {
                 offset,
                 time,
                 bytes,
-            } => self.frame(self.micros(time, offset), time.is_some(), bytes, out),
+            } => {
+                let micros = self.micros(time, offset);
+                if let Some(d) = out.direct(super::COLUMNS) {
+                    self.frame_stats(micros, time.is_some(), bytes);
+                    super::direct::frame(d, micros, bytes);
+                    return;
+                }
+                self.frame(micros, time.is_some(), bytes, out)
+            }
             Event::Slot {
                 offset,
                 time,
                 bytes,
                 group,
                 ..
-            } => self.slot(self.micros(time, offset), bytes, group, out),
+            } => {
+                let micros = self.micros(time, offset);
+                if let Some(d) = out.direct(super::COLUMNS) {
+                    let (n, other) = self.slot_stats(bytes, group);
+                    super::direct::slot(d, micros, &bytes, n, other);
+                    return;
+                }
+                self.slot(micros, bytes, group, out)
+            }
             Event::Broken {
                 offset,
                 time,
@@ -138,14 +154,8 @@ impl Mapper {
         };
     }
 
-    fn frame(
-        &mut self,
-        micros: u64,
-        timed: bool,
-        f: &[u8; FRAME_LEN],
-        out: &mut dyn RowOut,
-    ) -> RowResult {
-        self.clear();
+    /// Counts a frame.
+    fn frame_stats(&mut self, micros: u64, timed: bool, f: &[u8; FRAME_LEN]) {
         let st = &mut self.stats;
         let (flags, end) = (f[23], f[24]);
         match wire::slot_group(end) {
@@ -166,6 +176,20 @@ impl Mapper {
         let failsafe = flags & wire::FLAG_FAILSAFE != 0;
         st.frame_lost += u64::from(lost);
         st.failsafe += u64::from(failsafe);
+    }
+
+    fn frame(
+        &mut self,
+        micros: u64,
+        timed: bool,
+        f: &[u8; FRAME_LEN],
+        out: &mut dyn RowOut,
+    ) -> RowResult {
+        self.clear();
+        self.frame_stats(micros, timed, f);
+        let (flags, end) = (f[23], f[24]);
+        let lost = flags & wire::FLAG_FRAME_LOST != 0;
+        let failsafe = flags & wire::FLAG_FAILSAFE != 0;
 
         let raw = wire::channels(f);
         for (i, &r) in raw.iter().enumerate() {
@@ -241,6 +265,21 @@ impl Mapper {
         })
     }
 
+    /// Counts a slot answer: its slot number, and the group the frame before announced when
+    /// that was another.
+    fn slot_stats(&mut self, b: [u8; SLOT_LEN], group: u8) -> (u8, Option<u8>) {
+        // The reassembler hands on slot ids only.
+        let n = wire::slot_number(b[0]).unwrap_or(0);
+        let st = &mut self.stats;
+        st.slots[usize::from(n)] += 1;
+        st.slot_last[usize::from(n)] = u16::from_be_bytes([b[1], b[2]]);
+        if n / wire::SLOTS_PER_GROUP != group {
+            st.slot_mismatch += 1;
+            return (n, Some(group));
+        }
+        (n, None)
+    }
+
     fn slot(
         &mut self,
         micros: u64,
@@ -249,12 +288,8 @@ impl Mapper {
         out: &mut dyn RowOut,
     ) -> RowResult {
         self.clear();
-        // The reassembler hands on slot ids only.
-        let n = wire::slot_number(b[0]).unwrap_or(0);
+        let (n, other) = self.slot_stats(b, group);
         let value = u16::from_be_bytes([b[1], b[2]]);
-        let st = &mut self.stats;
-        st.slots[usize::from(n)] += 1;
-        st.slot_last[usize::from(n)] = value;
         push_0x16(&mut self.data, value);
         self.nums
             .int(SLOT_NAMES[usize::from(n)], "", i64::from(value));
@@ -265,8 +300,7 @@ impl Mapper {
             note.push_str("raw value (the sensor is assigned on the transmitter)");
         }
         let mut class = Class::Plain;
-        if n / wire::SLOTS_PER_GROUP != group {
-            st.slot_mismatch += 1;
+        if other.is_some() {
             class = Class::Warning;
             note.push_str("; answered after a frame announcing ");
             note.push_str(group_text(group));
