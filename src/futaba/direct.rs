@@ -13,24 +13,20 @@ use crate::row::{Cells, Class, Direct, Fmt, Mark, WriteRow};
 const FRAME_STAMP: u32 = 1 << 30;
 const SLOT_STAMP: u32 = 1 << 29;
 
-/// Bytes of one number's text in the tables: a blank and up to four digits.
-const W: usize = 5;
 /// Numbers an 11-bit channel can be.
 const RAWS: usize = 1 << 11;
-/// A table's bytes: every number's `W`, and room for reading 8 bytes at the last.
-const TABLE: usize = RAWS * W + 8;
 
 /// The texts of every 11-bit channel value (`micros`: of its microseconds), each a blank and
-/// its digits in `W` bytes (padded with blanks), and each text's length (blank included).
-const fn number_table(micros: bool) -> ([u8; TABLE], [u8; RAWS]) {
-    let mut text = [b' '; TABLE];
-    let mut len = [0u8; RAWS];
+/// its digits in the low bytes of a word, and the text's length (blank included) in its top
+/// byte: one load gives both.
+const fn number_table(micros: bool) -> [u64; RAWS] {
+    let mut table = [0u64; RAWS];
     let mut x = 0;
     while x < RAWS {
         let mut v = if micros {
-            wire::micros(x as u16) as usize
+            wire::micros(x as u16) as u64
         } else {
-            x
+            x as u64
         };
         let mut digits = 1;
         let mut p = 10;
@@ -38,20 +34,21 @@ const fn number_table(micros: bool) -> ([u8; TABLE], [u8; RAWS]) {
             digits += 1;
             p *= 10;
         }
+        let mut word = b' ' as u64 | (1 + digits) << 56;
         let mut i = digits;
         while i > 0 {
-            text[x * W + i] = b'0' + (v % 10) as u8;
+            word |= (b'0' as u64 + v % 10) << (8 * i);
             v /= 10;
             i -= 1;
         }
-        len[x] = 1 + digits as u8;
+        table[x] = word;
         x += 1;
     }
-    (text, len)
+    table
 }
 
-static US: ([u8; TABLE], [u8; RAWS]) = number_table(true);
-static RAW: ([u8; TABLE], [u8; RAWS]) = number_table(false);
+static US: [u64; RAWS] = number_table(true);
+static RAW: [u64; RAWS] = number_table(false);
 
 /// A line of ASCII text built in place: fixed-size copies of 8 bytes (the bytes past the text
 /// are written over later), then checked as text once.
@@ -65,26 +62,18 @@ impl<const N: usize> Text<N> {
         Text { b: [b' '; N], n: 0 }
     }
 
-    /// The number `r`'s text from a table (a blank and digits), from its `skip`th byte.
+    /// The number `r`'s text from a table: a blank and digits, or (`first`) the digits.
     #[inline(always)]
-    fn number(&mut self, table: &([u8; TABLE], [u8; RAWS]), r: u16, skip: usize) {
-        let r = usize::from(r) & (RAWS - 1);
-        let (Some(dst), Some(src)) = (
-            self.b.get_mut(self.n..self.n + 8),
-            table.0.get(r * W + skip..r * W + skip + 8),
-        ) else {
-            return;
+    fn number(&mut self, table: &[u64; RAWS], r: u16, first: bool) {
+        let word = table[usize::from(r) & (RAWS - 1)];
+        let (word, len) = if first {
+            (word >> 8, (word >> 56) as usize - 1)
+        } else {
+            (word, (word >> 56) as usize)
         };
-        dst.copy_from_slice(src);
-        self.n += usize::from(table.1[r]) - skip;
-    }
-
-    #[inline(always)]
-    fn put(&mut self, s: &[u8]) {
-        if let Some(dst) = self.b.get_mut(self.n..self.n + s.len()) {
-            dst.copy_from_slice(s);
-            self.n += s.len();
-        }
+        let at = self.n.min(N - 8);
+        self.b[at..at + 8].copy_from_slice(&word.to_le_bytes());
+        self.n = at + len;
     }
 
     #[inline(always)]
@@ -93,62 +82,68 @@ impl<const N: usize> Text<N> {
     }
 }
 
-/// The texts of a group's slots following, by slot group.
-const FOLLOW: [&str; 4] = [
-    "; slots 0-7 follow",
-    "; slots 8-15 follow",
-    "; slots 16-23 follow",
-    "; slots 24-31 follow",
+/// The flags' part of the Note, by the four low bits of the flags byte.
+const FLAGS: [&str; 16] = [
+    "CH17=0 CH18=0 FrameLost=0 Failsafe=0",
+    "CH17=1 CH18=0 FrameLost=0 Failsafe=0",
+    "CH17=0 CH18=1 FrameLost=0 Failsafe=0",
+    "CH17=1 CH18=1 FrameLost=0 Failsafe=0",
+    "CH17=0 CH18=0 FrameLost=1 Failsafe=0",
+    "CH17=1 CH18=0 FrameLost=1 Failsafe=0",
+    "CH17=0 CH18=1 FrameLost=1 Failsafe=0",
+    "CH17=1 CH18=1 FrameLost=1 Failsafe=0",
+    "CH17=0 CH18=0 FrameLost=0 Failsafe=1",
+    "CH17=1 CH18=0 FrameLost=0 Failsafe=1",
+    "CH17=0 CH18=1 FrameLost=0 Failsafe=1",
+    "CH17=1 CH18=1 FrameLost=0 Failsafe=1",
+    "CH17=0 CH18=0 FrameLost=1 Failsafe=1",
+    "CH17=1 CH18=0 FrameLost=1 Failsafe=1",
+    "CH17=0 CH18=1 FrameLost=1 Failsafe=1",
+    "CH17=1 CH18=1 FrameLost=1 Failsafe=1",
 ];
 
-/// A channel frame's row: the Data and Note cells made beforehand (`ends`: where each
-/// channel's text ends in Data).
+/// What the Note says after the flags, by end byte: the slots that follow, the fast pace.
+fn after_flags(end: u8) -> &'static str {
+    match end {
+        0x04 => "; slots 0-7 follow; raw",
+        0x14 => "; slots 8-15 follow; raw",
+        0x24 => "; slots 16-23 follow; raw",
+        0x34 => "; slots 24-31 follow; raw",
+        wire::END_FAST => "; SBUS2 fast pace, no slots; raw",
+        _ => "; raw",
+    }
+}
+
+/// A channel frame's row: the Data cell and the Note's list of raw values made beforehand
+/// (`ends`: where each channel's text ends in Data).
 struct ChannelRow {
     flags: u8,
     end: u8,
-    data: Text<96>,
+    data: Text<88>,
     ends: [u8; CHANNELS],
-    note: Text<200>,
+    raw: Text<88>,
 }
 
 impl ChannelRow {
     #[inline(always)]
     fn new(f: &[u8; FRAME_LEN]) -> Self {
         let raw = wire::channels(f);
-        let (flags, end) = (f[23], f[24]);
         let mut data = Text::new();
         let mut ends = [0u8; CHANNELS];
         for (i, (&r, e)) in raw.iter().zip(&mut ends).enumerate() {
-            // The first without its blank.
-            data.number(&US, r, usize::from(i == 0));
+            data.number(&US, r, i == 0);
             *e = data.n as u8;
         }
-        let mut note = Text::new();
-        note.put(b"CH17=0 CH18=0 FrameLost=0 Failsafe=0");
-        note.b[5] += flags & wire::FLAG_CH17;
-        note.b[12] += (flags & wire::FLAG_CH18) >> 1;
-        note.b[24] += (flags & wire::FLAG_FRAME_LOST) >> 2;
-        note.b[35] += (flags & wire::FLAG_FAILSAFE) >> 3;
-        if flags & 0xF0 != 0 {
-            note.put(b"; unused flag bits set (flags ");
-            note.put(hex_0x(flags).as_bytes());
-            note.put(b")");
-        }
-        match wire::slot_group(end) {
-            Some(g) => note.put(FOLLOW[usize::from(g & 3)].as_bytes()),
-            None if end == wire::END_FAST => note.put(b"; SBUS2 fast pace, no slots"),
-            None => {}
-        }
-        note.put(b"; raw");
+        let mut list = Text::new();
         for &r in &raw {
-            note.number(&RAW, r, 0);
+            list.number(&RAW, r, false);
         }
         ChannelRow {
-            flags,
-            end,
+            flags: f[23],
+            end: f[24],
             data,
             ends,
-            note,
+            raw: list,
         }
     }
 }
@@ -185,7 +180,14 @@ impl WriteRow for ChannelRow {
         c.value(Some(mark(0)));
         c.text("us");
         c.begin();
-        c.str(self.note.as_str());
+        c.str(FLAGS[usize::from(flags & 0x0F)]);
+        if flags & 0xF0 != 0 {
+            c.str("; unused flag bits set (flags ");
+            c.str(hex_0x(flags));
+            c.str(")");
+        }
+        c.str(after_flags(end));
+        c.str(self.raw.as_str());
         c.end();
         for (i, name) in CH_NAMES.iter().enumerate() {
             c.part(name, mark(i));

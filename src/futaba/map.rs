@@ -80,6 +80,9 @@ impl Stats {
 pub(super) struct Mapper {
     /// Line speed, for the times of sources without time.
     baud: u32,
+    /// Microseconds a byte takes when that is a whole number (100000 and 200000 baud): the
+    /// times of untimed sources without a division.
+    byte_micros: Option<u64>,
     data: String,
     note: String,
     nums: Numbers<PARTS>,
@@ -90,6 +93,11 @@ impl Mapper {
     pub fn new(baud: u32) -> Self {
         Mapper {
             baud: baud.max(1),
+            byte_micros: {
+                let bit_micros = u64::from(wire::BITS_PER_CHAR) * 1_000_000;
+                let baud = u64::from(baud.max(1));
+                (bit_micros % baud == 0).then_some(bit_micros / baud)
+            },
             data: String::new(),
             note: String::new(),
             nums: Numbers::default(),
@@ -101,7 +109,10 @@ impl Mapper {
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
         match time {
             Some(t) => t,
-            None => crate::protocol::untimed_micros(offset, wire::BITS_PER_CHAR, self.baud),
+            None => match self.byte_micros.and_then(|m| offset.checked_mul(m)) {
+                Some(us) => us,
+                None => crate::protocol::untimed_micros(offset, wire::BITS_PER_CHAR, self.baud),
+            },
         }
     }
 
