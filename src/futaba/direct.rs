@@ -114,37 +114,35 @@ fn after_flags(end: u8) -> &'static str {
     }
 }
 
-/// A channel frame's row: the Data cell and the Note's list of raw values made beforehand
-/// (`ends`: where each channel's text ends in Data).
+/// A channel frame's row: the Data cell and the Note's list of raw values made beforehand,
+/// one after the other in `text` (Data's ends at `ends[15]`; `ends`: where each channel's
+/// text ends).
 struct ChannelRow {
     flags: u8,
     end: u8,
-    data: Text<88>,
     ends: [u8; CHANNELS],
-    raw: Text<88>,
+    text: Text<176>,
 }
 
 impl ChannelRow {
     #[inline(always)]
     fn new(f: &[u8; FRAME_LEN]) -> Self {
-        let raw = wire::channels(f);
-        let mut data = Text::new();
-        let mut ends = [0u8; CHANNELS];
-        for (i, (&r, e)) in raw.iter().zip(&mut ends).enumerate() {
-            data.number(&US, r, i == 0);
-            *e = data.n as u8;
-        }
-        let mut list = Text::new();
-        for &r in &raw {
-            list.number(&RAW, r, false);
-        }
-        ChannelRow {
+        let mut row = ChannelRow {
             flags: f[23],
             end: f[24],
-            data,
-            ends,
-            raw: list,
+            ends: [0; CHANNELS],
+            text: Text::new(),
+        };
+        let raw = wire::channels(f);
+        let t = &mut row.text;
+        for (i, (&r, e)) in raw.iter().zip(&mut row.ends).enumerate() {
+            t.number(&US, r, i == 0);
+            *e = t.n as u8;
         }
+        for &r in &raw {
+            t.number(&RAW, r, false);
+        }
+        row
     }
 }
 
@@ -164,9 +162,14 @@ impl WriteRow for ChannelRow {
             });
             c.stamp_end();
         }
+        let (data, raw) = self
+            .text
+            .as_str()
+            .split_at_checked(usize::from(self.ends[CHANNELS - 1]))
+            .unwrap_or_default();
         c.begin();
         let at = c.here();
-        c.str(self.data.as_str());
+        c.str(data);
         c.end();
         let mark = |i: usize| {
             // After the blank before it (the first has none).
@@ -187,7 +190,7 @@ impl WriteRow for ChannelRow {
             c.str(")");
         }
         c.str(after_flags(end));
-        c.str(self.raw.as_str());
+        c.str(raw);
         c.end();
         for (i, name) in CH_NAMES.iter().enumerate() {
             c.part(name, mark(i));
@@ -233,25 +236,28 @@ impl WriteRow for SlotRow {
             c.stamp_end();
         }
         c.begin();
-        c.str("0x");
-        c.hex2((self.value >> 8) as u8);
+        c.str(hex_0x((self.value >> 8) as u8));
         c.hex2(self.value as u8);
         c.end();
         let mut ib = itoa::Buffer::new();
         let v = ib.format(self.value);
         c.value_text(Some(v));
         c.empty();
-        c.begin();
-        c.str(if n == 0 {
+        let note = if n == 0 {
             "receiver voltage slot, raw value"
         } else {
             "raw value (the sensor is assigned on the transmitter)"
-        });
-        if let Some(g) = self.other {
-            c.str("; answered after a frame announcing ");
-            c.str(group_text(g));
+        };
+        match self.other {
+            None => c.text(note),
+            Some(g) => {
+                c.begin();
+                c.str(note);
+                c.str("; answered after a frame announcing ");
+                c.str(group_text(g));
+                c.end();
+            }
         }
-        c.end();
         c.part_text(SLOT_NAMES[usize::from(n & 31)], v);
     }
 }
