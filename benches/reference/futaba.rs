@@ -52,7 +52,11 @@ pub fn futaba(path: &Path, frames: u64) -> std::io::Result<u64> {
             flags |= wire::FLAG_CH17 | wire::FLAG_CH18;
         }
         let sbus2 = (n / 500) % 2 == 1;
-        let end = if sbus2 { [0x04, 0x14, 0x24, 0x34][group] } else { 0 };
+        let end = if sbus2 {
+            [0x04, 0x14, 0x24, 0x34][group]
+        } else {
+            0
+        };
         frame.clear();
         wire::encode_frame(&mut frame, &ch, flags, end);
         match rng.below(10_000) {

@@ -208,7 +208,7 @@ impl Reassembler {
             data = &data[n..];
         }
         if self.buf.is_empty() && !data.is_empty() {
-            let used = run_on(data, self.offset, &|_| time, &mut self.slots, false, emit);
+            let used = run_on(data, self.offset, |_| time, &mut self.slots, false, emit);
             self.offset += used as u64;
             let rest = &data[used..];
             self.buf.extend_from_slice(rest);
@@ -229,7 +229,7 @@ impl Reassembler {
         let used = run_on(
             &self.buf,
             self.offset,
-            &|i| times[i],
+            |i| times[i],
             &mut self.slots,
             end,
             emit,
@@ -248,7 +248,7 @@ impl Reassembler {
 fn run_on(
     buf: &[u8],
     offset: u64,
-    time: &dyn Fn(usize) -> Option<u64>,
+    time: impl Fn(usize) -> Option<u64>,
     slots: &mut Option<(u8, u8)>,
     end: bool,
     emit: &mut dyn FnMut(Event<'_>),
