@@ -29,6 +29,8 @@
 #[path = "reference/captures.rs"]
 mod captures;
 mod common;
+#[path = "reference/futaba.rs"]
+mod futaba;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -208,6 +210,18 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "sbus_ref",
             file,
             args: &["sbus", "--no-config", "--mode", "data"],
+            rows: 0,
+        });
+    }
+    if want("futaba") {
+        let frames = common::env_u64("BUSNOOP_BENCH_FRAMES", 800_000);
+        let file = dir.join(format!("ref-futaba-{frames}.bin"));
+        made(&file, &|p| futaba::futaba(p, frames));
+        v.push(Case {
+            name: "futaba",
+            c: "futaba_ref",
+            file,
+            args: &["futaba", "--no-config"],
             rows: 0,
         });
     }

@@ -11,13 +11,13 @@ use crate::stats::{Column, Problems, Report};
 const PARTS: usize = CHANNELS + 4;
 
 /// Part names of the 16 proportional channels.
-const CH_NAMES: [&str; CHANNELS] = [
+pub(super) const CH_NAMES: [&str; CHANNELS] = [
     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11", "CH12", "CH13",
     "CH14", "CH15", "CH16",
 ];
 
 /// Part names of the slots' raw values.
-const SLOT_NAMES: [&str; 32] = [
+pub(super) const SLOT_NAMES: [&str; 32] = [
     "Slot0", "Slot1", "Slot2", "Slot3", "Slot4", "Slot5", "Slot6", "Slot7", "Slot8", "Slot9",
     "Slot10", "Slot11", "Slot12", "Slot13", "Slot14", "Slot15", "Slot16", "Slot17", "Slot18",
     "Slot19", "Slot20", "Slot21", "Slot22", "Slot23", "Slot24", "Slot25", "Slot26", "Slot27",
@@ -37,7 +37,7 @@ pub fn device(slot: u32) -> &'static str {
 }
 
 /// The slots of a group, as the Note names them.
-fn group_text(group: u8) -> &'static str {
+pub(super) fn group_text(group: u8) -> &'static str {
     ["slots 0-7", "slots 8-15", "slots 16-23", "slots 24-31"][usize::from(group & 3)]
 }
 
@@ -80,6 +80,9 @@ impl Stats {
 pub(super) struct Mapper {
     /// Line speed, for the times of sources without time.
     baud: u32,
+    /// Microseconds a byte takes when that is a whole number (100000 and 200000 baud): the
+    /// times of untimed sources without a division.
+    byte_micros: Option<u64>,
     data: String,
     note: String,
     nums: Numbers<PARTS>,
@@ -90,6 +93,11 @@ impl Mapper {
     pub fn new(baud: u32) -> Self {
         Mapper {
             baud: baud.max(1),
+            byte_micros: {
+                let bit_micros = u64::from(wire::BITS_PER_CHAR) * 1_000_000;
+                let baud = u64::from(baud.max(1));
+                (bit_micros % baud == 0).then_some(bit_micros / baud)
+            },
             data: String::new(),
             note: String::new(),
             nums: Numbers::default(),
@@ -101,7 +109,10 @@ impl Mapper {
     fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
         match time {
             Some(t) => t,
-            None => crate::protocol::untimed_micros(offset, wire::BITS_PER_CHAR, self.baud),
+            None => match self.byte_micros.and_then(|m| offset.checked_mul(m)) {
+                Some(us) => us,
+                None => crate::protocol::untimed_micros(offset, wire::BITS_PER_CHAR, self.baud),
+            },
         }
     }
 
@@ -121,14 +132,30 @@ impl Mapper {
                 offset,
                 time,
                 bytes,
-            } => self.frame(self.micros(time, offset), time.is_some(), bytes, out),
+            } => {
+                let micros = self.micros(time, offset);
+                if let Some(d) = out.direct(super::COLUMNS) {
+                    self.frame_stats(micros, time.is_some(), bytes);
+                    super::direct::frame(d, micros, bytes);
+                    return;
+                }
+                self.frame(micros, time.is_some(), bytes, out)
+            }
             Event::Slot {
                 offset,
                 time,
                 bytes,
                 group,
                 ..
-            } => self.slot(self.micros(time, offset), bytes, group, out),
+            } => {
+                let micros = self.micros(time, offset);
+                if let Some(d) = out.direct(super::COLUMNS) {
+                    let (n, other) = self.slot_stats(bytes, group);
+                    super::direct::slot(d, micros, &bytes, n, other);
+                    return;
+                }
+                self.slot(micros, bytes, group, out)
+            }
             Event::Broken {
                 offset,
                 time,
@@ -138,14 +165,8 @@ impl Mapper {
         };
     }
 
-    fn frame(
-        &mut self,
-        micros: u64,
-        timed: bool,
-        f: &[u8; FRAME_LEN],
-        out: &mut dyn RowOut,
-    ) -> RowResult {
-        self.clear();
+    /// Counts a frame.
+    fn frame_stats(&mut self, micros: u64, timed: bool, f: &[u8; FRAME_LEN]) {
         let st = &mut self.stats;
         let (flags, end) = (f[23], f[24]);
         match wire::slot_group(end) {
@@ -166,6 +187,20 @@ impl Mapper {
         let failsafe = flags & wire::FLAG_FAILSAFE != 0;
         st.frame_lost += u64::from(lost);
         st.failsafe += u64::from(failsafe);
+    }
+
+    fn frame(
+        &mut self,
+        micros: u64,
+        timed: bool,
+        f: &[u8; FRAME_LEN],
+        out: &mut dyn RowOut,
+    ) -> RowResult {
+        self.clear();
+        self.frame_stats(micros, timed, f);
+        let (flags, end) = (f[23], f[24]);
+        let lost = flags & wire::FLAG_FRAME_LOST != 0;
+        let failsafe = flags & wire::FLAG_FAILSAFE != 0;
 
         let raw = wire::channels(f);
         for (i, &r) in raw.iter().enumerate() {
@@ -241,6 +276,21 @@ impl Mapper {
         })
     }
 
+    /// Counts a slot answer: its slot number, and the group the frame before announced when
+    /// that was another.
+    fn slot_stats(&mut self, b: [u8; SLOT_LEN], group: u8) -> (u8, Option<u8>) {
+        // The reassembler hands on slot ids only.
+        let n = wire::slot_number(b[0]).unwrap_or(0);
+        let st = &mut self.stats;
+        st.slots[usize::from(n)] += 1;
+        st.slot_last[usize::from(n)] = u16::from_be_bytes([b[1], b[2]]);
+        if n / wire::SLOTS_PER_GROUP != group {
+            st.slot_mismatch += 1;
+            return (n, Some(group));
+        }
+        (n, None)
+    }
+
     fn slot(
         &mut self,
         micros: u64,
@@ -249,12 +299,8 @@ impl Mapper {
         out: &mut dyn RowOut,
     ) -> RowResult {
         self.clear();
-        // The reassembler hands on slot ids only.
-        let n = wire::slot_number(b[0]).unwrap_or(0);
+        let (n, other) = self.slot_stats(b, group);
         let value = u16::from_be_bytes([b[1], b[2]]);
-        let st = &mut self.stats;
-        st.slots[usize::from(n)] += 1;
-        st.slot_last[usize::from(n)] = value;
         push_0x16(&mut self.data, value);
         self.nums
             .int(SLOT_NAMES[usize::from(n)], "", i64::from(value));
@@ -265,8 +311,7 @@ impl Mapper {
             note.push_str("raw value (the sensor is assigned on the transmitter)");
         }
         let mut class = Class::Plain;
-        if n / wire::SLOTS_PER_GROUP != group {
-            st.slot_mismatch += 1;
+        if other.is_some() {
             class = Class::Warning;
             note.push_str("; answered after a frame announcing ");
             note.push_str(group_text(group));

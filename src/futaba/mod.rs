@@ -11,6 +11,7 @@
 //! The table mapping and the choices made where the wire is ambiguous are in `docs/futaba.md`.
 
 mod args;
+mod direct;
 mod map;
 mod vocab;
 pub mod wire;

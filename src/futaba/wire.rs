@@ -73,22 +73,16 @@ pub const fn slot_number(id: u8) -> Option<u8> {
 }
 
 /// The 16 channels of a frame, as the 11-bit numbers on the wire.
+#[inline]
 pub fn channels(frame: &[u8; FRAME_LEN]) -> [u16; CHANNELS] {
-    let mut out = [0u16; CHANNELS];
-    let mut acc: u32 = 0;
-    let mut bits = 0;
-    let mut ch = 0;
-    for &b in &frame[1..23] {
-        acc |= u32::from(b) << bits;
-        bits += 8;
-        while bits >= 11 && ch < CHANNELS {
-            out[ch] = (acc & 0x7FF) as u16;
-            acc >>= 11;
-            bits -= 11;
-            ch += 1;
-        }
-    }
-    out
+    // Channel i's 11 bits start at bit 11 i of the data bytes (frame[1..23]); three bytes from
+    // there hold them (the last channel's third byte is the flags byte, masked off).
+    std::array::from_fn(|i| {
+        let bit = 11 * i;
+        let at = 1 + bit / 8;
+        let three = u32::from_le_bytes([frame[at], frame[at + 1], frame[at + 2], 0]);
+        ((three >> (bit % 8)) & 0x7FF) as u16
+    })
 }
 
 /// Betaflight's microseconds for an 11-bit channel value: `5 * x / 8 + 880`, in integers as
@@ -194,14 +188,31 @@ impl Reassembler {
         Self::default()
     }
 
-    /// Feeds bytes that arrived at `time`.
+    /// Feeds bytes that arrived at `time`. They are read where they are; only the few at the
+    /// end that need more bytes for a decision are kept (with the time of each).
     pub fn push(&mut self, mut data: &[u8], time: Option<u64>, emit: &mut dyn FnMut(Event<'_>)) {
-        while !data.is_empty() {
-            let n = (CAP - self.buf.len()).min(data.len());
+        // Bytes kept from before: completed from the new ones until what is left came with
+        // these (then read in place).
+        while !self.buf.is_empty() && !data.is_empty() {
+            let old = self.buf.len();
+            let n = (CAP - old).min(data.len());
             self.buf.extend_from_slice(&data[..n]);
             self.times.extend(std::iter::repeat_n(time, n));
+            let used = self.run(false, emit);
+            if used >= old {
+                self.buf.clear();
+                self.times.clear();
+                data = &data[used - old..];
+                break;
+            }
             data = &data[n..];
-            self.run(false, emit);
+        }
+        if self.buf.is_empty() && !data.is_empty() {
+            let used = run_on(data, self.offset, |_| time, &mut self.slots, false, emit);
+            self.offset += used as u64;
+            let rest = &data[used..];
+            self.buf.extend_from_slice(rest);
+            self.times.extend(std::iter::repeat_n(time, rest.len()));
         }
     }
 
@@ -211,128 +222,153 @@ impl Reassembler {
         self.slots = None;
     }
 
-    /// Consumes what can be decided. Without `end`, stops where more bytes are needed.
-    fn run(&mut self, end: bool, emit: &mut dyn FnMut(Event<'_>)) {
-        let mut used = 0;
-        while used < self.buf.len() {
-            match self.step(used, end) {
-                Some((n, ev)) => {
-                    let offset = self.offset + used as u64;
-                    let time = self.times[used];
-                    let bytes = &self.buf[used..used + n];
-                    match ev {
-                        Step::Frame => {
-                            let frame: &[u8; FRAME_LEN] = match bytes.try_into() {
-                                Ok(f) => f,
-                                Err(_) => unreachable!("a frame step is 25 bytes"),
-                            };
-                            self.slots = slot_group(frame[24]).map(|g| (g, 0));
-                            emit(Event::Frame {
-                                offset,
-                                time,
-                                bytes: frame,
-                            });
-                        }
-                        Step::Slot => {
-                            let (group, index) = self.slots.unwrap_or((0, 0));
-                            let next = index + 1;
-                            self.slots = (next < SLOTS_PER_GROUP).then_some((group, next));
-                            emit(Event::Slot {
-                                offset,
-                                time,
-                                bytes: [bytes[0], bytes[1], bytes[2]],
-                                group,
-                                index,
-                            });
-                        }
-                        Step::Broken(why) => {
-                            self.slots = None;
-                            emit(Event::Broken {
-                                offset,
-                                time,
-                                why,
-                                bytes,
-                            });
-                        }
-                    }
-                    used += n;
-                }
-                None => break,
-            }
-        }
+    /// Consumes what can be decided of the bytes kept, and returns how many. Without `end`,
+    /// stops where more bytes are needed.
+    fn run(&mut self, end: bool, emit: &mut dyn FnMut(Event<'_>)) -> usize {
+        let times = &self.times;
+        let used = run_on(
+            &self.buf,
+            self.offset,
+            |i| times[i],
+            &mut self.slots,
+            end,
+            emit,
+        );
         self.buf.drain(..used);
         self.times.drain(..used);
         self.offset += used as u64;
-    }
-
-    /// What starts at `at`, and how many bytes it takes; `None` when more bytes are needed.
-    fn step(&self, at: usize, end: bool) -> Option<(usize, Step)> {
-        let b = &self.buf[at..];
-        let first = b[0];
-        if first == START {
-            if b.len() < FRAME_LEN {
-                // A 0F among the first bytes may be a channel byte: only the 25th byte tells.
-                if !end {
-                    return None;
-                }
-                return Some(match next_start(b, b.len()) {
-                    Some(i) => (i, Step::Broken(Broken::Cut)),
-                    None => (b.len(), Step::Broken(Broken::AtEnd)),
-                });
-            }
-            if end_ok(b[FRAME_LEN - 1]) {
-                return Some((FRAME_LEN, Step::Frame));
-            }
-            // A wrong end byte: cut short if a frame starts at a later 0F among its bytes (a
-            // byte was lost), otherwise 25 bytes that are no frame.
-            let mut from = 1;
-            while let Some(q) = next_start(&b[from - 1..], FRAME_LEN - from + 1) {
-                let q = q + from - 1;
-                if b.len() < q + FRAME_LEN {
-                    if !end {
-                        return None;
-                    }
-                    break;
-                }
-                if end_ok(b[q + FRAME_LEN - 1]) {
-                    return Some((q, Step::Broken(Broken::Cut)));
-                }
-                from = q + 1;
-            }
-            return Some((FRAME_LEN, Step::Broken(Broken::WrongEnd)));
-        }
-        if self.slots.is_some() && slot_number(first).is_some() {
-            // A value byte may be 0F. The slot is cut short only when a frame starts at that
-            // 0F and none starts right after the three bytes read as a slot.
-            if b.len() < SLOT_LEN {
-                return end.then_some((b.len(), Step::Broken(Broken::AtEnd)));
-            }
-            if !b[1..SLOT_LEN].contains(&START) {
-                return Some((SLOT_LEN, Step::Slot));
-            }
-            if b.len() < SLOT_LEN + FRAME_LEN && !end {
-                return None;
-            }
-            let frame_at = |i: usize| {
-                b.get(i) == Some(&START) && b.get(i + FRAME_LEN - 1).is_some_and(|&e| end_ok(e))
-            };
-            let slot_fits = b.len() == SLOT_LEN || frame_at(SLOT_LEN);
-            if !slot_fits && let Some(i) = (1..SLOT_LEN).find(|&i| frame_at(i)) {
-                return Some((i, Step::Broken(Broken::SlotCut)));
-            }
-            return Some((SLOT_LEN, Step::Slot));
-        }
-        // Garbage up to the next 0F, at most GARBAGE_ROW_MAX bytes.
-        let limit = GARBAGE_ROW_MAX.min(b.len());
-        match next_start(b, limit) {
-            Some(i) => Some((i, Step::Broken(Broken::Garbage))),
-            None if limit == GARBAGE_ROW_MAX || end => Some((limit, Step::Broken(Broken::Garbage))),
-            None => None,
-        }
+        used
     }
 }
 
-/// What [`Reassembler::step`] decided.
+/// Consumes what can be decided of `buf` (stream position `offset`, the time of byte `i` is
+/// `time(i)`; `slots`: the open slot group and the answers seen so far), and returns how
+/// many bytes. Without `end`, stops where more bytes are needed.
+#[inline]
+fn run_on(
+    buf: &[u8],
+    offset: u64,
+    time: impl Fn(usize) -> Option<u64>,
+    slots: &mut Option<(u8, u8)>,
+    end: bool,
+    emit: &mut dyn FnMut(Event<'_>),
+) -> usize {
+    let mut used = 0;
+    while used < buf.len() {
+        let Some((n, ev)) = step(&buf[used..], slots.is_some(), end) else {
+            break;
+        };
+        let offset = offset + used as u64;
+        let time = time(used);
+        let bytes = &buf[used..used + n];
+        match ev {
+            Step::Frame => {
+                let frame: &[u8; FRAME_LEN] = match bytes.try_into() {
+                    Ok(f) => f,
+                    Err(_) => unreachable!("a frame step is 25 bytes"),
+                };
+                *slots = slot_group(frame[24]).map(|g| (g, 0));
+                emit(Event::Frame {
+                    offset,
+                    time,
+                    bytes: frame,
+                });
+            }
+            Step::Slot => {
+                let (group, index) = slots.unwrap_or((0, 0));
+                let next = index + 1;
+                *slots = (next < SLOTS_PER_GROUP).then_some((group, next));
+                emit(Event::Slot {
+                    offset,
+                    time,
+                    bytes: [bytes[0], bytes[1], bytes[2]],
+                    group,
+                    index,
+                });
+            }
+            Step::Broken(why) => {
+                *slots = None;
+                emit(Event::Broken {
+                    offset,
+                    time,
+                    why,
+                    bytes,
+                });
+            }
+        }
+        used += n;
+    }
+    used
+}
+
+/// What starts at `b[0]`, and how many bytes it takes (`slots`: a slot group is open); `None`
+/// when more bytes are needed.
+#[inline]
+fn step(b: &[u8], slots: bool, end: bool) -> Option<(usize, Step)> {
+    let first = b[0];
+    if first == START {
+        if b.len() < FRAME_LEN {
+            // A 0F among the first bytes may be a channel byte: only the 25th byte tells.
+            if !end {
+                return None;
+            }
+            return Some(match next_start(b, b.len()) {
+                Some(i) => (i, Step::Broken(Broken::Cut)),
+                None => (b.len(), Step::Broken(Broken::AtEnd)),
+            });
+        }
+        if end_ok(b[FRAME_LEN - 1]) {
+            return Some((FRAME_LEN, Step::Frame));
+        }
+        // A wrong end byte: cut short if a frame starts at a later 0F among its bytes (a
+        // byte was lost), otherwise 25 bytes that are no frame.
+        let mut from = 1;
+        while let Some(q) = next_start(&b[from - 1..], FRAME_LEN - from + 1) {
+            let q = q + from - 1;
+            if b.len() < q + FRAME_LEN {
+                if !end {
+                    return None;
+                }
+                break;
+            }
+            if end_ok(b[q + FRAME_LEN - 1]) {
+                return Some((q, Step::Broken(Broken::Cut)));
+            }
+            from = q + 1;
+        }
+        return Some((FRAME_LEN, Step::Broken(Broken::WrongEnd)));
+    }
+    if slots && slot_number(first).is_some() {
+        // A value byte may be 0F. The slot is cut short only when a frame starts at that
+        // 0F and none starts right after the three bytes read as a slot.
+        if b.len() < SLOT_LEN {
+            return end.then_some((b.len(), Step::Broken(Broken::AtEnd)));
+        }
+        if !b[1..SLOT_LEN].contains(&START) {
+            return Some((SLOT_LEN, Step::Slot));
+        }
+        if b.len() < SLOT_LEN + FRAME_LEN && !end {
+            return None;
+        }
+        let frame_at = |i: usize| {
+            b.get(i) == Some(&START) && b.get(i + FRAME_LEN - 1).is_some_and(|&e| end_ok(e))
+        };
+        let slot_fits = b.len() == SLOT_LEN || frame_at(SLOT_LEN);
+        if !slot_fits && let Some(i) = (1..SLOT_LEN).find(|&i| frame_at(i)) {
+            return Some((i, Step::Broken(Broken::SlotCut)));
+        }
+        return Some((SLOT_LEN, Step::Slot));
+    }
+    // Garbage up to the next 0F, at most GARBAGE_ROW_MAX bytes.
+    let limit = GARBAGE_ROW_MAX.min(b.len());
+    match next_start(b, limit) {
+        Some(i) => Some((i, Step::Broken(Broken::Garbage))),
+        None if limit == GARBAGE_ROW_MAX || end => Some((limit, Step::Broken(Broken::Garbage))),
+        None => None,
+    }
+}
+
+/// What [`step`] decided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Step {
     Frame,

@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use super::Sink;
-use crate::row::{OutputError, Row, RowOut, RowResult, Unframed};
+use crate::row::{Direct, OutputError, Row, RowOut, RowResult, Unframed};
 
 /// The stop conditions of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -85,6 +85,16 @@ impl<'a> Limit<'a> {
 }
 
 impl RowOut for Limit<'_> {
+    /// Without a stop condition nothing here reads the rows: the table's output is lent (a
+    /// condition needs each row, and gets it as a [`Row`]).
+    #[inline]
+    fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
+        if self.done || self.stops != Stops::default() {
+            return None;
+        }
+        self.inner.direct(columns)
+    }
+
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         if !self.admit(row) {
             return Ok(());
