@@ -31,36 +31,32 @@ struct CrsfRow<'a> {
     p: &'a [u8],
 }
 
-/// The text of every number below 2048 after a blank (` 1501`), from one string.
-struct Texts {
-    s: &'static str,
-    /// Where each text starts in `s` (and, one on, where it ends).
-    at: Box<[u16; 2049]>,
-}
+/// The text of every number below 2048 after a blank (` 1501`), each a slice of one string
+/// made once.
+struct Texts(Box<[&'static str; 2048]>);
 
 impl Texts {
     fn new(number: impl Fn(u16) -> i64) -> Self {
         let mut s = String::with_capacity(2048 * 5);
-        let mut at = Box::new([0u16; 2049]);
+        let mut at = [0usize; 2049];
         for raw in 0..2048u16 {
-            at[usize::from(raw)] = s.len() as u16;
+            at[usize::from(raw)] = s.len();
             s.push(' ');
             crate::fmt::push_i64(&mut s, number(raw));
         }
-        at[2048] = s.len() as u16;
-        Texts {
-            s: Box::leak(s.into_boxed_str()),
-            at,
+        at[2048] = s.len();
+        let s: &'static str = Box::leak(s.into_boxed_str());
+        let mut t = Box::new([""; 2048]);
+        for (i, text) in t.iter_mut().enumerate() {
+            *text = &s[at[i]..at[i + 1]];
         }
+        Texts(t)
     }
 
     /// ` <number>` of `raw` (below 2048).
     #[inline(always)]
     fn get(&self, raw: u16) -> &'static str {
-        let i = usize::from(raw & 0x7FF);
-        self.s
-            .get(usize::from(self.at[i])..usize::from(self.at[i + 1]))
-            .unwrap_or_default()
+        self.0[usize::from(raw & 0x7FF)]
     }
 }
 
