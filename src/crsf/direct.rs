@@ -31,9 +31,12 @@ struct CrsfRow<'a> {
     p: &'a [u8],
 }
 
-/// The text of every number below 2048 after a blank (` 1501`), each a slice of one string
-/// made once.
-struct Texts(Box<[&'static str; 2048]>);
+/// The text of every number below 2048 after a blank (` 1501`): each a slice of one string
+/// made once, and each padded to 8 bytes with its length (for one fixed-size copy).
+struct Texts {
+    slices: Box<[&'static str; 2048]>,
+    padded: Box<[([u8; 8], u8); 2048]>,
+}
 
 impl Texts {
     fn new(number: impl Fn(u16) -> i64) -> Self {
@@ -46,17 +49,43 @@ impl Texts {
         }
         at[2048] = s.len();
         let s: &'static str = Box::leak(s.into_boxed_str());
-        let mut t = Box::new([""; 2048]);
-        for (i, text) in t.iter_mut().enumerate() {
-            *text = &s[at[i]..at[i + 1]];
+        let mut slices = Box::new([""; 2048]);
+        let mut padded = Box::new([([0u8; 8], 0u8); 2048]);
+        for i in 0..2048 {
+            let t = &s[at[i]..at[i + 1]];
+            slices[i] = t;
+            padded[i].0[..t.len()].copy_from_slice(t.as_bytes());
+            padded[i].1 = t.len() as u8;
         }
-        Texts(t)
+        Texts { slices, padded }
     }
 
     /// ` <number>` of `raw` (below 2048).
     #[inline(always)]
     fn get(&self, raw: u16) -> &'static str {
-        self.0[usize::from(raw & 0x7FF)]
+        self.slices[usize::from(raw & 0x7FF)]
+    }
+
+    /// Appends ` <number>` of each of `raw` to `buf` from `n` on (room for 8 bytes more than
+    /// the texts), noting where each number starts and ends; returns the end.
+    #[inline(always)]
+    fn list(
+        &self,
+        raw: &[u16; 16],
+        buf: &mut [u8; 136],
+        mut n: usize,
+        at: &mut [(u32, u32); 16],
+    ) -> usize {
+        for (&r, at) in raw.iter().zip(at) {
+            let (text, len) = &self.padded[usize::from(r & 0x7FF)];
+            if let Some(room) = buf.get_mut(n..n + 8) {
+                room.copy_from_slice(text);
+            }
+            at.0 = n as u32 + 1;
+            n = (n + usize::from(*len)).min(buf.len() - 8);
+            at.1 = n as u32;
+        }
+        n
     }
 }
 
@@ -148,25 +177,23 @@ impl WriteRow for CrsfRow<'_> {
             What::Rc => {
                 let raw = channels(p);
                 let (us, numbers) = texts();
-                let mut marks = [Mark::default(); 16];
+                // Data: the µs texts (each after a blank) in one piece, without the first blank.
+                let mut buf = [0u8; 136];
+                let mut at = [(0u32, 0u32); 16];
+                let n = us.list(&raw, &mut buf, 0, &mut at);
                 c.begin();
-                // The texts come after a blank: the first without it.
-                let mut a = c.here();
-                c.str(us.get(raw[0]).get(1..).unwrap_or_default());
-                marks[0] = Mark::new(a, c.here());
-                for (m, &r) in marks.iter_mut().zip(&raw).skip(1) {
-                    a = c.here();
-                    c.str(us.get(r));
-                    *m = Mark::new(a + 1, c.here());
-                }
+                // Where buf[0] would be in the line.
+                let a = c.here().saturating_sub(1);
+                c.str(std::str::from_utf8(&buf[1..n]).unwrap_or_default());
+                let marks = at.map(|(s, e)| Mark::new(a + s, a + e));
                 c.end();
                 c.value(Some(marks[0]));
                 c.text(unit);
+                // Note: `raw` and the raw values.
+                buf[..3].copy_from_slice(b"raw");
+                let n = numbers.list(&raw, &mut buf, 3, &mut at);
                 c.begin();
-                c.str("raw");
-                for &r in &raw {
-                    c.str(numbers.get(r));
-                }
+                c.str(std::str::from_utf8(&buf[..n]).unwrap_or_default());
                 c.end();
                 const NAMES: [&str; 16] = [
                     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11",
