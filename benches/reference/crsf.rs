@@ -34,12 +34,12 @@ pub fn crsf(path: &Path, frames: u64) -> std::io::Result<u64> {
     let mut tick = 0u64;
     while n < frames {
         tick += 1;
-        // (type, payload)
+        // (type, present)
         let mut frames_now: [(u8, bool); 3] = [(0x16, true), (0, false), (0, false)];
-        if tick % 10 == 0 {
+        if tick.is_multiple_of(10) {
             frames_now[1] = (0x14, true);
         }
-        if tick % 4 == 0 {
+        if tick.is_multiple_of(4) {
             frames_now[2] = (0x1E, true);
         } else if tick % 12 == 2 {
             frames_now[2] = ([0x08, 0x02, 0x21][(tick / 12 % 3) as usize], true);

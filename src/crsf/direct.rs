@@ -92,12 +92,7 @@ impl Texts {
 /// The channels' texts: µs on Betaflight's scale (`values::channel_us`) and raw, made once.
 fn texts() -> &'static (Texts, Texts) {
     static T: std::sync::OnceLock<(Texts, Texts)> = std::sync::OnceLock::new();
-    T.get_or_init(|| {
-        (
-            Texts::new(|raw| super::values::channel_us(raw)),
-            Texts::new(i64::from),
-        )
-    })
+    T.get_or_init(|| (Texts::new(super::values::channel_us), Texts::new(i64::from)))
 }
 
 /// The 16 channels of a 22-byte RC payload (11 bits each, little-endian).
