@@ -12,7 +12,8 @@
 //!
 //! It generates captures of what the C decoders cover (`target/bench-data/ref-*`: S.Port
 //! `BUSNOOP_BENCH_POLLS` polls, 3 M; Ether-S-Bus `BUSNOOP_BENCH_PACKETS` packets, 1 M; serial
-//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16), compiles the C decoders
+//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16; CRSF `BUSNOOP_BENCH_CRSF_FRAMES` frames,
+//! 800 k), compiles the C decoders
 //! with `cc -O2` (skipped with a message when there is no C compiler), checks that each one's
 //! output is byte-identical to `busnoop … -f tsv`, and then runs the C decoder and busnoop
 //! to TSV, CSV, JSON Lines and pretty text (no colour) alternately, each pinned to CPU 0 with its
@@ -31,6 +32,8 @@ mod captures;
 mod common;
 #[path = "reference/futaba.rs"]
 mod futaba;
+#[path = "reference/crsf.rs"]
+mod crsf;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -222,6 +225,18 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "futaba_ref",
             file,
             args: &["futaba", "--no-config"],
+            rows: 0,
+        });
+    }
+    if want("crsf") {
+        let frames = common::env_u64("BUSNOOP_BENCH_CRSF_FRAMES", 800_000);
+        let file = dir.join(format!("ref-crsf-{frames}.bin"));
+        made(&file, &|p| crsf::crsf(p, frames));
+        v.push(Case {
+            name: "crsf",
+            c: "crsf_ref",
+            file,
+            args: &["crsf", "--no-config"],
             rows: 0,
         });
     }

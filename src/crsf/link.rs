@@ -2,8 +2,6 @@
 //! event onto a row (a [`Dialect`] describes the valid frames), the time of untimed inputs and
 //! the statistics.
 
-use std::collections::BTreeMap;
-
 use super::wire::{Addresses, Event, Kind, Reassembler};
 use crate::fmt::{push_0x, push_hex, push_u64};
 use crate::numbers::Numbers;
@@ -81,6 +79,13 @@ pub(crate) trait Dialect: Default + Send {
     fn type_name(addr: u8, ty: u8) -> Option<&'static str>;
     /// Fills the scratch for a frame whose CRC passed.
     fn describe(&mut self, f: &Event<'_>, sc: &mut Scratch) -> Described;
+    /// Writes the row of a frame whose CRC passed (`wire`: address to CRC) straight into the
+    /// table ([`crate::row::direct`]) when it can: `Some` with the link-quality sample the
+    /// frame carries; `None` leaves the frame to [`Dialect::describe`].
+    #[inline]
+    fn direct(&mut self, _wire: &[u8], _micros: u64, _out: &mut Latch<'_>) -> Option<Option<u8>> {
+        None
+    }
     /// The hint for a live line where no frame turns up.
     fn no_frames_hint() -> &'static str;
 }
@@ -93,10 +98,41 @@ struct TypeStats {
     last: u64,
 }
 
+/// The counters of every (address, type) pair seen, found by an index rather than a search.
+#[derive(Clone, Debug, Default)]
+struct PerType {
+    /// `address << 8 | type` → position in `list` + 1 (0: not seen); empty before the first
+    /// frame.
+    index: Vec<u32>,
+    list: Vec<((u8, u8), TypeStats)>,
+}
+
+impl PerType {
+    #[inline]
+    fn entry(&mut self, addr: u8, ty: u8) -> &mut TypeStats {
+        if self.index.is_empty() {
+            self.index = vec![0; 1 << 16];
+        }
+        let slot = &mut self.index[usize::from(addr) << 8 | usize::from(ty)];
+        if *slot == 0 {
+            self.list.push(((addr, ty), TypeStats::default()));
+            *slot = self.list.len() as u32;
+        }
+        &mut self.list[*slot as usize - 1].1
+    }
+
+    /// The pairs in the order of their keys.
+    fn sorted(&self) -> Vec<&((u8, u8), TypeStats)> {
+        let mut v: Vec<_> = self.list.iter().collect();
+        v.sort_by_key(|e| e.0);
+        v
+    }
+}
+
 /// Counters kept while decoding (`--stats`).
 #[derive(Clone, Debug, Default)]
 struct Stats {
-    per: BTreeMap<(u8, u8), TypeStats>,
+    per: PerType,
     valid_frames: u64,
     crc_errors: u64,
     inner_crc_errors: u64,
@@ -144,18 +180,55 @@ impl<D: Dialect> LinkDecoder<D> {
     }
 }
 
+impl Stats {
+    /// A valid frame at `micros` (its link-quality sample, if it carries one).
+    #[inline]
+    fn frame(&mut self, addr: u8, ty: u8, micros: u64, lq: Option<u8>) {
+        self.valid_frames += 1;
+        if self.lost {
+            self.resyncs += 1;
+            self.lost = false;
+        }
+        self.first.get_or_insert(micros);
+        self.last = micros;
+        let t = self.per.entry(addr, ty);
+        if t.frames == 0 {
+            t.first = micros;
+        }
+        t.frames += 1;
+        t.last = micros;
+        if let Some(lq) = lq {
+            self.lq_min = if self.lq_frames == 0 {
+                lq
+            } else {
+                self.lq_min.min(lq)
+            };
+            self.lq_frames += 1;
+            self.lq_sum += u64::from(lq);
+            self.lq_last = lq;
+        }
+    }
+}
+
 impl<D: Dialect> Mapper<D> {
     fn event(&mut self, ev: &Event<'_>, out: &mut Latch<'_>) {
         if out.stopped() {
             return;
         }
-        let _ = self.row(ev, out);
-    }
-
-    fn row(&mut self, ev: &Event<'_>, out: &mut dyn RowOut) -> RowResult {
         let micros = ev.time.unwrap_or_else(|| {
             untimed_micros(ev.offset, self.line.bits_per_char(), self.line.baud)
         });
+        if ev.kind == Kind::Frame
+            && let Some(lq) = self.dialect.direct(ev.wire, micros, out)
+        {
+            self.stats
+                .frame(ev.addr(), ev.ty().unwrap_or(0), micros, lq);
+            return;
+        }
+        let _ = self.row(ev, micros, out);
+    }
+
+    fn row(&mut self, ev: &Event<'_>, micros: u64, out: &mut dyn RowOut) -> RowResult {
         self.sc.clear();
         let sc = &mut self.sc;
         let st = &mut self.stats;
@@ -164,32 +237,10 @@ impl<D: Dialect> Mapper<D> {
         let mut class = Class::Error;
         let kind: &str = match ev.kind {
             Kind::Frame => {
-                st.valid_frames += 1;
-                if st.lost {
-                    st.resyncs += 1;
-                    st.lost = false;
-                }
-                st.first.get_or_insert(micros);
-                st.last = micros;
                 let ty = ev.ty().unwrap_or(0);
-                let t = st.per.entry((ev.addr(), ty)).or_default();
-                if t.frames == 0 {
-                    t.first = micros;
-                }
-                t.frames += 1;
-                t.last = micros;
                 push_0x(&mut sc.sensor_no, ty);
                 let d = self.dialect.describe(ev, sc);
-                if let Some(lq) = d.lq {
-                    st.lq_min = if st.lq_frames == 0 {
-                        lq
-                    } else {
-                        st.lq_min.min(lq)
-                    };
-                    st.lq_frames += 1;
-                    st.lq_sum += u64::from(lq);
-                    st.lq_last = lq;
-                }
+                st.frame(ev.addr(), ty, micros, d.lq);
                 st.inner_crc_errors += u64::from(d.inner_crc_error);
                 class = d.class;
                 d.kind
@@ -352,7 +403,7 @@ impl<D: Dialect> Decoder for LinkDecoder<D> {
              frame of the kind"
                 .into(),
         );
-        for (&(addr, ty), t) in &st.per {
+        for &((addr, ty), ref t) in st.per.sorted() {
             r.row(vec![
                 format!("0x{addr:02X}"),
                 D::device(addr).to_owned(),

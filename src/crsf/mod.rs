@@ -9,6 +9,7 @@
 //! ([`wire`]) and the decoder skeleton of this module.
 
 mod args;
+mod direct;
 pub(crate) mod ext;
 pub(crate) mod link;
 pub mod names;
@@ -21,7 +22,7 @@ pub mod wire;
 mod tests;
 
 use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
-use crate::row::Class;
+use crate::row::{Class, Latch};
 use link::{Described, Dialect, LinkDecoder, Scratch};
 use wire::Event;
 
@@ -122,6 +123,11 @@ impl Dialect for Crsf {
 
     fn type_name(_addr: u8, ty: u8) -> Option<&'static str> {
         names::frame_type(ty)
+    }
+
+    #[inline]
+    fn direct(&mut self, wire: &[u8], micros: u64, out: &mut Latch<'_>) -> Option<Option<u8>> {
+        direct::frame(wire, micros, out)
     }
 
     fn describe(&mut self, f: &Event<'_>, sc: &mut Scratch) -> Described {
