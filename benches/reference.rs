@@ -29,6 +29,8 @@
 #[path = "reference/captures.rs"]
 mod captures;
 mod common;
+#[path = "reference/sab.rs"]
+mod sab;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -208,6 +210,19 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "sbus_ref",
             file,
             args: &["sbus", "--no-config", "--mode", "data"],
+            rows: 0,
+        });
+    }
+    if want("sab") {
+        let file = dir.join(format!("ref-sab2-{mb}mib.bin"));
+        made(&file, &|p| sab::sab(p, mb << 20));
+        v.push(Case {
+            name: "sab",
+            c: "sab_ref",
+            file,
+            // Forced: detection would read every byte twice (the other framing in the
+            // background, to switch), which the C decoder does not.
+            args: &["sab", "--no-config", "--framing", "hdlc"],
             rows: 0,
         });
     }
