@@ -162,6 +162,26 @@ static DECIMALS3: &str = {
     }
 };
 
+/// `.000` … `.999`, the point and three decimals of a response time.
+static DOT_DECIMALS3: &str = {
+    const TEXT: [u8; 4000] = {
+        let mut t = [0u8; 4000];
+        let mut i = 0;
+        while i < 1000 {
+            t[4 * i] = b'.';
+            t[4 * i + 1] = b'0' + (i / 100) as u8;
+            t[4 * i + 2] = b'0' + (i / 10 % 10) as u8;
+            t[4 * i + 3] = b'0' + (i % 10) as u8;
+            i += 1;
+        }
+        t
+    };
+    match std::str::from_utf8(&TEXT) {
+        Ok(s) => s,
+        Err(_) => panic!("ASCII"),
+    }
+};
+
 /// [`push_ms`] for a response time: µs as milliseconds with three decimals.
 fn push_ms3(out: &mut String, micros: u64) {
     let micros = micros.min(i64::MAX as u64);
@@ -326,11 +346,14 @@ impl WriteRow for FrameRow<'_> {
             Some(micros) => {
                 // `push_ms3`
                 let micros = micros.min(i64::MAX as u64);
-                let f = (micros % 1000) as usize;
+                let (ms, f) = (micros / 1000, (micros % 1000) as usize);
                 c.begin();
-                c.dec(micros / 1000);
-                c.str(".");
-                c.str(&DECIMALS3[3 * f..3 * f + 3]);
+                if ms < 10 {
+                    c.ascii(b'0' + ms as u8);
+                } else {
+                    c.dec(ms);
+                }
+                c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
                 c.end();
             }
             None => c.empty(),
