@@ -699,7 +699,6 @@ impl Mapper {
                 ..
             }) => {
                 let micros = micros / 1000;
-                push_ms3(&mut sc.resp, micros);
                 if repeat {
                     st.repeats += 1;
                     per.repeats += 1;
@@ -798,6 +797,9 @@ impl Mapper {
             } else {
                 push_payload(&mut sc.data, payload);
             }
+        }
+        if let Some(Answer::Paired { micros, .. }) = answer {
+            push_ms3(&mut self.scratch.resp, micros / 1000);
         }
         self.put(
             RowParts {
