@@ -366,6 +366,54 @@ impl WriteRow for FrameRow<'_> {
     }
 }
 
+/// A `Timeout` row closed by the next request or the end of the capture, written straight
+/// into the table: the cells [`Mapper::timeout_row`] puts into a [`Row`] otherwise.
+struct TimeoutRow<'a> {
+    stamp: u32,
+    addr: u8,
+    command: u8,
+    /// Closed by the end of the capture (else by the next request).
+    end: bool,
+    /// µs waited.
+    waited: u64,
+    framing: Framing,
+    names: &'a Names,
+}
+
+impl WriteRow for TimeoutRow<'_> {
+    #[inline]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let (addr, command) = (self.addr, self.command);
+        if c.stamp(self.stamp) {
+            c.id(Some(u32::from(addr)));
+            c.text(self.names.device(addr));
+            c.text(crate::row::kind::TIMEOUT);
+            c.text(hex_0x(command));
+            c.text(self.names.command(command));
+            c.stamp_end();
+        }
+        c.empty();
+        c.value(None);
+        c.empty();
+        c.text(hex_0x(addr));
+        c.empty();
+        c.text(self.framing.name());
+        // `push_ms` (three decimals)
+        let micros = self.waited.min(i64::MAX as u64);
+        let f = (micros % 1000) as usize;
+        c.begin();
+        c.str(if self.end {
+            "no response before the end of the capture (after "
+        } else {
+            "no response before the next request (after "
+        });
+        c.dec(micros / 1000);
+        c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
+        c.str(" ms)");
+        c.end();
+    }
+}
+
 /// Maps events onto rows, pairs requests with responses, keeps the statistics.
 pub(super) struct Mapper {
     baud: u32,
@@ -571,6 +619,22 @@ impl Mapper {
         let r = x.request;
         self.stats.timeouts += 1;
         self.stats.per[r.address as usize].timeouts += 1;
+        let stamp = 1 << 30 | u32::from(r.address) << 16 | u32::from(r.command) << 8;
+        if let (Why::NextRequest | Why::Retry | Why::End, None) = (x.why, &self.framing_note)
+            && let Some(d) = out.direct(COLUMNS)
+        {
+            let row = TimeoutRow {
+                stamp,
+                addr: r.address,
+                command: r.command,
+                end: x.why == Why::End,
+                waited: x.waited / 1000,
+                framing,
+                names: &self.names,
+            };
+            d.row(Some(x.at / 1000), Class::Warning, &[], &row);
+            return;
+        }
         let sc = &mut self.scratch;
         sc.clear();
         let n = sc.note();
@@ -606,7 +670,7 @@ impl Mapper {
                 class: Class::Warning,
                 framing,
                 raw: &[],
-                stamp: 1 << 30 | u32::from(r.address) << 16 | u32::from(r.command) << 8,
+                stamp,
             },
             out,
         );
