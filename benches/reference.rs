@@ -34,6 +34,8 @@ mod common;
 mod futaba;
 #[path = "reference/crsf.rs"]
 mod crsf;
+#[path = "reference/sab.rs"]
+mod sab;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -237,6 +239,19 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "crsf_ref",
             file,
             args: &["crsf", "--no-config"],
+            rows: 0,
+        });
+    }
+    if want("sab") {
+        let file = dir.join(format!("ref-sab2-{mb}mib.bin"));
+        made(&file, &|p| sab::sab(p, mb << 20));
+        v.push(Case {
+            name: "sab",
+            c: "sab_ref",
+            file,
+            // Forced: detection would read every byte twice (the other framing in the
+            // background, to switch), which the C decoder does not.
+            args: &["sab", "--no-config", "--framing", "hdlc"],
             rows: 0,
         });
     }

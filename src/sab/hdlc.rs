@@ -39,8 +39,42 @@ const SHORT_RUN: usize = 16;
 /// this CRC (the background framing of the detection checks SAB v1 data with it too).
 static CRC16: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_MODBUS);
 
+/// Bytes up to which [`crc16`] goes a byte at a time: a frame's usual body (header,
+/// command, a few payload bytes) is shorter than the slice-by-16 loop's stride, and the call
+/// into it costs more than the bytes.
+const SHORT_CRC: usize = 16;
+
+/// CRC-16/MODBUS by byte (reflected polynomial 0xA001): the table of [`crc16`]'s short path.
+static CRC16_BYTE: [u16; 256] = {
+    let mut t = [0u16; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u16;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xA001
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        t[i] = c;
+        i += 1;
+    }
+    t
+};
+
 /// CRC-16/MODBUS of `bytes` (HEADER … DATA of a frame).
+#[inline]
 pub fn crc16(bytes: &[u8]) -> u16 {
+    if bytes.len() <= SHORT_CRC {
+        let mut c = 0xFFFFu16;
+        for &b in bytes {
+            c = (c >> 8) ^ CRC16_BYTE[usize::from((c as u8) ^ b)];
+        }
+        return c;
+    }
     CRC16.checksum(bytes)
 }
 

@@ -13,7 +13,8 @@ use super::{hdlc, sync};
 use crate::fmt::{hex_0x, push_0x, push_0x16, push_hex, push_ms, push_ms_short, push_u64};
 use std::ops::Range;
 
-use crate::row::{Class, Part, Row};
+use super::config::COLUMNS;
+use crate::row::{Cells, Class, Fmt, Mark, Part, Parts, Row, WriteRow};
 use crate::row::{Latch, RowOut};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
@@ -161,6 +162,26 @@ static DECIMALS3: &str = {
     }
 };
 
+/// `.000` … `.999`, the point and three decimals of a response time.
+static DOT_DECIMALS3: &str = {
+    const TEXT: [u8; 4000] = {
+        let mut t = [0u8; 4000];
+        let mut i = 0;
+        while i < 1000 {
+            t[4 * i] = b'.';
+            t[4 * i + 1] = b'0' + (i / 100) as u8;
+            t[4 * i + 2] = b'0' + (i / 10 % 10) as u8;
+            t[4 * i + 3] = b'0' + (i % 10) as u8;
+            i += 1;
+        }
+        t
+    };
+    match std::str::from_utf8(&TEXT) {
+        Ok(s) => s,
+        Err(_) => panic!("ASCII"),
+    }
+};
+
 /// [`push_ms`] for a response time: µs as milliseconds with three decimals.
 fn push_ms3(out: &mut String, micros: u64) {
     let micros = micros.min(i64::MAX as u64);
@@ -220,6 +241,177 @@ struct RowParts<'a> {
     /// cells follow from the address, the command and the Type (the names are fixed for a
     /// run).
     stamp: u32,
+}
+
+/// A row of the scratch buffers, written straight into the table ([`crate::row::direct`]):
+/// the cells of the [`Row`] [`Mapper::put`] builds otherwise.
+struct ScratchRow<'a> {
+    p: &'a RowParts<'a>,
+    sc: &'a Scratch,
+    addr: &'a str,
+    device: &'a str,
+    sensor_no: &'a str,
+    sensor: &'a str,
+    unit: &'a str,
+    parts: Parts<'a>,
+}
+
+impl WriteRow for ScratchRow<'_> {
+    #[inline]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let (p, sc) = (self.p, self.sc);
+        if c.stamp(p.stamp) {
+            c.id(p.id.map(u32::from));
+            c.text(self.device);
+            c.text(p.kind);
+            c.text(self.sensor_no);
+            c.text(self.sensor);
+            c.stamp_end();
+        }
+        c.text(&sc.data);
+        c.value_text(self.parts.first().map(|p| p.text));
+        c.text(self.unit);
+        c.text(self.addr);
+        c.text(&sc.resp);
+        c.text(p.framing.name());
+        c.text(&sc.note);
+        c.row_parts(self.parts);
+    }
+}
+
+/// A valid frame's row written straight into the table, its Data cell (the payload and its
+/// integer reading, [`push_data`]), Value and response time formatted in place: the cells
+/// [`Mapper::frame`] puts into a [`Row`] otherwise, for frames without a declared type.
+struct FrameRow<'a> {
+    stamp: u32,
+    addr: u8,
+    command: u8,
+    flags: Flags,
+    /// A request or an ACK: its reading is the row's number.
+    numbered: bool,
+    payload: &'a [u8],
+    /// Response time (µs) of a paired response.
+    resp: Option<u64>,
+    framing: Framing,
+    names: &'a Names,
+    note: &'a str,
+}
+
+impl WriteRow for FrameRow<'_> {
+    #[inline(always)]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let (addr, command) = (self.addr, self.command);
+        if c.stamp(self.stamp) {
+            c.id(Some(u32::from(addr)));
+            c.text(self.names.device(addr));
+            c.text(self.flags.type_name());
+            c.text(hex_0x(command));
+            c.text(self.names.command(command));
+            c.stamp_end();
+        }
+        let payload = self.payload;
+        let mut mark = None;
+        if payload.is_empty() {
+            c.empty();
+        } else {
+            c.begin();
+            if let [b] = *payload {
+                // `XX (` and the number's digits
+                let text = DATA1[b as usize];
+                let a = c.here() + 4;
+                c.str(text);
+                let digits = 1 + u32::from(b >= 10) + u32::from(b >= 100);
+                mark = Some(Mark::new(a, a + digits));
+            } else {
+                c.hex_bytes(payload);
+                if let Some((unsigned, signed)) = int_reading(payload) {
+                    c.str(" (");
+                    let a = c.here();
+                    c.dec(u64::from(unsigned));
+                    mark = Some(Mark::new(a, c.here()));
+                    if signed < 0 {
+                        c.str(", ");
+                        c.dec_i(i64::from(signed));
+                    }
+                    c.str(")");
+                }
+            }
+            c.end();
+        }
+        let number = if self.numbered { mark } else { None };
+        c.value(number);
+        c.empty();
+        c.text(hex_0x(addr));
+        match self.resp {
+            Some(micros) => {
+                // `push_ms3`
+                let micros = micros.min(i64::MAX as u64);
+                let (ms, f) = (micros / 1000, (micros % 1000) as usize);
+                c.begin();
+                if ms < 10 {
+                    c.ascii(b'0' + ms as u8);
+                } else {
+                    c.dec(ms);
+                }
+                c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
+                c.end();
+            }
+            None => c.empty(),
+        }
+        c.text(self.framing.name());
+        c.text(self.note);
+        if let Some(m) = number {
+            c.part(self.names.part(command, self.flags == Flags::Ack), m);
+        }
+    }
+}
+
+/// A `Timeout` row closed by the next request or the end of the capture, written straight
+/// into the table: the cells [`Mapper::timeout_row`] puts into a [`Row`] otherwise.
+struct TimeoutRow<'a> {
+    stamp: u32,
+    addr: u8,
+    command: u8,
+    /// Closed by the end of the capture (else by the next request).
+    end: bool,
+    /// µs waited.
+    waited: u64,
+    framing: Framing,
+    names: &'a Names,
+}
+
+impl WriteRow for TimeoutRow<'_> {
+    #[inline]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let (addr, command) = (self.addr, self.command);
+        if c.stamp(self.stamp) {
+            c.id(Some(u32::from(addr)));
+            c.text(self.names.device(addr));
+            c.text(crate::row::kind::TIMEOUT);
+            c.text(hex_0x(command));
+            c.text(self.names.command(command));
+            c.stamp_end();
+        }
+        c.empty();
+        c.value(None);
+        c.empty();
+        c.text(hex_0x(addr));
+        c.empty();
+        c.text(self.framing.name());
+        // `push_ms` (three decimals)
+        let micros = self.waited.min(i64::MAX as u64);
+        let f = (micros % 1000) as usize;
+        c.begin();
+        c.str(if self.end {
+            "no response before the end of the capture (after "
+        } else {
+            "no response before the next request (after "
+        });
+        c.dec(micros / 1000);
+        c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
+        c.str(" ms)");
+        c.end();
+    }
 }
 
 /// Maps events onto rows, pairs requests with responses, keeps the statistics.
@@ -287,13 +479,11 @@ impl Mapper {
         self.stats.chose(framing, reason);
     }
 
-    /// Writes one row; `out` is the decoder's [`Latch`], which keeps a write error. The
-    /// mapper takes the latch by its type, not as a `dyn RowOut`: its check is inlined here
-    /// and only the table's write remains a dynamic call.
+    /// The note on how the framing was chosen, when not said yet: in front of the row's note.
     #[inline(always)]
-    fn put(&mut self, p: RowParts<'_>, out: &mut Latch<'_>) {
-        let sc = &mut self.scratch;
+    fn take_framing_note(&mut self) {
         if let Some(n) = self.framing_note.take() {
+            let sc = &mut self.scratch;
             if sc.note.is_empty() {
                 sc.note = n;
             } else {
@@ -301,6 +491,15 @@ impl Mapper {
                 sc.note.insert_str(0, &n);
             }
         }
+    }
+
+    /// Writes one row; `out` is the decoder's [`Latch`], which keeps a write error. The
+    /// mapper takes the latch by its type, not as a `dyn RowOut`: its check is inlined here
+    /// and only the table's write remains a dynamic call.
+    #[inline(always)]
+    fn put(&mut self, p: RowParts<'_>, out: &mut Latch<'_>) {
+        self.take_framing_note();
+        let sc = &mut self.scratch;
         let (addr, device) = match p.id {
             Some(a) => (hex_0x(a), self.names.device(a)),
             None => ("", ""),
@@ -329,6 +528,20 @@ impl Mapper {
             }
             None => &[],
         };
+        if let Some(d) = out.direct(COLUMNS) {
+            let row = ScratchRow {
+                p: &p,
+                sc,
+                addr,
+                device,
+                sensor_no,
+                sensor,
+                unit,
+                parts: parts.into(),
+            };
+            d.row(Some(p.micros), p.class, p.raw, &row);
+            return;
+        }
         let extra = [
             unit,
             addr,
@@ -406,6 +619,22 @@ impl Mapper {
         let r = x.request;
         self.stats.timeouts += 1;
         self.stats.per[r.address as usize].timeouts += 1;
+        let stamp = 1 << 30 | u32::from(r.address) << 16 | u32::from(r.command) << 8;
+        if let (Why::NextRequest | Why::Retry | Why::End, None) = (x.why, &self.framing_note)
+            && let Some(d) = out.direct(COLUMNS)
+        {
+            let row = TimeoutRow {
+                stamp,
+                addr: r.address,
+                command: r.command,
+                end: x.why == Why::End,
+                waited: x.waited / 1000,
+                framing,
+                names: &self.names,
+            };
+            d.row(Some(x.at / 1000), Class::Warning, &[], &row);
+            return;
+        }
         let sc = &mut self.scratch;
         sc.clear();
         let n = sc.note();
@@ -441,7 +670,7 @@ impl Mapper {
                 class: Class::Warning,
                 framing,
                 raw: &[],
-                stamp: 1 << 30 | u32::from(r.address) << 16 | u32::from(r.command) << 8,
+                stamp,
             },
             out,
         );
@@ -487,10 +716,12 @@ impl Mapper {
         let per = &mut st.per[addr as usize];
         let sc = &mut self.scratch;
         sc.clear();
-        if matches!(flags, Flags::Request | Flags::Ack) {
+        // A payload read by a declared type (its note first) goes as a `Row`; the rest may be
+        // written straight, the Data cell formatted in place.
+        let numbered = matches!(flags, Flags::Request | Flags::Ack);
+        let declared = numbered && self.values.declared(command, flags == Flags::Ack).is_some();
+        if declared {
             Self::number(&self.values, sc, command, flags, payload);
-        } else {
-            push_payload(&mut sc.data, payload);
         }
         match flags {
             Flags::Request => per.requests += 1,
@@ -532,7 +763,6 @@ impl Mapper {
                 ..
             }) => {
                 let micros = micros / 1000;
-                push_ms3(&mut sc.resp, micros);
                 if repeat {
                     st.repeats += 1;
                     per.repeats += 1;
@@ -602,6 +832,39 @@ impl Mapper {
                 "unusual escape (0x7D not followed by 0x5E or 0x5D), decoded as modm does",
             );
         }
+        let stamp = 1 << 31 | u32::from(addr) << 16 | u32::from(command) << 8 | flags as u32;
+        if !declared {
+            if let Some(d) = out.direct(COLUMNS) {
+                self.take_framing_note();
+                let resp = match answer {
+                    Some(Answer::Paired { micros, .. }) => Some(micros / 1000),
+                    _ => None,
+                };
+                let row = FrameRow {
+                    stamp,
+                    addr,
+                    command,
+                    flags,
+                    numbered,
+                    payload,
+                    resp,
+                    framing: ev.framing,
+                    names: &self.names,
+                    note: &self.scratch.note,
+                };
+                d.row(Some(start / 1000), class, ev.wire, &row);
+                return;
+            }
+            let sc = &mut self.scratch;
+            if numbered {
+                Self::number(&self.values, sc, command, flags, payload);
+            } else {
+                push_payload(&mut sc.data, payload);
+            }
+        }
+        if let Some(Answer::Paired { micros, .. }) = answer {
+            push_ms3(&mut self.scratch.resp, micros / 1000);
+        }
         self.put(
             RowParts {
                 micros: start / 1000,
@@ -611,7 +874,7 @@ impl Mapper {
                 class,
                 framing: ev.framing,
                 raw: ev.wire,
-                stamp: 1 << 31 | u32::from(addr) << 16 | u32::from(command) << 8 | flags as u32,
+                stamp,
             },
             out,
         );

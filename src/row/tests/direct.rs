@@ -84,7 +84,7 @@ fn every_protocol_on_the_fixtures_and_seeds() {
     assert!(inputs.len() > 30, "{} inputs", inputs.len());
     for protocol in crate::protocols::PROTOCOLS {
         let direct: u64 = inputs.iter().map(|f| check(protocol, f, true)).sum();
-        if matches!(protocol.command, "sport" | "sbus" | "futaba" | "crsf") {
+        if matches!(protocol.command, "sport" | "sbus" | "futaba" | "crsf" | "sab2") {
             assert!(
                 direct > 1000,
                 "{}: {direct} rows written straight",
@@ -104,6 +104,7 @@ fn the_fuzz_corpora() {
         ("fuzz/corpus/sbus_serial", &crate::sbus::PROTOCOL),
         ("fuzz/corpus/futaba", &crate::futaba::PROTOCOL),
         ("fuzz/corpus/crsf", &crate::crsf::PROTOCOL),
+        ("fuzz/corpus/sab", &crate::sab::PROTOCOL),
     ];
     for (dir, protocol) in corpora {
         let direct: u64 = files(dir).iter().map(|f| check(protocol, f, false)).sum();
