@@ -12,7 +12,8 @@
 //!
 //! It generates captures of what the C decoders cover (`target/bench-data/ref-*`: S.Port
 //! `BUSNOOP_BENCH_POLLS` polls, 3 M; Ether-S-Bus `BUSNOOP_BENCH_PACKETS` packets, 1 M; serial
-//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16), compiles the C decoders
+//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16; Modbus RTU `BUSNOOP_BENCH_EXCHANGES`
+//! exchanges, 600 k), compiles the C decoders
 //! with `cc -O2` (skipped with a message when there is no C compiler), checks that each one's
 //! output is byte-identical to `busnoop … -f tsv`, and then runs the C decoder and busnoop
 //! to TSV, CSV, JSON Lines and pretty text (no colour) alternately, each pinned to CPU 0 with its
@@ -29,6 +30,8 @@
 #[path = "reference/captures.rs"]
 mod captures;
 mod common;
+#[path = "reference/modbus.rs"]
+mod modbus;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -208,6 +211,18 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "sbus_ref",
             file,
             args: &["sbus", "--no-config", "--mode", "data"],
+            rows: 0,
+        });
+    }
+    if want("modbus") {
+        let exchanges = common::env_u64("BUSNOOP_BENCH_EXCHANGES", 600_000);
+        let file = dir.join(format!("ref-modbus-{exchanges}.bin"));
+        made(&file, &|p| modbus::modbus(p, exchanges));
+        v.push(Case {
+            name: "modbus",
+            c: "modbus_ref",
+            file,
+            args: &["modbus", "--no-config"],
             rows: 0,
         });
     }
