@@ -68,7 +68,7 @@ pub fn modbus(path: &Path, exchanges: u64) -> std::io::Result<u64> {
         let [sh, sl] = start.to_be_bytes();
         // The request, and the response to it (`None`: a broadcast).
         let (req, resp): (Vec<u8>, Option<Vec<u8>>) = match kind {
-            0..=37 | 38..=57 => {
+            0..=57 => {
                 // read holding (3) or input (4) registers
                 let fc = if kind < 38 { 3 } else { 4 };
                 let count = match (fc, rng.below(50)) {

@@ -781,7 +781,7 @@ fn fast_cells_match_describe() {
         let mut pdu: Vec<u8> = (0..len).map(|_| next() as u8).collect();
         pdu[1] = fc;
         if next() % 2 == 0 && len > 6 {
-            pdu[5] = pdu[5] % 20; // counts that fit now and then
+            pdu[5] %= 20; // counts that fit now and then
             pdu[4] = 0;
         }
         let kind = if next() % 2 == 0 {
