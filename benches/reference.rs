@@ -12,8 +12,9 @@
 //!
 //! It generates captures of what the C decoders cover (`target/bench-data/ref-*`: S.Port
 //! `BUSNOOP_BENCH_POLLS` polls, 3 M; Ether-S-Bus `BUSNOOP_BENCH_PACKETS` packets, 1 M; serial
-//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16; CRSF `BUSNOOP_BENCH_CRSF_FRAMES` frames,
-//! 800 k), compiles the C decoders
+//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16; SAB2 of `BUSNOOP_BENCH_MB` MiB; Futaba SBUS
+//! `BUSNOOP_BENCH_FUTABA_FRAMES` frames, 800 k; CRSF `BUSNOOP_BENCH_CRSF_FRAMES` frames, 800 k;
+//! Modbus RTU `BUSNOOP_BENCH_EXCHANGES` exchanges, 600 k), compiles the C decoders
 //! with `cc -O2` (skipped with a message when there is no C compiler), checks that each one's
 //! output is byte-identical to `busnoop … -f tsv`, and then runs the C decoder and busnoop
 //! to TSV, CSV, JSON Lines and pretty text (no colour) alternately, each pinned to CPU 0 with its
@@ -36,6 +37,8 @@ mod futaba;
 mod crsf;
 #[path = "reference/sab.rs"]
 mod sab;
+#[path = "reference/modbus.rs"]
+mod modbus;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -219,7 +222,7 @@ fn cases(only: &[String]) -> Vec<Case> {
         });
     }
     if want("futaba") {
-        let frames = common::env_u64("BUSNOOP_BENCH_FRAMES", 800_000);
+        let frames = common::env_u64("BUSNOOP_BENCH_FUTABA_FRAMES", 800_000);
         let file = dir.join(format!("ref-futaba-{frames}.bin"));
         made(&file, &|p| futaba::futaba(p, frames));
         v.push(Case {
@@ -252,6 +255,18 @@ fn cases(only: &[String]) -> Vec<Case> {
             // Forced: detection would read every byte twice (the other framing in the
             // background, to switch), which the C decoder does not.
             args: &["sab", "--no-config", "--framing", "hdlc"],
+            rows: 0,
+        });
+    }
+    if want("modbus") {
+        let exchanges = common::env_u64("BUSNOOP_BENCH_EXCHANGES", 600_000);
+        let file = dir.join(format!("ref-modbus-{exchanges}.bin"));
+        made(&file, &|p| modbus::modbus(p, exchanges));
+        v.push(Case {
+            name: "modbus",
+            c: "modbus_ref",
+            file,
+            args: &["modbus", "--no-config"],
             rows: 0,
         });
     }

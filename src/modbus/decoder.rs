@@ -2,6 +2,7 @@
 //! and answers are paired, and everything is counted per slave and function.
 
 use super::ascii::AsciiFramer;
+use super::fast::Fast;
 use super::function;
 use super::pairing::{Answer, Outstanding, Pairing, Reason, RequestKind};
 use super::pdu::{Content, describe, request_info};
@@ -36,6 +37,8 @@ struct Core {
     c: Content,
     tc: Content,
     resp: String,
+    /// The Data cell and numbers of the common frames ([`super::fast`]).
+    fast: Fast,
 }
 
 impl ModbusDecoder {
@@ -59,6 +62,7 @@ impl ModbusDecoder {
                 c: Content::default(),
                 tc: Content::default(),
                 resp: String::new(),
+                fast: Fast::default(),
                 opts,
             },
         }
@@ -291,7 +295,11 @@ impl Core {
                 (if exception { "Exception" } else { "Response" }, req)
             }
         };
-        describe(f.pdu, f.kind, req.as_ref(), &self.opts.map, &mut self.c);
+        let fast = self.opts.map.registers().is_empty()
+            && self.fast.describe(f.pdu, f.kind, req.as_ref(), &mut self.c);
+        if !fast {
+            describe(f.pdu, f.kind, req.as_ref(), &self.opts.map, &mut self.c);
+        }
         if f.kind == Kind::Exception {
             self.c.note_with(|n| {
                 n.push_str("function ");
@@ -302,17 +310,22 @@ impl Core {
             self.c
                 .note("read as a response by its place after the request");
         }
-        let Core { opts, c, resp, .. } = self;
+        let Core {
+            opts,
+            c,
+            resp,
+            fast: written,
+            ..
+        } = self;
         let unit = c.nums.first_unit(&opts.map);
         let extra = [unit, resp.as_str(), c.note.as_str()];
-        let data = c.data.as_str();
         let dev = device(opts, Some(slave));
         let fc = fc & 0x7F;
         let frame = Unframed {
             bytes: f.pdu,
             bad_check: None,
         };
-        c.nums.with_parts(&opts.map, |parts| {
+        let row = |data: &str, parts: Parts<'_>, out: &mut dyn RowOut| {
             out.row_unframed(
                 &Row {
                     stamp: 0,
@@ -325,12 +338,19 @@ impl Core {
                     sensor: function::name(fc),
                     data,
                     extra: &extra,
-                    parts: Parts::List(parts),
+                    parts,
                     raw: f.bytes,
                 },
                 &frame,
             )
-        })
+        };
+        if fast {
+            let text = written.text();
+            return row(text, written.parts(text), out);
+        }
+        let data = c.data.as_str();
+        c.nums
+            .with_parts(&opts.map, |parts| row(data, Parts::List(parts), out))
     }
 
     fn junk(&mut self, j: &Junk<'_>, out: &mut dyn RowOut) -> RowResult {

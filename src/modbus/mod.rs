@@ -15,6 +15,7 @@ mod args;
 pub mod ascii;
 mod decoder;
 pub mod export;
+mod fast;
 pub mod function;
 pub(crate) mod pairing;
 pub mod pdu;

@@ -185,7 +185,7 @@ impl Content {
     }
 }
 
-fn word(b: &[u8], i: usize) -> u16 {
+pub(super) fn word(b: &[u8], i: usize) -> u16 {
     match (b.get(i), b.get(i + 1)) {
         (Some(&h), Some(&l)) => u16::from_be_bytes([h, l]),
         _ => 0,
@@ -297,7 +297,7 @@ fn start_count(c: &mut Content, d: &[u8]) -> (u16, u16) {
     (start, count)
 }
 
-fn count_note(c: &mut Content, count: u16, max: u16) {
+pub(super) fn count_note(c: &mut Content, count: u16, max: u16) {
     if count == 0 || count > max {
         c.note_with(|n| {
             n.push_str("count ");
@@ -378,15 +378,20 @@ fn request(slave: u8, fc: u8, d: &[u8], map: &RegisterMap, c: &mut Content) {
 fn coil_value(c: &mut Content, addr: u16, v: u16) {
     match v {
         0xFF00 | 0x0000 => c.nums.plain('C', Some(addr as u32), 0, u16::from(v != 0)),
-        _ => c.note_with(|n| {
-            n.push_str("coil value ");
-            push_0x16(n, v);
-            n.push_str(" is neither 0xFF00 (on) nor 0x0000 (off)");
-        }),
+        _ => coil_note(c, v),
     }
 }
 
-fn byte_count_note(c: &mut Content, got: Option<&u8>, want: usize) {
+/// The note of a coil written with a value other than 0xFF00 and 0x0000.
+pub(super) fn coil_note(c: &mut Content, v: u16) {
+    c.note_with(|n| {
+        n.push_str("coil value ");
+        push_0x16(n, v);
+        n.push_str(" is neither 0xFF00 (on) nor 0x0000 (off)");
+    });
+}
+
+pub(super) fn byte_count_note(c: &mut Content, got: Option<&u8>, want: usize) {
     if let Some(&g) = got
         && g as usize != want
     {

@@ -1,8 +1,6 @@
 //! Modbus counters per slave and function and for the whole input, the `--stats` report and
 //! the problems line.
 
-use std::collections::BTreeMap;
-
 use super::function;
 use crate::fmt::push_fixed;
 use crate::stats::{Column, Problems, Report};
@@ -67,29 +65,58 @@ pub struct Totals {
 /// The counters by (slave, function), bounded.
 #[derive(Clone, Debug, Default)]
 pub struct Table {
-    rows: BTreeMap<(u8, u8), FunctionStats>,
+    /// Each pair's place in `rows` plus one (0: none), by [`slot`]; allocated at the first
+    /// pair.
+    index: Vec<u16>,
+    /// The pairs in the order they were first seen.
+    rows: Vec<((u8, u8), FunctionStats)>,
     other: FunctionStats,
+}
+
+/// A pair's place in [`Table::index`] (function codes without the exception bit).
+fn slot(slave: u8, function: u8) -> usize {
+    (slave as usize) << 7 | (function & 0x7F) as usize
 }
 
 impl Table {
     /// The counters of a pair seen in a valid frame (created on first use; beyond
     /// [`MAX_ROWS`] pairs, the shared row).
     pub fn valid(&mut self, slave: u8, function: u8, totals: &mut Totals) -> &mut FunctionStats {
-        let key = (slave, function & 0x7F);
-        if self.rows.len() >= MAX_ROWS && !self.rows.contains_key(&key) {
-            totals.merged += 1;
-            return &mut self.other;
+        if self.index.is_empty() {
+            self.index = vec![0; 256 << 7];
         }
-        self.rows.entry(key).or_default()
+        let at = slot(slave, function);
+        match self.index[at] as usize {
+            0 if self.rows.len() >= MAX_ROWS => {
+                totals.merged += 1;
+                &mut self.other
+            }
+            0 => {
+                self.rows
+                    .push(((slave, function & 0x7F), FunctionStats::default()));
+                self.index[at] = self.rows.len() as u16;
+                &mut self.rows.last_mut().expect("just pushed").1
+            }
+            i => &mut self.rows[i - 1].1,
+        }
+    }
+
+    fn place(&self, slave: u8, function: u8) -> Option<usize> {
+        match self.index.get(slot(slave, function)) {
+            Some(&i) if i > 0 => Some(i as usize - 1),
+            _ => None,
+        }
     }
 
     /// The counters of a pair if it was seen in a valid frame.
     pub fn seen(&mut self, slave: u8, function: u8) -> Option<&mut FunctionStats> {
-        self.rows.get_mut(&(slave, function & 0x7F))
+        let i = self.place(slave, function)?;
+        Some(&mut self.rows[i].1)
     }
 
     pub fn get(&self, slave: u8, function: u8) -> Option<&FunctionStats> {
-        self.rows.get(&(slave, function & 0x7F))
+        let i = self.place(slave, function)?;
+        Some(&self.rows[i].1)
     }
 }
 
@@ -124,11 +151,13 @@ pub fn report(head: String, table: &Table, t: &Totals, name: impl Fn(u8) -> Stri
          CRC errors counted where the pair was seen in a valid frame"
             .into(),
     );
-    let rows = table
-        .rows
-        .iter()
+    let mut sorted: Vec<_> = table.rows.iter().collect();
+    sorted.sort_by_key(|(key, _)| *key);
+    let rows = sorted
+        .into_iter()
         .filter(|(_, st)| st.valid())
-        .map(|(&(s, f), st)| {
+        .map(|(key, st)| {
+            let (s, f) = *key;
             let mut fun = String::new();
             fun.push_str(crate::fmt::hex_0x(f));
             fun.push(' ');

@@ -744,3 +744,83 @@ fn bad_answers_spoil_the_timeout_and_count_for_their_pair() {
     assert!(rows[3].parts.is_empty());
     assert_eq!(rows[3].class, Class::Error);
 }
+
+/// The Data cell and numbers of the common frames written in one pass (`fast.rs`) are those
+/// `describe` writes: every function's example, paired and unpaired, and random frames of
+/// functions 1-6, 15 and 16 (any length, counts that do not fit, coil values that are neither
+/// on nor off, responses paired with any request).
+#[test]
+fn fast_cells_match_describe() {
+    use super::fast::Fast;
+    use super::pairing::Req;
+    use super::pdu::{Content, describe, request_info};
+    use super::wire::Kind;
+    let map = RegisterMap::default();
+    let mut cases: Vec<(Vec<u8>, Kind, Option<Req>)> = Vec::new();
+    for (req, resp) in exchanges() {
+        let info = request_info(&req);
+        let kind = if resp[1] & 0x80 != 0 {
+            Kind::Exception
+        } else {
+            Kind::Response
+        };
+        cases.push((req, Kind::Request, None));
+        cases.push((resp.clone(), kind, Some(info)));
+        cases.push((resp, kind, None));
+    }
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    for _ in 0..50_000 {
+        let fc = [1u8, 2, 3, 4, 5, 6, 15, 16][(next() % 8) as usize];
+        let len = 2 + (next() % 40) as usize;
+        let mut pdu: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        pdu[1] = fc;
+        if next() % 2 == 0 && len > 6 {
+            pdu[5] %= 20; // counts that fit now and then
+            pdu[4] = 0;
+        }
+        let kind = if next() % 2 == 0 {
+            Kind::Request
+        } else {
+            Kind::Response
+        };
+        let req = (next() % 3 != 0).then(|| Req {
+            slave: pdu[0],
+            function: if next() % 4 == 0 { 3 } else { fc },
+            start: next() as u16,
+            count: (next() % 300) as u16,
+        });
+        cases.push((pdu, kind, req));
+    }
+    let mut fast = Fast::default();
+    let mut covered = 0;
+    for (pdu, kind, req) in cases {
+        let mut want = Content::default();
+        describe(&pdu, kind, req.as_ref(), &map, &mut want);
+        let mut got = Content::default();
+        if !fast.describe(&pdu, kind, req.as_ref(), &mut got) {
+            continue;
+        }
+        covered += 1;
+        let text = fast.text();
+        assert_eq!(text, want.data, "{pdu:02X?} {kind:?} {req:?}");
+        assert_eq!(got.note, want.note, "{pdu:02X?} {kind:?} {req:?}");
+        let parts: Vec<(String, String, String, f64)> = want.nums.with_parts(&map, |p| {
+            p.iter()
+                .map(|p| (p.name.into(), p.unit.into(), p.text.into(), p.value))
+                .collect()
+        });
+        let fast_parts: Vec<(String, String, String, f64)> = fast
+            .parts(text)
+            .iter()
+            .map(|p| (p.name.into(), p.unit.into(), p.text.into(), p.value))
+            .collect();
+        assert_eq!(fast_parts, parts, "{pdu:02X?} {kind:?} {req:?}");
+    }
+    assert!(covered > 30_000, "{covered}");
+}
