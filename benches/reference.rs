@@ -31,14 +31,14 @@
 #[path = "reference/captures.rs"]
 mod captures;
 mod common;
-#[path = "reference/futaba.rs"]
-mod futaba;
 #[path = "reference/crsf.rs"]
 mod crsf;
-#[path = "reference/sab.rs"]
-mod sab;
+#[path = "reference/futaba.rs"]
+mod futaba;
 #[path = "reference/modbus.rs"]
 mod modbus;
+#[path = "reference/sab.rs"]
+mod sab;
 
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};

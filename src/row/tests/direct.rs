@@ -84,7 +84,10 @@ fn every_protocol_on_the_fixtures_and_seeds() {
     assert!(inputs.len() > 30, "{} inputs", inputs.len());
     for protocol in crate::protocols::PROTOCOLS {
         let direct: u64 = inputs.iter().map(|f| check(protocol, f, true)).sum();
-        if matches!(protocol.command, "sport" | "sbus" | "futaba" | "crsf" | "sab2") {
+        if matches!(
+            protocol.command,
+            "sport" | "sbus" | "futaba" | "crsf" | "sab2"
+        ) {
             assert!(
                 direct > 1000,
                 "{}: {direct} rows written straight",
