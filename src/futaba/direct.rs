@@ -3,7 +3,9 @@
 //! [`crate::row::Direct`]) go through the mapper as a [`crate::row::Row`]; both give the same
 //! bytes (`testing::assert_direct_rows_match`).
 
-use super::map::{CH_NAMES, CHANNELS_TYPE, RX_VOLTAGE, SLOT_NAMES, SLOT_TYPE, device, group_text};
+use super::names::{
+    CH_NAMES, CHANNELS_TYPE, RX_VOLTAGE, SLOT_NAMES, SLOT_TYPE, device, group_text,
+};
 use super::wire::{self, CHANNELS, FRAME_LEN, SLOT_LEN};
 use crate::fmt::hex_0x;
 use crate::row::{Cells, Class, Direct, Fmt, Mark, WriteRow};

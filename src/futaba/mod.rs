@@ -13,10 +13,12 @@
 mod args;
 mod direct;
 mod map;
+mod names;
 mod vocab;
 pub mod wire;
 
-pub use map::{CHANNELS_TYPE, SLOT_TYPE, Stats};
+pub use map::Stats;
+pub use names::{CHANNELS_TYPE, SLOT_TYPE};
 
 use crate::protocol::{Decoder, Front, InputKind, Line, Parity, Probe, Protocol, Variant};
 use crate::row::{Latch, RowOut, RowResult};

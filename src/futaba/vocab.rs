@@ -1,6 +1,6 @@
 //! What a Futaba SBUS table can show, for checking filters and names (`crate::filter`).
 
-use super::map::{CHANNELS_TYPE, RX_VOLTAGE, SLOT_TYPE, device};
+use super::names::{CHANNELS_TYPE, RX_VOLTAGE, SLOT_TYPE, device};
 use crate::protocol::vocab::{Sensor, Vocab, hex_digits};
 use crate::row::kind;
 
