@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Instructions per row: the output benchmark's reference writer against busnoop, and busnoop's
-# table writer against everything else (docs/performance.md, "What the targets ask, per row").
+# table writer against everything else (docs/performance-history.md, "What the targets ask, per row").
 #
 #   cargo build --release && cargo bench --bench output_limit --no-run
 #   BUSNOOP_BENCH_MB=1 BUSNOOP_BENCH_PACKETS=10000 BUSNOOP_BENCH_RUNS=1 cargo bench --bench output_limit
