@@ -3,14 +3,14 @@
 #
 # Runs target/release/busnoop over every file in fixtures/ and fuzz/seeds/ with each subcommand
 # (sport; sbus --mode auto/data/break; sab2 --framing auto/sync/hdlc; futaba; ibus; fport
-# --variant auto/v1/v2) and each format
+# --variant auto/v1/v2; crsf; ghst; modbus) and each format
 # (tsv, csv, jsonl, pretty --color always), with --raw and --stats, and stores stdout, stderr
 # and the exit code of every run in one directory (sbus and sport once more with --time abs
 # --utc, for the capture times of pcaps, recordings and logs). Prints one sha256 over that directory.
 #
 #   tools/golden.sh [OUT_DIR]          # default: target/golden
-#   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial, sab, sbus_ether and
-#                                      # recording (tsv only)
+#   GOLDEN_CORPUS=1 tools/golden.sh    # also the fuzz corpora of sbus_serial, sab, sbus_ether,
+#                                      # recording, crsf and futaba (tsv only)
 #   GOLDEN_BENCH=1 tools/golden.sh     # also the benchmark captures in target/bench-data (tsv,
 #                                      # stored as the sha256 of stdout; run the benches first)
 #   BUSNOOP=path/to/busnoop tools/golden.sh   # another binary (e.g. a copy of the old one)
@@ -34,6 +34,7 @@ commands=(
   "sab2 --framing auto" "sab2 --framing sync" "sab2 --framing hdlc"
   "futaba" "ibus"
   "fport" "fport --variant v1" "fport --variant v2"
+  "crsf" "ghst" "modbus"
 )
 formats=("tsv" "csv" "jsonl" "pretty --color always")
 
@@ -81,6 +82,11 @@ if [ "${GOLDEN_CORPUS:-0}" = 1 ]; then
   for f in fuzz/corpus/sab/*; do
     # shellcheck disable=SC2086
     run "$(slug "$f sab2")" "$f" sab2 -f tsv
+  done
+  for p in crsf futaba; do
+    for f in fuzz/corpus/$p/*; do
+      run "$(slug "$f $p")" "$f" $p -f tsv
+    done
   done
 fi
 
