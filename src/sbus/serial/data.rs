@@ -451,10 +451,10 @@ impl DataFramer {
             return CrcCheck::None;
         }
         let got = u16::from_be_bytes([self.tele[n - 2], self.tele[n - 1]]);
-        let mut d = crate::sbus::telegram::CRC_WIDE.digest();
-        d.update(&[FS]);
-        d.update(&self.tele[..n - 2]);
-        let unescaped = d.finalize();
+        let unescaped = crate::sbus::telegram::crc16_from(
+            crate::sbus::telegram::crc_step(0, FS),
+            &self.tele[..n - 2],
+        );
         let crc_wire = self.tele_at[0];
         // Both readings in one pass when no DLE pair was undone before the CRC (the usual
         // case): the wire then holds the same bytes as the logical telegram.
