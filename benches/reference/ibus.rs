@@ -53,7 +53,19 @@ pub fn ibus(path: &Path, frames: u64) -> std::io::Result<u64> {
     }
     let mut ch = [1500u16; 18];
     let mut values: [i64; 13] = [
-        512, 650, 0, 1260, 410, 120, 100, 90, 0, 0x0903, 525_200_000, 134_050_000, 3400,
+        512,
+        650,
+        0,
+        1260,
+        410,
+        120,
+        100,
+        90,
+        0,
+        0x0903,
+        525_200_000,
+        134_050_000,
+        3400,
     ];
     let mut next = 0usize;
     for n in 0..frames {
@@ -81,11 +93,11 @@ pub fn ibus(path: &Path, frames: u64) -> std::io::Result<u64> {
         let v = &mut values[i];
         let r = rng.below(21) as i64 - 10;
         *v = match i {
-            2 => (*v + 50 * r).clamp(0, 30_000),      // RPM
+            2 => (*v + 50 * r).clamp(0, 30_000),              // RPM
             6 => (*v - i64::from(rng.below(50) == 0)).max(0), // Fuel
-            7 => (*v + r).rem_euclid(360),             // heading
-            8 => (*v + 5 * r).clamp(-800, 800),        // climb rate
-            9 => (rng.below(4) as i64 + 7) << 8 | 3, // satellites, fix 3
+            7 => (*v + r).rem_euclid(360),                    // heading
+            8 => (*v + 5 * r).clamp(-800, 800),               // climb rate
+            9 => (rng.below(4) as i64 + 7) << 8 | 3,          // satellites, fix 3
             10 | 11 => *v + 37 * r,
             _ => (*v + r).clamp(0, 20_000),
         };

@@ -186,7 +186,9 @@ struct Pending {
 #[derive(Debug, Default)]
 pub struct Reassembler {
     buf: Vec<u8>,
-    times: Vec<Option<u64>>,
+    /// The arrival times of the bytes in `buf`, as runs: `(stream offset of the run's first
+    /// byte, time)`, in order; the first run starts at or before `offset`.
+    times: Vec<(u64, Option<u64>)>,
     offset: u64,
     pending: Option<Pending>,
 }
@@ -221,7 +223,10 @@ impl Reassembler {
         while !data.is_empty() {
             let n = (CAP - self.buf.len()).min(data.len());
             self.buf.extend_from_slice(&data[..n]);
-            self.times.extend(std::iter::repeat_n(time, n));
+            let at = self.offset + self.buf.len() as u64 - n as u64;
+            if self.times.last().is_none_or(|&(_, t)| t != time) {
+                self.times.push((at, time));
+            }
             data = &data[n..];
             self.run(false, emit);
         }
@@ -255,7 +260,7 @@ impl Reassembler {
             };
             let at = Located {
                 offset: self.offset + used as u64,
-                time: self.times[used],
+                time: self.time_at(self.offset + used as u64),
                 bytes: &self.buf[used..used + n],
             };
             match step {
@@ -305,8 +310,20 @@ impl Reassembler {
             used += n;
         }
         self.buf.drain(..used);
-        self.times.drain(..used);
+        // The runs wholly before the new start go (the run holding it stays).
+        let start = self.offset + used as u64;
+        let keep = self.times.partition_point(|&(at, _)| at <= start).max(1) - 1;
+        self.times.drain(..keep);
         self.offset += used as u64;
+    }
+
+    /// The arrival time of the byte at stream offset `at` (in the buffer).
+    #[inline]
+    fn time_at(&self, at: u64) -> Option<u64> {
+        match self.times.as_slice() {
+            [(_, t)] => *t,
+            runs => runs[runs.partition_point(|&(a, _)| a <= at).max(1) - 1].1,
+        }
     }
 
     /// What starts at `at` and how many bytes it takes; `None` when more bytes are needed.
