@@ -85,25 +85,24 @@ impl WriteRow for RcRow {
         let start = c.here();
         c.str(data);
         c.end();
-        let mut marks = [Mark::new(0, 0); RC_CHANNELS_MAX];
-        for (i, m) in marks[..n].iter_mut().enumerate() {
-            // After the blank before it (the first has none).
+        // Channel i's text: after the blank before it (the first has none).
+        let mark = |i: usize| {
             let a = if i == 0 {
                 0
             } else {
                 u32::from(ends[i - 1]) + 1
             };
-            *m = Mark::new(start + a, start + u32::from(ends[i]));
-        }
-        c.value(Some(marks[0]));
+            Mark::new(start + a, start + u32::from(ends[i]))
+        };
+        c.value(Some(mark(0)));
         c.text("us");
         c.text(if self.high {
             "18 channels (15-18 from the high nibbles)"
         } else {
             "14 channels"
         });
-        for (name, &m) in CH_NAMES.iter().zip(&marks[..n]) {
-            c.part(name, m);
+        for (i, name) in CH_NAMES[..n].iter().enumerate() {
+            c.part(name, mark(i));
         }
     }
 }

@@ -88,6 +88,7 @@ pub fn encode_rc(out: &mut Vec<u8>, channels: &[u16]) {
 /// The channels of an RC frame as Betaflight reads them (`rx/ibus.c`): 14 from the low 12 bits
 /// of each slot, and channels 15-18 from the high nibbles of slots 1-3, 4-6, 7-9 and 10-12.
 /// Returns the 18 values and whether any high nibble is set (an 18-channel receiver).
+#[inline]
 pub fn rc_channels(frame: &[u8]) -> ([u16; RC_CHANNELS_MAX], bool) {
     let mut ch = [0u16; RC_CHANNELS_MAX];
     let slot = |i: usize| u16::from_le_bytes([frame[2 + 2 * i], frame[3 + 2 * i]]);
