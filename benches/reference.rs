@@ -11,17 +11,18 @@
 //! ```
 //!
 //! It generates captures of what the C decoders cover (`target/bench-data/ref-*`: S.Port
-//! `BUSNOOP_BENCH_POLLS` polls, 3 M; Ether-S-Bus `BUSNOOP_BENCH_PACKETS` packets, 1 M; serial
-//! S-Bus in data mode of `BUSNOOP_BENCH_MB` MiB, 16; SAB2 of `BUSNOOP_BENCH_MB` MiB; Futaba SBUS
+//! `BUSNOOP_BENCH_POLLS` polls, 3 M; Ether-S-Bus `BUSNOOP_BENCH_PACKETS` packets, 1 M; serial S-Bus
+//! in data mode of `BUSNOOP_BENCH_MB` MiB, 16; SAB2 of `BUSNOOP_BENCH_MB` MiB; Futaba SBUS
 //! `BUSNOOP_BENCH_FUTABA_FRAMES` frames, 800 k; CRSF `BUSNOOP_BENCH_CRSF_FRAMES` frames, 800 k;
-//! Modbus RTU `BUSNOOP_BENCH_EXCHANGES` exchanges, 600 k), compiles the C decoders
-//! with `cc -O2` (skipped with a message when there is no C compiler), checks that each one's
-//! output is byte-identical to `busnoop … -f tsv`, and then runs the C decoder and busnoop
-//! to TSV, CSV, JSON Lines and pretty text (no colour) alternately, each pinned to CPU 0 with its
-//! output going to /dev/null, `BUSNOOP_BENCH_RUNS` times. Times are CPU times (user + system
-//! of the child): the minimum of the runs. The share is the C decoder's time over busnoop's
-//! (100 % = as fast as the C decoder, which writes TSV in every comparison). `--stats` is not
-//! given; peak memory (`--stats` on) is `cargo bench --bench memory`'s.
+//! Modbus RTU `BUSNOOP_BENCH_EXCHANGES` exchanges, 600 k; FlySky iBUS `BUSNOOP_BENCH_IBUS_FRAMES`
+//! RC frames with as many sensor polls, 600 k), compiles the C decoders with `cc -O2` (skipped with
+//! a message when there is no C compiler), checks that each one's output is byte-identical to
+//! `busnoop … -f tsv`, and then runs the C decoder and busnoop to TSV, CSV, JSON Lines and pretty
+//! text (no colour) alternately, each pinned to CPU 0 with its output going to /dev/null,
+//! `BUSNOOP_BENCH_RUNS` times. Times are CPU times (user + system of the child): the minimum of the
+//! runs. The share is the C decoder's time over busnoop's (100 % = as fast as the C decoder, which
+//! writes TSV in every comparison). `--stats` is not given; peak memory (`--stats` on) is `cargo
+//! bench --bench memory`'s.
 //!
 //! With `BUSNOOP_BENCH_COUNT=1`, every run is counted instead of timed: instructions under
 //! `valgrind --tool=cachegrind --cache-sim=no` (the same whatever else the machine runs).
@@ -35,6 +36,8 @@ mod common;
 mod crsf;
 #[path = "reference/futaba.rs"]
 mod futaba;
+#[path = "reference/ibus.rs"]
+mod ibus;
 #[path = "reference/modbus.rs"]
 mod modbus;
 #[path = "reference/sab.rs"]
@@ -230,6 +233,18 @@ fn cases(only: &[String]) -> Vec<Case> {
             c: "futaba_ref",
             file,
             args: &["futaba", "--no-config"],
+            rows: 0,
+        });
+    }
+    if want("ibus") {
+        let frames = common::env_u64("BUSNOOP_BENCH_IBUS_FRAMES", 600_000);
+        let file = dir.join(format!("ref-ibus-{frames}.bin"));
+        made(&file, &|p| ibus::ibus(p, frames));
+        v.push(Case {
+            name: "ibus",
+            c: "ibus_ref",
+            file,
+            args: &["ibus", "--no-config"],
             rows: 0,
         });
     }

@@ -1,6 +1,8 @@
 //! iBUS frames, exchanges and broken bytes onto the log table (documented in `docs/ibus.md`),
 //! and the statistics.
 
+use super::names::CH_NAMES;
+pub use super::names::{CHANNELS, DISCOVER, MEASURE, OTHER, SENSOR_TYPE, UNKNOWN};
 use super::sensors::{self, SensorType};
 use super::wire::{self, Broken, Event, Located};
 use crate::fmt::{hex_0x, push_0x, push_0x16, push_hex};
@@ -10,21 +12,6 @@ use crate::stats::{Column, Problems, Report};
 
 /// Numbers of a row: at most the 18 channels of an RC frame.
 const PARTS: usize = wire::RC_CHANNELS_MAX;
-
-const CH_NAMES: [&str; PARTS] = [
-    "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11", "CH12", "CH13",
-    "CH14", "CH15", "CH16", "CH17", "CH18",
-];
-
-/// Types of rows.
-pub const CHANNELS: &str = "Channels";
-pub const DISCOVER: &str = "Discover";
-pub const SENSOR_TYPE: &str = "SensorType";
-pub const MEASURE: &str = "Measure";
-/// A command other than 8, 9 and A, answered.
-pub const OTHER: &str = "Other";
-/// A valid frame of no known kind.
-pub const UNKNOWN: &str = "Unknown";
 
 /// Addresses on the sensor bus (the low nibble of the command byte; sensors use 1-15).
 pub const ADDRESSES: usize = 16;
@@ -45,8 +32,69 @@ pub struct AddrStats {
     pub polls: [u64; 4],
     pub answered: u64,
     pub bad_crc: u64,
-    /// The last measurement, as the Data column showed it.
-    pub last: String,
+    /// The last measurement: the type it was read in and its value bytes.
+    pub last: Option<LastValue>,
+}
+
+/// A measurement's value bytes (the first 4 of `len`) and the type they were read in.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LastValue {
+    pub learned: Option<Learned>,
+    pub bytes: [u8; 4],
+    pub len: u8,
+}
+
+impl LastValue {
+    fn new(learned: Option<Learned>, value: &[u8]) -> Self {
+        let mut bytes = [0u8; 4];
+        let n = value.len().min(4);
+        bytes[..n].copy_from_slice(&value[..n]);
+        LastValue {
+            learned,
+            bytes,
+            len: value.len() as u8,
+        }
+    }
+
+    /// As the Data column showed it, with the unit.
+    pub fn text(&self) -> String {
+        let mut value = [0u8; wire::MAX_LEN];
+        value[..4].copy_from_slice(&self.bytes);
+        let value = &value[..usize::from(self.len)];
+        let mut nums: Numbers<PARTS> = Numbers::default();
+        let (mut data, mut note) = (String::new(), String::new());
+        let unit = measure_cells(self.learned, value, &mut nums, &mut data, &mut note);
+        if !unit.is_empty() {
+            data.push(' ');
+            data.push_str(unit);
+        }
+        data
+    }
+}
+
+/// The Data text, numbers and notes of a measurement read in the type `learned`; returns the
+/// unit.
+fn measure_cells(
+    learned: Option<Learned>,
+    value: &[u8],
+    nums: &mut Numbers<PARTS>,
+    data: &mut String,
+    note: &mut String,
+) -> &'static str {
+    let ty: Option<&SensorType> = learned.and_then(|l| sensors::sensor_type(l.code));
+    if learned.is_some() && ty.is_none() {
+        // A type code busnoop does not know: raw, named by the type.
+        let r = sensors::raw(value);
+        nums.int("Raw", "", i64::from(r));
+        data.push_str("0x");
+        for &b in value.iter().take(4).rev() {
+            crate::fmt::push_hex_u8(data, b);
+        }
+        crate::row::note_part(note).push_str("type not in Betaflight's or EdgeTX's tables: raw");
+        ""
+    } else {
+        sensors::decode(ty, value, nums, data, note)
+    }
 }
 
 /// Counters kept while decoding (`--stats`).
@@ -176,15 +224,15 @@ impl Mapper {
         answer: Option<Located<'_>>,
         out: &mut dyn RowOut,
     ) -> RowResult {
-        self.clear();
         let micros = self.micros(&poll);
         let cmd = poll.bytes[1] >> 4;
         let addr = poll.bytes[1] & 0x0F;
         let st = &mut self.stats.per[usize::from(addr)];
         st.polls[cmd_index(cmd)] += 1;
         self.stats.valid_frames += 1;
-        self.raw.extend_from_slice(poll.bytes);
         let Some(a) = answer else {
+            self.clear();
+            self.raw.extend_from_slice(poll.bytes);
             let n = crate::row::note_part(&mut self.note);
             n.push_str(cmd_words(cmd));
             if cmd_index(cmd) == 3 {
@@ -206,6 +254,22 @@ impl Mapper {
         };
         st.answered += 1;
         self.stats.valid_frames += 1;
+        if cmd == wire::CMD_MEASURE
+            && let Some(t) = self.direct_type(addr, a.bytes)
+            && let Some(d) = out.direct(super::COLUMNS)
+        {
+            let value = &a.bytes[2..a.bytes.len() - 2];
+            let learned = self.learned(addr);
+            self.stats.per[usize::from(addr)].last = Some(LastValue::new(learned, value));
+            let mut raw = [0u8; 12];
+            raw[..4].copy_from_slice(poll.bytes);
+            raw[4..4 + a.bytes.len()].copy_from_slice(a.bytes);
+            let r = sensors::raw(value);
+            super::direct::measure(d, micros, addr, t, r, &raw[..4 + a.bytes.len()]);
+            return Ok(());
+        }
+        self.clear();
+        self.raw.extend_from_slice(poll.bytes);
         self.raw.extend_from_slice(a.bytes);
         match cmd {
             wire::CMD_DISCOVER => {
@@ -234,6 +298,13 @@ impl Mapper {
                 self.write(out, micros, Some(addr), "", Class::Warning, "", "", OTHER)
             }
         }
+    }
+
+    /// The type of an address whose measurement answer `a` is decoded in units, which the
+    /// direct rows write: a known type, not raw, with the width it expects.
+    fn direct_type(&self, addr: u8, a: &[u8]) -> Option<&'static SensorType> {
+        let t = sensors::sensor_type(self.learned(addr)?.code)?;
+        (sensors::width(t.enc)? == a.len() - 4).then_some(t)
     }
 
     /// `06 9a [type][size] chk`: the address's type, learned from here on.
@@ -278,28 +349,15 @@ impl Mapper {
     /// `06 Aa [LE16] chk` or `08 Aa [LE32] chk`: the value in the address's type.
     fn measurement(&mut self, micros: u64, addr: u8, a: &[u8], out: &mut dyn RowOut) -> RowResult {
         let learned = self.learned(addr);
-        let ty: Option<&SensorType> = learned.and_then(|l| sensors::sensor_type(l.code));
         let value = &a[2..a.len() - 2];
-        let unit = if learned.is_some() && ty.is_none() {
-            // A type code busnoop does not know: raw, named by the type.
-            let r = sensors::raw(value);
-            self.nums.int("Raw", "", i64::from(r));
-            self.data.push_str("0x");
-            for &b in value.iter().take(4).rev() {
-                crate::fmt::push_hex_u8(&mut self.data, b);
-            }
-            self.note("type not in Betaflight's or EdgeTX's tables: raw");
-            ""
-        } else {
-            sensors::decode(ty, value, &mut self.nums, &mut self.data, &mut self.note)
-        };
-        let st = &mut self.stats.per[usize::from(addr)];
-        st.last.clear();
-        st.last.push_str(&self.data);
-        if !unit.is_empty() {
-            st.last.push(' ');
-            st.last.push_str(unit);
-        }
+        let unit = measure_cells(
+            learned,
+            value,
+            &mut self.nums,
+            &mut self.data,
+            &mut self.note,
+        );
+        self.stats.per[usize::from(addr)].last = Some(LastValue::new(learned, value));
         let (sensor_no, sensor) = self.sensor_cells(addr);
         self.write(
             out,
@@ -315,10 +373,20 @@ impl Mapper {
 
     /// A valid frame that is no poll and answers none.
     fn frame(&mut self, f: Located<'_>, out: &mut dyn RowOut) -> RowResult {
-        self.clear();
         let micros = self.micros(&f);
         let b = f.bytes;
         self.stats.valid_frames += 1;
+        if b.len() == usize::from(wire::RC_LEN)
+            && b[1] == wire::RC_CMD
+            && let Some(d) = out.direct(super::COLUMNS)
+        {
+            self.stats.rc_frames += 1;
+            if super::direct::rc(d, micros, b) {
+                self.stats.rc_18 += 1;
+            }
+            return Ok(());
+        }
+        self.clear();
         self.raw.extend_from_slice(b);
         if b.len() == usize::from(wire::RC_LEN) {
             if b[1] != wire::RC_CMD {
@@ -510,7 +578,7 @@ impl Mapper {
                 a.answered.to_string(),
                 (polls - a.answered).to_string(),
                 a.bad_crc.to_string(),
-                a.last.clone(),
+                a.last.map_or(String::new(), |l| l.text()),
             ]);
         }
         r.totals.push(format!(

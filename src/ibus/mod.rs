@@ -9,7 +9,9 @@
 //! The table mapping, the sources and the check against a real capture are in `docs/ibus.md`.
 
 mod args;
+mod direct;
 mod map;
+mod names;
 pub mod sensors;
 mod vocab;
 pub mod wire;

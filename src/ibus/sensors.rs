@@ -127,9 +127,21 @@ pub const TYPES: &[SensorType] = &[
     t(0xFE, "RQly", "receiver error rate", "", 0, Enc::Raw),
 ];
 
+/// The place in [`TYPES`] of every code, `u8::MAX` for the codes busnoop does not know.
+static INDEX: [u8; 256] = {
+    let mut index = [u8::MAX; 256];
+    let mut i = 0;
+    while i < TYPES.len() {
+        index[TYPES[i].code as usize] = i as u8;
+        i += 1;
+    }
+    index
+};
+
 /// The type of a code, when busnoop knows it.
+#[inline]
 pub fn sensor_type(code: u8) -> Option<&'static SensorType> {
-    TYPES.iter().find(|s| s.code == code)
+    TYPES.get(usize::from(INDEX[usize::from(code)]))
 }
 
 /// The value bytes' width a type expects (2 or 4), or `None` for the raw ones.

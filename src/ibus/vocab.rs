@@ -1,6 +1,6 @@
 //! What an iBUS table can show, for checking filters and names (`crate::filter`).
 
-use super::map::{CHANNELS, DISCOVER, MEASURE, OTHER, SENSOR_TYPE, UNKNOWN};
+use super::names::{CHANNELS, DISCOVER, MEASURE, OTHER, SENSOR_TYPE, UNKNOWN};
 use super::sensors::TYPES;
 use crate::protocol::vocab::{Sensor, Vocab, hex_digits};
 use crate::row::kind;

@@ -88,6 +88,7 @@ pub fn encode_rc(out: &mut Vec<u8>, channels: &[u16]) {
 /// The channels of an RC frame as Betaflight reads them (`rx/ibus.c`): 14 from the low 12 bits
 /// of each slot, and channels 15-18 from the high nibbles of slots 1-3, 4-6, 7-9 and 10-12.
 /// Returns the 18 values and whether any high nibble is set (an 18-channel receiver).
+#[inline]
 pub fn rc_channels(frame: &[u8]) -> ([u16; RC_CHANNELS_MAX], bool) {
     let mut ch = [0u16; RC_CHANNELS_MAX];
     let slot = |i: usize| u16::from_le_bytes([frame[2 + 2 * i], frame[3 + 2 * i]]);
@@ -186,7 +187,9 @@ struct Pending {
 #[derive(Debug, Default)]
 pub struct Reassembler {
     buf: Vec<u8>,
-    times: Vec<Option<u64>>,
+    /// The arrival times of the bytes in `buf`, as runs: `(stream offset of the run's first
+    /// byte, time)`, in order; the first run starts at or before `offset`.
+    times: Vec<(u64, Option<u64>)>,
     offset: u64,
     pending: Option<Pending>,
 }
@@ -221,7 +224,10 @@ impl Reassembler {
         while !data.is_empty() {
             let n = (CAP - self.buf.len()).min(data.len());
             self.buf.extend_from_slice(&data[..n]);
-            self.times.extend(std::iter::repeat_n(time, n));
+            let at = self.offset + self.buf.len() as u64 - n as u64;
+            if self.times.last().is_none_or(|&(_, t)| t != time) {
+                self.times.push((at, time));
+            }
             data = &data[n..];
             self.run(false, emit);
         }
@@ -255,7 +261,7 @@ impl Reassembler {
             };
             let at = Located {
                 offset: self.offset + used as u64,
-                time: self.times[used],
+                time: self.time_at(self.offset + used as u64),
                 bytes: &self.buf[used..used + n],
             };
             match step {
@@ -305,8 +311,20 @@ impl Reassembler {
             used += n;
         }
         self.buf.drain(..used);
-        self.times.drain(..used);
+        // The runs wholly before the new start go (the run holding it stays).
+        let start = self.offset + used as u64;
+        let keep = self.times.partition_point(|&(at, _)| at <= start).max(1) - 1;
+        self.times.drain(..keep);
         self.offset += used as u64;
+    }
+
+    /// The arrival time of the byte at stream offset `at` (in the buffer).
+    #[inline]
+    fn time_at(&self, at: u64) -> Option<u64> {
+        match self.times.as_slice() {
+            [(_, t)] => *t,
+            runs => runs[runs.partition_point(|&(a, _)| a <= at).max(1) - 1].1,
+        }
     }
 
     /// What starts at `at` and how many bytes it takes; `None` when more bytes are needed.

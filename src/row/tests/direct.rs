@@ -86,7 +86,7 @@ fn every_protocol_on_the_fixtures_and_seeds() {
         let direct: u64 = inputs.iter().map(|f| check(protocol, f, true)).sum();
         if matches!(
             protocol.command,
-            "sport" | "sbus" | "futaba" | "crsf" | "sab2"
+            "sport" | "sbus" | "futaba" | "crsf" | "sab2" | "ibus"
         ) {
             assert!(
                 direct > 1000,
@@ -108,6 +108,7 @@ fn the_fuzz_corpora() {
         ("fuzz/corpus/futaba", &crate::futaba::PROTOCOL),
         ("fuzz/corpus/crsf", &crate::crsf::PROTOCOL),
         ("fuzz/corpus/sab", &crate::sab::PROTOCOL),
+        ("fuzz/corpus/ibus", &crate::ibus::PROTOCOL),
     ];
     for (dir, protocol) in corpora {
         let direct: u64 = files(dir).iter().map(|f| check(protocol, f, false)).sum();
