@@ -591,8 +591,21 @@ impl<F: Fmt> Cells<'_, '_, F> {
         if F::FORMAT != Format::Jsonl {
             return;
         }
-        self.part_name(name);
-        self.put_marked(m);
+        match self.marked(m) {
+            (false, a, b) => {
+                let pre: &[u8] = if self.parts == 0 {
+                    b",\"parts\":{"
+                } else {
+                    b","
+                };
+                self.parts += 1;
+                self.p.line.json_member_within(pre, name, a, b);
+            }
+            (true, ..) => {
+                self.part_name(name);
+                self.put_marked(m);
+            }
+        }
     }
 
     /// JSON Lines only: a member of `parts` with its number's text.
