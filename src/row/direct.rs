@@ -376,11 +376,11 @@ impl<F: Fmt> Cells<'_, '_, F> {
             Format::Jsonl => {
                 let (key, numeric) = json_key(self.t, i);
                 let w = &mut *self.p.line;
-                w.put(key);
                 if numeric && super::text::is_json_number(s.as_bytes()) {
+                    w.put(key);
                     w.put(s.as_bytes());
                 } else {
-                    w.json_str(s);
+                    w.json_key_str(key, s);
                 }
             }
             Format::Pretty => {

@@ -495,6 +495,31 @@ impl W<'_> {
         self.copy_within(a, b);
     }
 
+    /// `key` as it is, then `s` as [`W::json_str`] writes it: for a short key and text with
+    /// nothing to escape, one room check and fixed-size copies.
+    #[inline(always)]
+    pub fn json_key_str(&mut self, key: &[u8], s: &str) {
+        let sb = s.as_bytes();
+        let (k, n) = (key.len(), sb.len());
+        if k <= 16 && n <= 16 && self.pos + 48 <= self.buf.len() {
+            let room = &mut self.buf[self.pos..self.pos + 48];
+            copy(room, key);
+            if n == 0 {
+                room[k..k + 4].copy_from_slice(b"null");
+                self.pos += k + 4;
+                return;
+            }
+            room[k] = b'"';
+            if copy_test(&mut room[k + 1..], sb, json_escape) == 0 {
+                room[k + 1 + n] = b'"';
+                self.pos += k + n + 2;
+                return;
+            }
+        }
+        self.put(key);
+        self.json_str(s);
+    }
+
     /// A row's numbers as JSON (`,"parts":{"Cell1":3.918,…}`). Not inlined: the table
     /// writer's code for the rest of the row stays as it was.
     #[inline(never)]
@@ -888,6 +913,35 @@ mod tests {
                         let m = write_line(&mut slow, 0, |w| write(w, false));
                         assert_eq!(&fast[..n], &slow[..m], "{name:?} {number:?} {room}");
                     }
+                }
+            }
+        }
+    }
+
+    /// A key and a string in one piece: what the key and [`W::json_str`] write.
+    #[test]
+    fn json_key_str_writes_what_each_piece_writes() {
+        let keys: [&[u8]; 3] = [b",\"unit\":", b",\"a_rather_long_column_key\":", b""];
+        let texts = [
+            "",
+            "us",
+            "q\"",
+            "t\tab",
+            "sixteen_bytes_xx",
+            "seventeen_bytes_x",
+            "caf\u{e9}",
+        ];
+        for key in keys {
+            for s in texts {
+                for room in [4, 20, 60, 200] {
+                    let mut fast = vec![0; room];
+                    let n = write_line(&mut fast, 0, |w| w.json_key_str(key, s));
+                    let mut slow = vec![0; room];
+                    let m = write_line(&mut slow, 0, |w| {
+                        w.put(key);
+                        w.json_str(s);
+                    });
+                    assert_eq!(&fast[..n], &slow[..m], "{s:?} {room}");
                 }
             }
         }
