@@ -376,11 +376,11 @@ impl<F: Fmt> Cells<'_, '_, F> {
             Format::Jsonl => {
                 let (key, numeric) = json_key(self.t, i);
                 let w = &mut *self.p.line;
-                w.put(key);
                 if numeric && super::text::is_json_number(s.as_bytes()) {
+                    w.put(key);
                     w.put(s.as_bytes());
                 } else {
-                    w.json_str(s);
+                    w.json_key_str(key, s);
                 }
             }
             Format::Pretty => {
@@ -591,8 +591,21 @@ impl<F: Fmt> Cells<'_, '_, F> {
         if F::FORMAT != Format::Jsonl {
             return;
         }
-        self.part_name(name);
-        self.put_marked(m);
+        match self.marked(m) {
+            (false, a, b) => {
+                let pre: &[u8] = if self.parts == 0 {
+                    b",\"parts\":{"
+                } else {
+                    b","
+                };
+                self.parts += 1;
+                self.p.line.json_member_within(pre, name, a, b);
+            }
+            (true, ..) => {
+                self.part_name(name);
+                self.put_marked(m);
+            }
+        }
     }
 
     /// JSON Lines only: a member of `parts` with its number's text.

@@ -197,34 +197,11 @@ impl W<'_> {
             return 0;
         };
         self.pos = end;
-        let load8 = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([b'A'; 8]));
-        let load4 = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([b'A'; 4]));
-        match n {
-            0 => 0,
-            1..=3 => {
-                let (a, b, c) = (s[0], s[n / 2], s[n - 1]);
-                room[0] = a;
-                room[n / 2] = b;
-                room[n - 1] = c;
-                test((rep(b'A') & !0xFF_FFFF) | a as u64 | (b as u64) << 8 | (c as u64) << 16)
-            }
-            4..=7 => {
-                let (a, b) = (load4(0), load4(n - 4));
-                room[..4].copy_from_slice(&a.to_le_bytes());
-                room[n - 4..].copy_from_slice(&b.to_le_bytes());
-                test(a as u64 | (b as u64) << 32)
-            }
-            8..=16 => {
-                let (a, b) = (load8(0), load8(n - 8));
-                room[..8].copy_from_slice(&a.to_le_bytes());
-                room[n - 8..].copy_from_slice(&b.to_le_bytes());
-                test(a) | test(b)
-            }
-            _ => {
-                copy(room, s);
-                scan(s, test)
-            }
+        if n <= 16 {
+            return copy_test(room, s, test);
         }
+        copy(room, s);
+        scan(s, test)
     }
 
     /// A TSV field: copied whole, control characters (tabs, newlines) that would break the
@@ -473,6 +450,76 @@ impl W<'_> {
         self.byte(b'"');
     }
 
+    /// A member of a JSON object after `pre` (`,` or `,"parts":{`): `name` as a JSON string
+    /// (as [`W::json_str`]), `:`, and the line's own bytes `a..b` (a number written before in
+    /// the line) again. Usually one bounds check and fixed-size copies: when the name is
+    /// short and needs no escaping, the number is short and the room is wide enough.
+    #[inline(always)]
+    pub fn json_member_within(&mut self, pre: &[u8], name: &str, a: usize, b: usize) {
+        let nb = name.as_bytes();
+        let k = pre.len() + nb.len() + 3;
+        if !nb.is_empty()
+            && nb.len() <= 16
+            && pre.len() <= 12
+            && a <= b
+            && b - a <= 32
+            && b <= self.pos
+            && self.pos + 64 <= self.buf.len()
+        {
+            // The number and what follows it, copied whole (`a + 32 <= pos + 32`, in the
+            // buffer; the bytes after it are written over later, or lie beyond the line).
+            let mut num = [0u8; 32];
+            num.copy_from_slice(&self.buf[a..a + 32]);
+            let room = &mut self.buf[self.pos..self.pos + 64];
+            copy(room, pre);
+            room[pre.len()] = b'"';
+            if copy_test(&mut room[pre.len() + 1..], nb, json_escape) != 0 {
+                // A name to escape: the piece-by-piece way (over what was written here).
+                return self.json_member_slow(pre, name, a, b);
+            }
+            room[k - 2] = b'"';
+            room[k - 1] = b':';
+            room[k..k + 32].copy_from_slice(&num);
+            self.pos += k + (b - a);
+            return;
+        }
+        self.json_member_slow(pre, name, a, b);
+    }
+
+    /// [`W::json_member_within`] piece by piece.
+    #[cold]
+    fn json_member_slow(&mut self, pre: &[u8], name: &str, a: usize, b: usize) {
+        self.put(pre);
+        self.json_str(name);
+        self.byte(b':');
+        self.copy_within(a, b);
+    }
+
+    /// `key` as it is, then `s` as [`W::json_str`] writes it: for a short key and text with
+    /// nothing to escape, one room check and fixed-size copies.
+    #[inline(always)]
+    pub fn json_key_str(&mut self, key: &[u8], s: &str) {
+        let sb = s.as_bytes();
+        let (k, n) = (key.len(), sb.len());
+        if k <= 16 && n <= 16 && self.pos + 48 <= self.buf.len() {
+            let room = &mut self.buf[self.pos..self.pos + 48];
+            copy(room, key);
+            if n == 0 {
+                room[k..k + 4].copy_from_slice(b"null");
+                self.pos += k + 4;
+                return;
+            }
+            room[k] = b'"';
+            if copy_test(&mut room[k + 1..], sb, json_escape) == 0 {
+                room[k + 1 + n] = b'"';
+                self.pos += k + n + 2;
+                return;
+            }
+        }
+        self.put(key);
+        self.json_str(s);
+    }
+
     /// A row's numbers as JSON (`,"parts":{"Cell1":3.918,…}`). Not inlined: the table
     /// writer's code for the rest of the row stays as it was.
     #[inline(never)]
@@ -564,6 +611,37 @@ impl W<'_> {
     }
 }
 
+/// Copies `src` (at most 16 bytes) to the start of `dst` (at least as long) and returns
+/// `test` ORed over words that cover it (as [`scan`]), from the same loads that copy it.
+#[inline(always)]
+fn copy_test(dst: &mut [u8], s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
+    let n = s.len();
+    let load8 = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([b'A'; 8]));
+    let load4 = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([b'A'; 4]));
+    match n {
+        0 => 0,
+        1..=3 => {
+            let (a, b, c) = (s[0], s[n / 2], s[n - 1]);
+            dst[0] = a;
+            dst[n / 2] = b;
+            dst[n - 1] = c;
+            test((rep(b'A') & !0xFF_FFFF) | a as u64 | (b as u64) << 8 | (c as u64) << 16)
+        }
+        4..=7 => {
+            let (a, b) = (load4(0), load4(n - 4));
+            dst[..4].copy_from_slice(&a.to_le_bytes());
+            dst[n - 4..n].copy_from_slice(&b.to_le_bytes());
+            test(a as u64 | (b as u64) << 32)
+        }
+        _ => {
+            let (a, b) = (load8(0), load8(n - 8));
+            dst[..8].copy_from_slice(&a.to_le_bytes());
+            dst[n - 8..n].copy_from_slice(&b.to_le_bytes());
+            test(a) | test(b)
+        }
+    }
+}
+
 /// Copies `src` to the start of `dst` (at least as long): short copies are done with one or
 /// two overlapping fixed-size moves instead of a call.
 #[inline(always)]
@@ -616,6 +694,12 @@ pub(crate) fn json_plain(text: &str) -> bool {
     }) == 0
 }
 
+/// Non-zero when some byte of `x` is one a JSON string escapes (below 0x20, `"`, `\\`).
+#[inline(always)]
+pub(crate) fn json_escape(x: u64) -> u64 {
+    below_0x20(x) | zero_byte(x ^ rep(b'"')) | zero_byte(x ^ rep(b'\\'))
+}
+
 /// Non-zero when some byte of `x` is below 0x20 (exact as to whether one is, as [`zero_byte`]).
 #[inline(always)]
 pub(crate) fn below_0x20(x: u64) -> u64 {
@@ -650,11 +734,13 @@ pub(crate) fn scan(s: &[u8], test: impl Fn(u64) -> u64) -> u64 {
         4..=7 => test(half(0) | half(n - 4) << 32),
         8..=16 => test(word(0)) | test(word(n - 8)),
         _ => {
-            let mut acc = test(word(n - 8));
-            let mut i = 0;
-            while i + 8 <= n {
-                acc |= test(word(i));
-                i += 8;
+            // Sixteen bytes a step, as two words: the compiler tests them side by side.
+            let mut acc = test(word(n - 16)) | test(word(n - 8));
+            for c in s.chunks_exact(16) {
+                let (a, b) = c.split_at(8);
+                let a = u64::from_le_bytes(a.try_into().unwrap_or([b'A'; 8]));
+                let b = u64::from_le_bytes(b.try_into().unwrap_or([b'A'; 8]));
+                acc |= test(a) | test(b);
             }
             acc
         }
@@ -786,6 +872,77 @@ mod tests {
                     w.byte(b'}');
                 });
                 assert_eq!(&fast[..len], &slow[..slow_len], "{text:?} {spans:?}");
+            }
+        }
+    }
+
+    /// A member copied in one piece is what the piece-by-piece writes give: names short,
+    /// long, empty or to escape, numbers short and long, near the end of the room or not.
+    #[test]
+    fn json_member_within_writes_what_each_piece_writes() {
+        let names = [
+            "CH1",
+            "",
+            "a\"b",
+            "x\ty",
+            "A_rather_long_name_of_a_part",
+            "caf\u{e9}",
+        ];
+        let numbers = ["1", "-0.5", "1234567890123456789012345678901234567890"];
+        for pre in [&b","[..], b",\"parts\":{"] {
+            for name in names {
+                for number in numbers {
+                    for room in [8, 40, 70, 200] {
+                        let write = |w: &mut W<'_>, fast: bool| {
+                            w.put(b"{\"data\":");
+                            let a = w.len();
+                            w.put(number.as_bytes());
+                            let b = w.len();
+                            if fast {
+                                w.json_member_within(pre, name, a, b);
+                            } else {
+                                w.put(pre);
+                                w.json_str(name);
+                                w.byte(b':');
+                                w.put(number.as_bytes());
+                            }
+                        };
+                        let mut fast = vec![0; room];
+                        let n = write_line(&mut fast, 0, |w| write(w, true));
+                        let mut slow = vec![0; room];
+                        let m = write_line(&mut slow, 0, |w| write(w, false));
+                        assert_eq!(&fast[..n], &slow[..m], "{name:?} {number:?} {room}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A key and a string in one piece: what the key and [`W::json_str`] write.
+    #[test]
+    fn json_key_str_writes_what_each_piece_writes() {
+        let keys: [&[u8]; 3] = [b",\"unit\":", b",\"a_rather_long_column_key\":", b""];
+        let texts = [
+            "",
+            "us",
+            "q\"",
+            "t\tab",
+            "sixteen_bytes_xx",
+            "seventeen_bytes_x",
+            "caf\u{e9}",
+        ];
+        for key in keys {
+            for s in texts {
+                for room in [4, 20, 60, 200] {
+                    let mut fast = vec![0; room];
+                    let n = write_line(&mut fast, 0, |w| w.json_key_str(key, s));
+                    let mut slow = vec![0; room];
+                    let m = write_line(&mut slow, 0, |w| {
+                        w.put(key);
+                        w.json_str(s);
+                    });
+                    assert_eq!(&fast[..n], &slow[..m], "{s:?} {room}");
+                }
             }
         }
     }
