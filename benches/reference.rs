@@ -178,114 +178,115 @@ fn first_difference(a: &[u8], b: &[u8]) -> String {
     unreachable!()
 }
 
+/// A protocol's case before its capture exists: its name (as `BUSNOOP_BENCH_ONLY` takes it),
+/// the C program, busnoop's arguments, the capture's file name, its generator and the size it
+/// takes (polls, packets, bytes or frames).
+struct Spec {
+    name: &'static str,
+    c: &'static str,
+    args: &'static [&'static str],
+    file: String,
+    make: fn(&Path, u64) -> std::io::Result<u64>,
+    size: u64,
+}
+
+/// The protocols' cases, each capture generated when it is not there yet.
 fn cases(only: &[String]) -> Vec<Case> {
-    let dir = common::data_dir();
-    let polls = common::env_u64("BUSNOOP_BENCH_POLLS", 3_000_000);
-    let packets = common::env_u64("BUSNOOP_BENCH_PACKETS", 1_000_000);
-    let mb = common::env_u64("BUSNOOP_BENCH_MB", 16);
-    let want = |name: &str| only.is_empty() || only.iter().any(|o| o == name);
-    let made = |path: &Path, make: &dyn Fn(&Path) -> std::io::Result<u64>| {
-        if !path.exists() {
-            eprintln!("generating {} ...", path.display());
-            make(path).expect("cannot write the capture");
-        }
-    };
-    let mut v = Vec::new();
-    if want("sport") {
-        let file = dir.join(format!("ref-sport-{polls}.bin"));
-        made(&file, &|p| captures::sport(p, polls));
-        v.push(Case {
+    let env = common::env_u64;
+    let polls = env("BUSNOOP_BENCH_POLLS", 3_000_000);
+    let packets = env("BUSNOOP_BENCH_PACKETS", 1_000_000);
+    let mb = env("BUSNOOP_BENCH_MB", 16);
+    let futaba_frames = env("BUSNOOP_BENCH_FUTABA_FRAMES", 800_000);
+    let ibus_frames = env("BUSNOOP_BENCH_IBUS_FRAMES", 600_000);
+    let crsf_frames = env("BUSNOOP_BENCH_CRSF_FRAMES", 800_000);
+    let exchanges = env("BUSNOOP_BENCH_EXCHANGES", 600_000);
+    let table = [
+        Spec {
             name: "sport",
             c: "sport_ref",
-            file,
             args: &["sport", "--no-config"],
-            rows: 0,
-        });
-    }
-    if want("ether") {
-        let file = dir.join(format!("ref-ether-{packets}.pcap"));
-        made(&file, &|p| captures::ether(p, packets));
-        v.push(Case {
+            file: format!("ref-sport-{polls}.bin"),
+            make: captures::sport,
+            size: polls,
+        },
+        Spec {
             name: "ether",
             c: "ether_ref",
-            file,
             args: &["sbus", "--no-config"],
-            rows: 0,
-        });
-    }
-    if want("sbus") {
-        let file = dir.join(format!("ref-sbus-data-{mb}mib.bin"));
-        made(&file, &|p| captures::sbus_data(p, mb << 20));
-        v.push(Case {
+            file: format!("ref-ether-{packets}.pcap"),
+            make: captures::ether,
+            size: packets,
+        },
+        Spec {
             name: "sbus",
             c: "sbus_ref",
-            file,
             args: &["sbus", "--no-config", "--mode", "data"],
-            rows: 0,
-        });
-    }
-    if want("futaba") {
-        let frames = common::env_u64("BUSNOOP_BENCH_FUTABA_FRAMES", 800_000);
-        let file = dir.join(format!("ref-futaba-{frames}.bin"));
-        made(&file, &|p| futaba::futaba(p, frames));
-        v.push(Case {
+            file: format!("ref-sbus-data-{mb}mib.bin"),
+            make: captures::sbus_data,
+            size: mb << 20,
+        },
+        Spec {
             name: "futaba",
             c: "futaba_ref",
-            file,
             args: &["futaba", "--no-config"],
-            rows: 0,
-        });
-    }
-    if want("ibus") {
-        let frames = common::env_u64("BUSNOOP_BENCH_IBUS_FRAMES", 600_000);
-        let file = dir.join(format!("ref-ibus-{frames}.bin"));
-        made(&file, &|p| ibus::ibus(p, frames));
-        v.push(Case {
+            file: format!("ref-futaba-{futaba_frames}.bin"),
+            make: futaba::futaba,
+            size: futaba_frames,
+        },
+        Spec {
             name: "ibus",
             c: "ibus_ref",
-            file,
             args: &["ibus", "--no-config"],
-            rows: 0,
-        });
-    }
-    if want("crsf") {
-        let frames = common::env_u64("BUSNOOP_BENCH_CRSF_FRAMES", 800_000);
-        let file = dir.join(format!("ref-crsf-{frames}.bin"));
-        made(&file, &|p| crsf::crsf(p, frames));
-        v.push(Case {
+            file: format!("ref-ibus-{ibus_frames}.bin"),
+            make: ibus::ibus,
+            size: ibus_frames,
+        },
+        Spec {
             name: "crsf",
             c: "crsf_ref",
-            file,
             args: &["crsf", "--no-config"],
-            rows: 0,
-        });
-    }
-    if want("sab") {
-        let file = dir.join(format!("ref-sab2-{mb}mib.bin"));
-        made(&file, &|p| sab::sab(p, mb << 20));
-        v.push(Case {
+            file: format!("ref-crsf-{crsf_frames}.bin"),
+            make: crsf::crsf,
+            size: crsf_frames,
+        },
+        Spec {
             name: "sab",
             c: "sab_ref",
-            file,
             // Forced: detection would read every byte twice (the other framing in the
             // background, to switch), which the C decoder does not.
             args: &["sab", "--no-config", "--framing", "hdlc"],
-            rows: 0,
-        });
-    }
-    if want("modbus") {
-        let exchanges = common::env_u64("BUSNOOP_BENCH_EXCHANGES", 600_000);
-        let file = dir.join(format!("ref-modbus-{exchanges}.bin"));
-        made(&file, &|p| modbus::modbus(p, exchanges));
-        v.push(Case {
+            file: format!("ref-sab2-{mb}mib.bin"),
+            make: sab::sab,
+            size: mb << 20,
+        },
+        Spec {
             name: "modbus",
             c: "modbus_ref",
-            file,
             args: &["modbus", "--no-config"],
-            rows: 0,
-        });
-    }
-    v
+            file: format!("ref-modbus-{exchanges}.bin"),
+            make: modbus::modbus,
+            size: exchanges,
+        },
+    ];
+    let dir = common::data_dir();
+    table
+        .into_iter()
+        .filter(|s| only.is_empty() || only.iter().any(|o| o == s.name))
+        .map(|s| {
+            let file = dir.join(s.file);
+            if !file.exists() {
+                eprintln!("generating {} ...", file.display());
+                (s.make)(&file, s.size).expect("cannot write the capture");
+            }
+            Case {
+                name: s.name,
+                c: s.c,
+                file,
+                args: s.args,
+                rows: 0,
+            }
+        })
+        .collect()
 }
 
 fn main() {
