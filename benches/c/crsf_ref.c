@@ -18,45 +18,14 @@
 //   cc -O2 -march=x86-64-v2 -o crsf_ref crsf_ref.c
 //   ./crsf_ref FILE > out.tsv
 //   "$BIN" crsf FILE -f tsv --no-config | cmp - out.tsv
-#define _GNU_SOURCE
-#include <fcntl.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
+#define OBUF_EXTRA 8192
+#include "ref_io.h"
 
-#define RD (256 * 1024)
-#define HIGH (64 * 1024)
 #define LOOK 160  // bytes a decision may need past its position: two frames and more
 static unsigned char ibuf[RD + LOOK + 64];
-static char obuf[HIGH + 8192];
-static char *o = obuf;
-
-static void flush_out(void) {
-    const char *p = obuf;
-    size_t n = (size_t)(o - obuf);
-    while (n) {
-        ssize_t w = write(1, p, n);
-        if (w <= 0) exit(3);
-        p += w; n -= (size_t)w;
-    }
-    o = obuf;
-}
 
 // ---- text helpers (as sport_ref.c) ----------------------------------------------------------
-static const char HEXU[] = "0123456789ABCDEF";
 
-static inline uint64_t eight_digits(uint32_t v) {
-    uint64_t merged = (uint64_t)(v / 10000) | (uint64_t)(v % 10000) << 32;
-    uint64_t top = ((merged * 10486) >> 20) & (0x7Full << 32 | 0x7F);
-    uint64_t bottom = merged - 100 * top;
-    uint64_t hundreds = (bottom << 16) + top;
-    uint64_t tens = ((hundreds * 103) >> 10) & (0xFull << 48 | 0xFull << 32 | 0xFull << 16 | 0xF);
-    tens += (hundreds - 10 * tens) << 8;
-    return tens;
-}
-#define ZEROS 0x3030303030303030ull
 static inline int lead_digits(char *t, uint32_t v) {  // v < 10^8, without leading zeros
     uint64_t d = eight_digits(v);
     int lead = v ? __builtin_ctzll(d) / 8 : 7;

@@ -16,33 +16,11 @@
 //   cc -O2 -march=x86-64-v2 -o futaba_ref futaba_ref.c
 //   ./futaba_ref FILE > out.tsv
 //   busnoop futaba FILE -f tsv --no-config | cmp - out.tsv
-#define _GNU_SOURCE
-#include <fcntl.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
+#include "ref_io.h"
 
-#define RD (256 * 1024)
-#define HIGH (64 * 1024)
 static unsigned char ibuf[RD + 256];
-static char obuf[HIGH + 4096];
-static char *o = obuf;
-
-static void flush_out(void) {
-    const char *p = obuf;
-    size_t n = (size_t)(o - obuf);
-    while (n) {
-        ssize_t w = write(1, p, n);
-        if (w <= 0) exit(3);
-        p += w; n -= (size_t)w;
-    }
-    o = obuf;
-}
 
 // ---- text helpers -------------------------------------------------------------------------
-static const char HEXU[] = "0123456789ABCDEF";
 #define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
 static inline char *put_u64(char *w, uint64_t v) {
     char t[24]; int i = 24;

@@ -24,47 +24,13 @@
 //   cc -O2 -march=x86-64-v2 -DDECODE_ONLY -o sab_decode sab_ref.c   # the same without the text
 //
 // SPDX-License-Identifier: MIT OR Apache-2.0
-#define _GNU_SOURCE
-#include <fcntl.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
+#include "ref_io.h"
 
-#define RD (256 * 1024)
-#define HIGH (64 * 1024)
 #define CARRY_MAX (64 * 1024)
 static unsigned char ibuf[CARRY_MAX + RD + 64];
-static char obuf[HIGH + 4096];
-static char *o = obuf;
-
-static void flush_out(void) {
-    const char *p = obuf;
-    size_t n = (size_t)(o - obuf);
-    while (n) {
-        ssize_t w = write(1, p, n);
-        if (w <= 0) exit(3);
-        p += w; n -= (size_t)w;
-    }
-    o = obuf;
-}
 
 // ---- text helpers -------------------------------------------------------------------------
-static const char HEXU[] = "0123456789ABCDEF";
 
-// The eight decimal digits of v < 10^8 (leading zeros included), the first digit in the lowest
-// byte, all at once with multiplications (D. Lemire; busnoop's digits::eight_digits).
-static inline uint64_t eight_digits(uint32_t v) {
-    uint64_t merged = (uint64_t)(v / 10000) | (uint64_t)(v % 10000) << 32;
-    uint64_t top = ((merged * 10486) >> 20) & (0x7Full << 32 | 0x7F);
-    uint64_t bottom = merged - 100 * top;
-    uint64_t hundreds = (bottom << 16) + top;
-    uint64_t tens = ((hundreds * 103) >> 10) & (0xFull << 48 | 0xFull << 32 | 0xFull << 16 | 0xF);
-    tens += (hundreds - 10 * tens) << 8;
-    return tens;
-}
-#define ZEROS 0x3030303030303030ull
 // Writes v's decimal digits at t (room for 24 + 8 bytes; bytes past the number may be written);
 // returns their count.
 static inline int lead_digits(char *t, uint32_t v) {  // v < 10^8, without leading zeros
