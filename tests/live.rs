@@ -422,6 +422,17 @@ fn has_open(pid: u32, path: &std::path::Path) -> bool {
         .unwrap_or(false)
 }
 
+/// What process `pid` holds open (the targets of /proc/PID/fd).
+fn open_files(pid: u32) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .map(|d| {
+            d.flatten()
+                .filter_map(|e| std::fs::read_link(e.path()).ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// L13 (issue 32): a Wireshark capture through the extcap with `--reconnect` wrote the unplug
 /// notices on stderr, which Wireshark shows as an error when the capture stops. The extcap's
 /// stderr stays empty; the gap is in the capture (the export) and its rows.
@@ -472,7 +483,25 @@ fn extcap_with_reconnect_keeps_stderr_empty_through_an_unplug() {
     std::os::unix::fs::symlink(&b2.path, &tmp).unwrap();
     std::fs::rename(&tmp, &link).unwrap();
     let second = b2.path.clone();
-    common::until("the port is open again", || has_open(pid, &second));
+    // Failed once in a CI loop under load (run 31) without saying why: on a timeout, what
+    // busnoop holds open and what it said.
+    let deadline = Instant::now() + common::PATIENCE;
+    while !has_open(pid, &second) {
+        if Instant::now() >= deadline {
+            let held = open_files(pid);
+            let exited = child.try_wait().unwrap();
+            unsafe { libc::kill(pid as i32, libc::SIGTERM) };
+            let _ = wait_exit(&mut child);
+            panic!(
+                "the port is not open again: busnoop (exited: {exited:?}) holds {held:?} (first \
+                 {}, second {}); stderr: {}",
+                first.display(),
+                second.display(),
+                stderr_of(&mut child)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
     b2.master.write_all(&slots(3).concat()).unwrap();
     b2.master.flush().unwrap();
     unsafe { libc::kill(pid as i32, libc::SIGTERM) };
