@@ -7,6 +7,27 @@
 
 const ZEROS: u64 = 0x3030_3030_3030_3030;
 
+/// The text ` DIGITS` of `v < 10^6` packed in a word for a table of small numbers (RC channel
+/// values): a blank in the lowest byte, the decimal digits in the next ones, and the text's
+/// length (blank included) in the top byte, so one load gives both.
+pub const fn blank_digits_word(v: u64) -> u64 {
+    let mut digits = 1;
+    let mut p = 10;
+    while v >= p {
+        digits += 1;
+        p *= 10;
+    }
+    let mut word = b' ' as u64 | (1 + digits) << 56;
+    let mut rest = v;
+    let mut i = digits;
+    while i > 0 {
+        word |= (b'0' as u64 + rest % 10) << (8 * i);
+        rest /= 10;
+        i -= 1;
+    }
+    word
+}
+
 /// `"00" "01" … "99"`: two decimal digits per step.
 static DEC2: [u8; 200] = {
     let mut t = [0u8; 200];
@@ -119,6 +140,21 @@ fn eight_digits(v: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn blank_digits_words() {
+        for (v, text) in [
+            (0u64, " 0"),
+            (7, " 7"),
+            (10, " 10"),
+            (2047, " 2047"),
+            (999_999, " 999999"),
+        ] {
+            let w = blank_digits_word(v);
+            let len = (w >> 56) as usize;
+            assert_eq!(&w.to_le_bytes()[..len], text.as_bytes(), "{v}");
+        }
+    }
 
     /// Powers of ten and their neighbours, and xorshift values of every size.
     fn samples() -> impl Iterator<Item = u64> {

@@ -25,25 +25,12 @@ const fn number_table(micros: bool) -> [u64; RAWS] {
     let mut table = [0u64; RAWS];
     let mut x = 0;
     while x < RAWS {
-        let mut v = if micros {
+        let v = if micros {
             wire::micros(x as u16) as u64
         } else {
             x as u64
         };
-        let mut digits = 1;
-        let mut p = 10;
-        while v >= p {
-            digits += 1;
-            p *= 10;
-        }
-        let mut word = b' ' as u64 | (1 + digits) << 56;
-        let mut i = digits;
-        while i > 0 {
-            word |= (b'0' as u64 + v % 10) << (8 * i);
-            v /= 10;
-            i -= 1;
-        }
-        table[x] = word;
+        table[x] = crate::digits::blank_digits_word(v);
         x += 1;
     }
     table

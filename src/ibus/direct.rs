@@ -23,21 +23,7 @@ const fn number_table() -> [u64; VALUES] {
     let mut table = [0u64; VALUES];
     let mut x = 0;
     while x < VALUES {
-        let mut v = x as u64;
-        let mut digits = 1;
-        let mut p = 10;
-        while v >= p {
-            digits += 1;
-            p *= 10;
-        }
-        let mut word = b' ' as u64 | (1 + digits) << 56;
-        let mut i = digits;
-        while i > 0 {
-            word |= (b'0' as u64 + v % 10) << (8 * i);
-            v /= 10;
-            i -= 1;
-        }
-        table[x] = word;
+        table[x] = crate::digits::blank_digits_word(x as u64);
         x += 1;
     }
     table
