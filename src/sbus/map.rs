@@ -156,11 +156,23 @@ impl WriteRow for ScratchRow<'_> {
             c.stamp_end();
         }
         c.text(&sc.data);
-        c.value_text(self.parts.first().map(|p| p.text));
+        c.value_text(first_text(self.parts));
         c.text(&sc.resp);
         c.text(&sc.seq);
         c.text(&sc.note);
         c.row_parts(self.parts);
+    }
+}
+
+/// The text of the row's first number (the Value column): cut straight from the Data text
+/// for a recorded media list (what `Parts::first` gives, without making the part).
+#[inline(always)]
+fn first_text(parts: Parts<'_>) -> Option<&str> {
+    match parts {
+        Parts::Spans { text, spans } => spans
+            .first()
+            .map(|s| text.get(s.eq as usize + 1..s.end as usize).unwrap_or("")),
+        parts => parts.first().map(|p| p.text),
     }
 }
 
