@@ -719,7 +719,7 @@ impl PartKeys {
         let nb = name.as_bytes();
         let words = name_words(nb)?;
         let p = nb.as_ptr() as usize;
-        let h = (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) as usize % Self::SLOTS;
+        let h = (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) % Self::SLOTS;
         let hit = self
             .slots
             .get(h)
