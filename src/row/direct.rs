@@ -593,12 +593,15 @@ impl<F: Fmt> Cells<'_, '_, F> {
         }
         match self.marked(m) {
             (false, a, b) => {
-                let pre: &[u8] = if self.parts == 0 {
-                    b",\"parts\":{"
-                } else {
-                    b","
-                };
+                let first = self.parts == 0;
                 self.parts += 1;
+                if let Some(key) = self.t.part_keys.get(name) {
+                    self.p
+                        .line
+                        .json_key_within(first, key, name.len() + 4, a, b);
+                    return;
+                }
+                let pre: &[u8] = if first { b",\"parts\":{" } else { b"," };
                 self.p.line.json_member_within(pre, name, a, b);
             }
             (true, ..) => {
@@ -612,6 +615,14 @@ impl<F: Fmt> Cells<'_, '_, F> {
     #[inline(always)]
     pub fn part_text(&mut self, name: &str, text: &str) {
         if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        if let Some(key) = self.t.part_keys.get(name) {
+            let first = self.parts == 0;
+            self.parts += 1;
+            self.p
+                .line
+                .json_key_text(first, key, name.len() + 4, text.as_bytes());
             return;
         }
         self.part_name(name);

@@ -486,6 +486,60 @@ impl W<'_> {
         self.json_member_slow(pre, name, a, b);
     }
 
+    /// A member of `parts` from its kept key ([`PartKeys::get`], `k` bytes long: `,"name":`)
+    /// and the line's own bytes `a..b` (a number written before in the line): after
+    /// `,"parts":{` instead of the key's comma when `first`. As [`W::json_member_within`]
+    /// writes it; usually one bounds check and fixed-size copies.
+    #[inline(always)]
+    pub fn json_key_within(&mut self, first: bool, key: &[u8; 16], k: usize, a: usize, b: usize) {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        if a <= b && b - a <= 32 && b <= self.pos && self.pos + 9 + 16 + 32 <= self.buf.len() {
+            // The number and what follows it, copied whole (`a + 32 <= pos + 32`, in the
+            // buffer; the bytes after it are written over later, or lie beyond the line).
+            let mut num = [0u8; 32];
+            num.copy_from_slice(&self.buf[a..a + 32]);
+            let mut at = self.pos;
+            if first {
+                self.buf[at..at + 16].copy_from_slice(PARTS);
+                at += 9;
+            }
+            self.buf[at..at + 16].copy_from_slice(key);
+            if first {
+                self.buf[at] = b'{';
+            }
+            let k = k.min(16);
+            self.buf[at + k..at + k + 32].copy_from_slice(&num);
+            self.pos = at + k + (b - a);
+            return;
+        }
+        self.json_key_slow(first, key, k, a, b);
+    }
+
+    #[cold]
+    fn json_key_slow(&mut self, first: bool, key: &[u8; 16], k: usize, a: usize, b: usize) {
+        let key = key.get(..k).unwrap_or(key);
+        if first {
+            self.put(b",\"parts\":{");
+            self.put(key.get(1..).unwrap_or_default());
+        } else {
+            self.put(key);
+        }
+        self.copy_within(a, b);
+    }
+
+    /// A member of `parts` from its kept key (as [`W::json_key_within`]) and its number's
+    /// text.
+    #[inline(always)]
+    pub fn json_key_text(&mut self, first: bool, key: &[u8; 16], k: usize, text: &[u8]) {
+        if first {
+            self.put(b",\"parts\":{");
+            self.put(key.get(1..k).unwrap_or_default());
+        } else {
+            self.put_prefix(key, k);
+        }
+        self.put(text);
+    }
+
     /// [`W::json_member_within`] piece by piece.
     #[cold]
     fn json_member_slow(&mut self, pre: &[u8], name: &str, a: usize, b: usize) {
@@ -608,6 +662,91 @@ impl W<'_> {
             Some(room) => self.pos += crate::digits::put_u64(room, n),
             None => self.put(itoa::Buffer::new().format(n).as_bytes()),
         }
+    }
+}
+
+/// JSON Lines: the keys of `parts`' members (`,"CH1":`), each written once per name and kept
+/// in a table of [`PartKeys::SLOTS`] places, found by the name's address and checked against
+/// the name's bytes (so a name is found only when it is the same text). A name whose place is
+/// taken by another is written again when it comes. Only names of 1 to [`PartKeys::NAME`]
+/// bytes with nothing to escape are kept; the rest are written piece by piece.
+pub(crate) struct PartKeys {
+    slots: Box<[KeySlot]>,
+}
+
+#[derive(Clone, Copy, Default)]
+struct KeySlot {
+    /// The name's bytes as [`name_words`] gives them, and its length (0: empty).
+    words: (u64, u64),
+    len: usize,
+    /// `,"name":`, padded with zeros.
+    key: [u8; 16],
+}
+
+/// A name of 1 to 12 bytes in two words that tell every such name of its length apart (each
+/// byte is in them, some twice): `None` for another length.
+#[inline(always)]
+fn name_words(s: &[u8]) -> Option<(u64, u64)> {
+    let n = s.len();
+    let load8 = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([0; 8]));
+    let load4 = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([0; 4]));
+    match n {
+        1..=3 => Some((
+            s[0] as u64 | (s[n / 2] as u64) << 8 | (s[n - 1] as u64) << 16,
+            0,
+        )),
+        4..=7 => Some((load4(0) as u64 | (load4(n - 4) as u64) << 32, 0)),
+        8..=PartKeys::NAME => Some((load8(0), load8(n - 8))),
+        _ => None,
+    }
+}
+
+impl PartKeys {
+    const SLOTS: usize = 256;
+    /// The longest name kept: its key fills the 16 bytes.
+    pub(crate) const NAME: usize = 12;
+
+    pub(crate) fn new() -> Self {
+        PartKeys {
+            slots: vec![KeySlot::default(); Self::SLOTS].into_boxed_slice(),
+        }
+    }
+
+    /// The key of `name` (`,"name":`, `name.len() + 4` bytes of the 16), when it is kept or
+    /// can be.
+    #[inline(always)]
+    pub(crate) fn get(&mut self, name: &str) -> Option<&[u8; 16]> {
+        let nb = name.as_bytes();
+        let words = name_words(nb)?;
+        let p = nb.as_ptr() as usize;
+        let h = (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) % Self::SLOTS;
+        let hit = self
+            .slots
+            .get(h)
+            .is_some_and(|s| s.words == words && s.len == nb.len());
+        if hit {
+            return self.slots.get(h).map(|s| &s.key);
+        }
+        self.fill(h, nb, words)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn fill(&mut self, h: usize, nb: &[u8], words: (u64, u64)) -> Option<&[u8; 16]> {
+        if nb.is_empty() || nb.len() > Self::NAME || scan(nb, json_escape) != 0 {
+            return None;
+        }
+        let slot = self.slots.get_mut(h)?;
+        let mut key = [0u8; 16];
+        key[..2].copy_from_slice(b",\"");
+        key[2..2 + nb.len()].copy_from_slice(nb);
+        key[2 + nb.len()..4 + nb.len()].copy_from_slice(b"\":");
+        *slot = KeySlot {
+            words,
+            len: nb.len(),
+            key,
+        };
+        Some(&slot.key)
     }
 }
 
@@ -912,6 +1051,83 @@ mod tests {
                         let mut slow = vec![0; room];
                         let m = write_line(&mut slow, 0, |w| write(w, false));
                         assert_eq!(&fast[..n], &slow[..m], "{name:?} {number:?} {room}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A member from its kept key, first or not, and a member with its number's text: what
+    /// [`W::json_member_within`] and the pieces write, for names kept or not (empty, long, to
+    /// escape, the same text at another address), numbers short and long, near the end of the
+    /// room or not.
+    #[test]
+    fn kept_part_keys_write_what_each_piece_writes() {
+        let owned = String::from("CH1");
+        let names = [
+            "CH1",
+            owned.as_str(),
+            "",
+            "a\"b",
+            "x\ty",
+            "A_rather_long_name_of_a_part",
+            "ABCDEFGHIJKL",
+            "ABCDEFGHIJKLM",
+            "caf\u{e9}",
+            "FrameLost",
+            "Bat%",
+        ];
+        let numbers = ["1", "-0.5", "1234567890123456789012345678901234567890"];
+        let mut keys = PartKeys::new();
+        for round in 0..2 {
+            for first in [true, false] {
+                for name in names {
+                    for number in numbers {
+                        for room in [8, 40, 70, 200] {
+                            let pre: &[u8] = if first { b",\"parts\":{" } else { b"," };
+                            let key = keys.get(name).copied();
+                            assert_eq!(
+                                key.is_some(),
+                                (1..=PartKeys::NAME).contains(&name.len())
+                                    && !name.contains(['"', '\t']),
+                                "{name:?}"
+                            );
+                            let write = |w: &mut W<'_>, fast: u8| {
+                                w.put(b"{\"data\":");
+                                let a = w.len();
+                                w.put(number.as_bytes());
+                                let b = w.len();
+                                match (fast, key) {
+                                    (1, Some(key)) => {
+                                        w.json_key_within(first, &key, name.len() + 4, a, b)
+                                    }
+                                    (2, Some(key)) => w.json_key_text(
+                                        first,
+                                        &key,
+                                        name.len() + 4,
+                                        number.as_bytes(),
+                                    ),
+                                    (0, _) => w.json_member_within(pre, name, a, b),
+                                    _ => {
+                                        w.put(pre);
+                                        w.json_str(name);
+                                        w.byte(b':');
+                                        w.put(number.as_bytes());
+                                    }
+                                }
+                            };
+                            let mut want = vec![0; room];
+                            let m = write_line(&mut want, 0, |w| write(w, 3));
+                            for fast in 0..3 {
+                                let mut got = vec![0; room];
+                                let n = write_line(&mut got, 0, |w| write(w, fast));
+                                assert_eq!(
+                                    &got[..n],
+                                    &want[..m],
+                                    "{round} {first} {name:?} {number:?} {room} {fast}"
+                                );
+                            }
+                        }
                     }
                 }
             }

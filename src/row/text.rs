@@ -109,6 +109,8 @@ pub struct Text {
     /// JSON Lines: the key of each extra column (`,"resp_ms":`), built once, and whether its
     /// cells are numbers.
     pub(crate) json_keys: Vec<(Vec<u8>, bool)>,
+    /// JSON Lines: the keys of `parts`' members, written once per name.
+    pub(crate) part_keys: super::line::PartKeys,
     /// The cells ID to Sensor as written, per [`super::Row::stamp`].
     pub(crate) spans: Spans,
     /// A cell written again (quoted, escaped) keeps its first text here.
@@ -138,6 +140,7 @@ impl Text {
                 .iter()
                 .map(|name| (json_key(name), NUMERIC_EXTRA.contains(name)))
                 .collect(),
+            part_keys: super::line::PartKeys::new(),
             spans: Spans::new(),
             scratch: Vec::new(),
             check: Vec::new(),
