@@ -10,11 +10,11 @@ use busnoop::fport::wire;
 use crate::common::Rng;
 
 /// The flight controller's S.Port sensors in the order Betaflight's `frsky_hub`-less S.Port
-/// telemetry sends them: (app ID, a value maker). Voltages, current, fuel, altitude, vario,
+/// telemetry sends them, by app ID: voltages, current, fuel, altitude, vario,
 /// heading, accelerations, GPS, temperatures (Betaflight's flight-mode and GPS-state numbers).
 const SENSORS: [u16; 14] = [
-    0x0210, 0x0200, 0x0600, 0x0910, 0x0100, 0x0110, 0x0840, 0x0700, 0x0710, 0x0720, 0x0800,
-    0x0830, 0x0400, 0x0410,
+    0x0210, 0x0200, 0x0600, 0x0910, 0x0100, 0x0110, 0x0840, 0x0700, 0x0710, 0x0720, 0x0800, 0x0830,
+    0x0400, 0x0410,
 ];
 
 /// F.Port v1 as Betaflight and a FrSky receiver speak it: a control frame (16 channels, flags,
@@ -99,11 +99,7 @@ pub fn fport(path: &Path, frames: u64) -> std::io::Result<u64> {
             };
             // Without delimiters, right after the poll's closing 0x7E (as Betaflight writes it).
             let start = buf.len();
-            wire::encode_v1_telemetry(
-                &mut buf,
-                wire::V1_UPLINK,
-                &wire::payload(0x10, id, value),
-            );
+            wire::encode_v1_telemetry(&mut buf, wire::V1_UPLINK, &wire::payload(0x10, id, value));
             buf.pop();
             buf.remove(start);
             spoil(&mut buf, start, 1, &mut rng);
