@@ -87,7 +87,7 @@ pub fn fport(path: &Path, frames: u64) -> std::io::Result<u64> {
                     lat += rng.below(21) as i32 - 10;
                     lon += rng.below(21) as i32 - 10;
                     gps += 1;
-                    if gps % 2 == 0 {
+                    if gps.is_multiple_of(2) {
                         (lat.unsigned_abs() * 6 / 10) & 0x3FFF_FFFF
                     } else {
                         (lon.unsigned_abs() * 6 / 10) & 0x3FFF_FFFF | 0x8000_0000
