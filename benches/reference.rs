@@ -15,7 +15,9 @@
 //! in data mode of `BUSNOOP_BENCH_MB` MiB, 16; SAB2 of `BUSNOOP_BENCH_MB` MiB; Futaba SBUS
 //! `BUSNOOP_BENCH_FUTABA_FRAMES` frames, 800 k; CRSF `BUSNOOP_BENCH_CRSF_FRAMES` frames, 800 k;
 //! Modbus RTU `BUSNOOP_BENCH_EXCHANGES` exchanges, 600 k; FlySky iBUS `BUSNOOP_BENCH_IBUS_FRAMES`
-//! RC frames with as many sensor polls, 600 k), compiles the C decoders with `cc -O2` (skipped with
+//! RC frames with as many sensor polls, 600 k; GHST `BUSNOOP_BENCH_GHST_FRAMES` frames, 1.2 M;
+//! F.Port v1 `BUSNOOP_BENCH_FPORT_FRAMES` control frames with their telemetry, 500 k),
+//! compiles the C decoders with `cc -O2` (skipped with
 //! a message when there is no C compiler), checks that each one's output is byte-identical to
 //! `busnoop … -f tsv`, and then runs the C decoder and busnoop to TSV, CSV, JSON Lines and pretty
 //! text (no colour) alternately, each pinned to CPU 0 with its output going to /dev/null,
@@ -34,8 +36,12 @@ mod captures;
 mod common;
 #[path = "reference/crsf.rs"]
 mod crsf;
+#[path = "reference/fport.rs"]
+mod fport;
 #[path = "reference/futaba.rs"]
 mod futaba;
+#[path = "reference/ghst.rs"]
+mod ghst;
 #[path = "reference/ibus.rs"]
 mod ibus;
 #[path = "reference/modbus.rs"]
@@ -200,6 +206,8 @@ fn cases(only: &[String]) -> Vec<Case> {
     let ibus_frames = env("BUSNOOP_BENCH_IBUS_FRAMES", 600_000);
     let crsf_frames = env("BUSNOOP_BENCH_CRSF_FRAMES", 800_000);
     let exchanges = env("BUSNOOP_BENCH_EXCHANGES", 600_000);
+    let ghst_frames = env("BUSNOOP_BENCH_GHST_FRAMES", 1_200_000);
+    let fport_frames = env("BUSNOOP_BENCH_FPORT_FRAMES", 500_000);
     let table = [
         Spec {
             name: "sport",
@@ -266,6 +274,22 @@ fn cases(only: &[String]) -> Vec<Case> {
             file: format!("ref-modbus-{exchanges}.bin"),
             make: modbus::modbus,
             size: exchanges,
+        },
+        Spec {
+            name: "ghst",
+            c: "ghst_ref",
+            args: &["ghst", "--no-config"],
+            file: format!("ref-ghst-{ghst_frames}.bin"),
+            make: ghst::ghst,
+            size: ghst_frames,
+        },
+        Spec {
+            name: "fport",
+            c: "fport_ref",
+            args: &["fport", "--no-config"],
+            file: format!("ref-fport-{fport_frames}.bin"),
+            make: fport::fport,
+            size: fport_frames,
         },
     ];
     let dir = common::data_dir();

@@ -106,13 +106,18 @@ impl Mapper {
             return;
         }
         let _ = match ev {
-            Event::Frame(f) => self.frame(framing, &f, out),
+            Event::Frame(f) => {
+                if super::direct::frame(self, framing, &f, out) {
+                    return;
+                }
+                self.frame(framing, &f, out)
+            }
             Event::Garbage(g) => self.garbage(&g, out),
         };
     }
 
     /// Time of a row: the source's, or 10 bits per byte at the line's speed.
-    fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
+    pub(super) fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
         time.unwrap_or_else(|| crate::protocol::untimed_micros(offset, 10, self.baud))
     }
 

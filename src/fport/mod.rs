@@ -5,6 +5,7 @@
 mod args;
 mod decoder;
 pub mod detect;
+mod direct;
 pub mod frame;
 mod map;
 #[cfg(feature = "selfcheck")]

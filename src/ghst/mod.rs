@@ -5,6 +5,7 @@
 //! table and the units are in `docs/ghst.md`.
 
 mod args;
+mod direct;
 pub mod names;
 mod values;
 pub(crate) mod vocab;
@@ -15,6 +16,7 @@ mod tests;
 use crate::crsf::link::{Described, Dialect, LinkDecoder, Scratch};
 use crate::crsf::wire::{self, Event};
 use crate::protocol::{Decoder, Export, Front, InputKind, Line, Probe, Protocol, Variant};
+use crate::row::Latch;
 
 pub use crate::crsf::link::COLUMNS;
 pub use values::{aux_us, primary_us100};
@@ -113,6 +115,11 @@ impl Dialect for Ghst {
 
     fn type_name(addr: u8, ty: u8) -> Option<&'static str> {
         names::frame_type(addr, ty)
+    }
+
+    #[inline]
+    fn direct(&mut self, wire: &[u8], micros: u64, out: &mut Latch<'_>) -> Option<Option<u8>> {
+        direct::frame(wire, micros, out)
     }
 
     fn describe(&mut self, f: &Event<'_>, sc: &mut Scratch) -> Described {

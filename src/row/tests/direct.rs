@@ -86,7 +86,7 @@ fn every_protocol_on_the_fixtures_and_seeds() {
         let direct: u64 = inputs.iter().map(|f| check(protocol, f, true)).sum();
         if matches!(
             protocol.command,
-            "sport" | "sbus" | "futaba" | "crsf" | "sab2" | "ibus"
+            "sport" | "sbus" | "futaba" | "crsf" | "sab2" | "ibus" | "ghst" | "fport"
         ) {
             assert!(
                 direct > 1000,
@@ -109,6 +109,8 @@ fn the_fuzz_corpora() {
         ("fuzz/corpus/crsf", &crate::crsf::PROTOCOL),
         ("fuzz/corpus/sab", &crate::sab::PROTOCOL),
         ("fuzz/corpus/ibus", &crate::ibus::PROTOCOL),
+        ("fuzz/corpus/ghst", &crate::ghst::PROTOCOL),
+        ("fuzz/corpus/fport", &crate::fport::PROTOCOL),
     ];
     for (dir, protocol) in corpora {
         let direct: u64 = files(dir).iter().map(|f| check(protocol, f, false)).sum();

@@ -1,0 +1,287 @@
+//! The common F.Port rows written straight into the table ([`crate::row::direct`]): control
+//! frames of 16 channels (F.Port v1, and F.Port 2 / FBUS), and on an F.Port v1 line the
+//! receiver's null polls and the flight controller's data answers of the common S.Port
+//! sensors (plain scalars and GPS coordinates, as `busnoop sport` writes them straight), each
+//! with a good checksum, without an unusual escape or a pad byte. Every other row (and every
+//! row when the table lends no [`crate::row::Direct`]) goes through the mapper as a
+//! [`crate::row::Row`]; both give the same bytes (`testing::assert_direct_rows_match`).
+
+use super::Framing;
+use super::frame::{Check, Frame, Role};
+use super::map::{COLUMNS, Mapper, RECEIVER, V1_PHYS};
+use super::wire::{
+    self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, V1_CONTROL_LEN, V1_TELEMETRY_LEN,
+    V2_CHANNELS, V2_CONTROL_16,
+};
+use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
+use crate::sport::names;
+use crate::sport::values::{self, Common};
+
+/// What the row shows.
+#[derive(Clone, Copy)]
+enum What {
+    /// A control frame: its 16 channels, flags and RSSI.
+    Control([u16; 16], u8, u8),
+    /// The receiver's null poll.
+    Poll,
+    /// The flight controller's answer of a common sensor.
+    Data(u16, u32, Common),
+}
+
+struct FportRow {
+    what: What,
+}
+
+/// The channels' texts, made once: whole µs after a blank (the Data cell), exact µs (Value
+/// and parts), raw after a blank (the Note).
+struct Texts {
+    whole: Vec<&'static str>,
+    exact: Vec<&'static str>,
+    raw: Vec<&'static str>,
+}
+
+fn texts() -> &'static Texts {
+    static T: std::sync::OnceLock<Texts> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        let leak = |f: &dyn Fn(u16, &mut String)| -> Vec<&'static str> {
+            (0..2048u16)
+                .map(|r| {
+                    let mut s = String::new();
+                    f(r, &mut s);
+                    &*Box::leak(s.into_boxed_str())
+                })
+                .collect()
+        };
+        Texts {
+            whole: leak(&|r, s| {
+                s.push(' ');
+                crate::fmt::push_u64(s, (wire::micros_milli(r) / 1000) as u64);
+            }),
+            exact: leak(&|r, s| {
+                let (mut v, mut prec) = (wire::micros_milli(r), 3u8);
+                while prec > 0 && v % 10 == 0 {
+                    v /= 10;
+                    prec -= 1;
+                }
+                crate::fmt::push_fixed(s, v, prec);
+            }),
+            raw: leak(&|r, s| {
+                s.push(' ');
+                crate::fmt::push_u64(s, u64::from(r));
+            }),
+        }
+    })
+}
+
+const CH: [&str; 16] = [
+    "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11", "CH12", "CH13",
+    "CH14", "CH15", "CH16",
+];
+
+impl WriteRow for FportRow {
+    #[inline(always)]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        match self.what {
+            What::Control(ch, flags, rssi) => {
+                if c.stamp(1 << 31 | 1) {
+                    c.id(None);
+                    c.text(RECEIVER);
+                    c.text("Control");
+                    c.empty();
+                    c.text("Channels");
+                    c.stamp_end();
+                }
+                let t = texts();
+                c.begin();
+                c.str(&t.whole[usize::from(ch[0])][1..]);
+                for &r in &ch[1..8] {
+                    c.str(t.whole[usize::from(r)]);
+                }
+                c.str(" …");
+                c.end();
+                c.value_text(Some(t.exact[usize::from(ch[0])]));
+                c.text("µs");
+                c.text("Control");
+                c.begin();
+                if flags != 0 {
+                    c.str("flags 0x");
+                    c.hex2(flags);
+                    let names = [
+                        (FLAG_CH17, "CH17"),
+                        (FLAG_CH18, "CH18"),
+                        (FLAG_FRAME_LOST, "frame lost"),
+                        (FLAG_FAILSAFE, "failsafe"),
+                        (0xF0, "unknown bits"),
+                    ];
+                    let mut sep = ": ";
+                    for (mask, name) in names {
+                        if flags & mask != 0 {
+                            c.str(sep);
+                            c.str(name);
+                            sep = ", ";
+                        }
+                    }
+                    c.str("; ");
+                }
+                c.str("raw");
+                for &r in &ch {
+                    c.str(t.raw[usize::from(r)]);
+                }
+                c.end();
+                for (name, &r) in CH.iter().zip(&ch) {
+                    c.part_text(name, t.exact[usize::from(r)]);
+                }
+                let bit = |mask: u8| if flags & mask != 0 { "1" } else { "0" };
+                c.part_text("CH17", bit(FLAG_CH17));
+                c.part_text("CH18", bit(FLAG_CH18));
+                c.part_text("FrameLost", bit(FLAG_FRAME_LOST));
+                c.part_text("Failsafe", bit(FLAG_FAILSAFE));
+                c.part_text("RSSI", &t.raw[usize::from(rssi)][1..]);
+            }
+            What::Poll => {
+                if c.stamp(1 << 31 | 2) {
+                    c.id(Some(u32::from(V1_PHYS)));
+                    c.text(names::device(V1_PHYS));
+                    c.empty();
+                    c.empty();
+                    c.empty();
+                    c.stamp_end();
+                }
+                c.empty();
+                c.value(None);
+                c.empty();
+                c.text("Downlink");
+                c.empty();
+            }
+            What::Data(app_id, value, common) => {
+                let sensor = match common {
+                    Common::Scalar { sensor, .. } => sensor,
+                    _ => "GPS",
+                };
+                let gps_lon = matches!(common, Common::Gps) && value & 0x8000_0000 != 0;
+                let stamp = 1 << 30 | u32::from(app_id) << 1 | u32::from(gps_lon);
+                if c.stamp(stamp) {
+                    c.id(Some(u32::from(V1_PHYS)));
+                    c.text(names::device(V1_PHYS));
+                    c.text("Data");
+                    c.begin();
+                    c.str("0x");
+                    c.hex2((app_id >> 8) as u8);
+                    c.hex2(app_id as u8);
+                    c.end();
+                    c.text(sensor);
+                    c.stamp_end();
+                }
+                c.begin();
+                let (name, unit, m) = match common {
+                    Common::Scalar {
+                        name,
+                        unit,
+                        raw,
+                        prec,
+                        ..
+                    } => {
+                        let a = c.here();
+                        c.fixed(raw, prec);
+                        (name, unit, Mark::new(a, c.here()))
+                    }
+                    _ => {
+                        // As `sport::values::gps`.
+                        let e7 = (i64::from(value & 0x3FFF_FFFF) * 100 + 3) / 6;
+                        let v = if value & 0x4000_0000 != 0 { -e7 } else { e7 };
+                        c.str(if gps_lon { "lon=" } else { "lat=" });
+                        let a = c.here();
+                        c.fixed(v, 7);
+                        let name = if gps_lon { "Lon" } else { "Lat" };
+                        (name, "deg", Mark::new(a, c.here()))
+                    }
+                };
+                c.end();
+                c.value(Some(m));
+                c.text(unit);
+                c.text("Uplink");
+                c.empty();
+                c.part(name, m);
+            }
+        }
+    }
+}
+
+/// Writes the frame's row straight into the table when it is a common row and the table lends
+/// its output, keeping the statistics as the mapper does; `false` leaves the frame (and the
+/// statistics) to the mapper.
+#[inline]
+pub(super) fn frame(
+    map: &mut Mapper,
+    framing: Framing,
+    f: &Frame<'_>,
+    out: &mut Latch<'_>,
+) -> bool {
+    if f.check != Check::Ok || f.unusual_escape || f.pad || f.guessed {
+        return false;
+    }
+    let len = f.body[0];
+    let data = f.data();
+    let what = match (framing, f.role) {
+        (Framing::V1, Role::Control) if len == V1_CONTROL_LEN => control(data),
+        (Framing::V2, Role::Control) if len == V2_CONTROL_16 && f.kind() == Some(V2_CHANNELS) => {
+            control(data)
+        }
+        (Framing::V1, Role::Downlink) if len == V1_TELEMETRY_LEN && data == [0; 7] => {
+            Some(What::Poll)
+        }
+        (Framing::V1, Role::Uplink) if len == V1_TELEMETRY_LEN && data[0] == 0x10 => {
+            let app_id = u16::from_le_bytes([data[1], data[2]]);
+            let value = u32::from_le_bytes([data[3], data[4], data[5], data[6]]);
+            match values::common(V1_PHYS, app_id, value) {
+                Some(c @ (Common::Scalar { .. } | Common::Gps)) => {
+                    Some(What::Data(app_id, value, c))
+                }
+                _ => None,
+            }
+        }
+        _ => None,
+    };
+    let Some(what) = what else {
+        return false;
+    };
+    let Some(direct) = out.direct(COLUMNS) else {
+        return false;
+    };
+    let micros = map.micros(f.time, f.offset);
+    let st = &mut map.stats;
+    st.valid();
+    let mut class = Class::Plain;
+    match what {
+        What::Control(_, flags, rssi) => {
+            st.control[1] += 1;
+            st.rssi(rssi);
+            if flags & FLAG_FRAME_LOST != 0 {
+                st.frame_lost += 1;
+                class = Class::Warning;
+            }
+            if flags & FLAG_FAILSAFE != 0 {
+                st.failsafe += 1;
+                class = Class::Warning;
+            }
+        }
+        What::Poll => st.per[usize::from(V1_PHYS)].polls += 1,
+        What::Data(..) => {
+            let ps = &mut st.per[usize::from(V1_PHYS)];
+            ps.answers += 1;
+            ps.data += 1;
+        }
+    }
+    direct.row(Some(micros), class, f.raw, &FportRow { what });
+    true
+}
+
+/// A control frame's 16 channels, flags and RSSI.
+#[inline(always)]
+fn control(data: &[u8]) -> Option<What> {
+    let bytes = wire::channel_bytes(16);
+    let (&flags, &rssi) = (data.get(bytes)?, data.get(bytes + 1)?);
+    let mut ch = [0u16; 16];
+    wire::unpack_channels(&data[..bytes], &mut ch);
+    Some(What::Control(ch, flags, rssi))
+}
