@@ -26,58 +26,9 @@
 #define LOOK 160  // bytes a decision may need past its position: two frames and more
 static unsigned char ibuf[RD + LOOK + 64];
 
-// ---- text helpers (as sport_ref.c) ----------------------------------------------------------
+// ---- text helpers (ref_text.h, as sport_ref.c) ---------------------------------------------
 
-static inline int lead_digits(char *t, uint32_t v) {  // v < 10^8, without leading zeros
-    uint64_t d = eight_digits(v);
-    int lead = v ? __builtin_ctzll(d) / 8 : 7;
-    d = (d >> (lead * 8)) | ZEROS; memcpy(t, &d, 8);
-    return 8 - lead;
-}
-static inline int udigits(char *t, uint64_t v) {
-    if (v < 100000000) return lead_digits(t, (uint32_t)v);
-    uint64_t hi = v / 100000000, d;
-    int k;
-    if (hi < 100000000) k = lead_digits(t, (uint32_t)hi);
-    else {
-        k = lead_digits(t, (uint32_t)(hi / 100000000));
-        d = eight_digits((uint32_t)(hi % 100000000)) | ZEROS; memcpy(t + k, &d, 8); k += 8;
-    }
-    d = eight_digits((uint32_t)(v % 100000000)) | ZEROS; memcpy(t + k, &d, 8);
-    return k + 8;
-}
-static inline char *put_u64(char *w, uint64_t v) { return w + udigits(w, v); }
-static inline char *put_i64(char *w, int64_t v) {
-    if (v < 0) { *w++ = '-'; return put_u64(w, (uint64_t)0 - (uint64_t)v); }
-    return put_u64(w, (uint64_t)v);
-}
-// raw / 10^prec (prec <= 7), as busnoop's push_decimal (16.8, -0.1996, 0.5)
-static inline char *put_fixed(char *w, int64_t raw, int prec) {
-    uint64_t m = raw < 0 ? (uint64_t)0 - (uint64_t)raw : (uint64_t)raw;
-    if (raw < 0) *w++ = '-';
-    if (prec == 0) return put_u64(w, m);
-    char t[40];
-    int nd = udigits(t, m);
-    if (nd > prec) {
-        memcpy(w, t, 24); w += nd - prec;
-        *w = '.'; memcpy(w + 1, t + nd - prec, 8); return w + 1 + prec;
-    }
-    memcpy(w, "0.00000000", 10); w += 2 + prec - nd;
-    memcpy(w, t, 8); return w + nd;
-}
-#define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
-static inline char *put_cstr(char *w, const char *s) { size_t n = strlen(s); memcpy(w, s, n); return w + n; }
-static inline char *put_hex_bytes(char *w, const unsigned char *b, int n) {
-    for (int i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
-    return w;
-}
-static inline char *put_0x(char *w, unsigned b) { *w++ = '0'; *w++ = 'x'; *w++ = HEXU[(b >> 4) & 15]; *w++ = HEXU[b & 15]; return w; }
-// a copy of the text between a and b (at most 32 bytes), loads before stores
-static inline char *put_again(char *w, const char *a, const char *b) {
-    uint64_t x0, x1, x2, x3; memcpy(&x0, a, 8); memcpy(&x1, a + 8, 8); memcpy(&x2, a + 16, 8); memcpy(&x3, a + 24, 8);
-    memcpy(w, &x0, 8); memcpy(w + 8, &x1, 8); memcpy(w + 16, &x2, 8); memcpy(w + 24, &x3, 8);
-    return w + (b - a);
-}
+#include "ref_text.h"
 
 // ---- tables -------------------------------------------------------------------------------
 static unsigned char CRC[256];   // CRC-8/DVB-S2, polynomial 0xD5
@@ -130,69 +81,8 @@ static void init_tables(void) {
 }
 
 // ---- rows ---------------------------------------------------------------------------------
-static char ctr[48]; static int ctr_start = 31;  // the Counter, kept as text
-static uint64_t frames;                          // valid frames so far
-
-// Counter, Millis (of the byte at stream offset `off`, 420000 baud, 10 bits a byte)
-static inline char *row_start(uint64_t off) {
-    if (o - obuf >= HIGH) flush_out();
-    int i = 31;
-    while (ctr[i] == '9') ctr[i--] = '0';
-    ctr[i]++;
-    if (i < ctr_start) ctr_start = i;
-    char *w = o;
-    memcpy(w, ctr + ctr_start, 16); w += 32 - ctr_start;
-    *w++ = '\t';
-    w = put_u64(w, off * 10000000 / 420000 / 1000);
-    *w++ = '\t';
-    return w;
-}
-// ID and Device
-static inline char *put_addr(char *w, unsigned a) {
-    w = put_u64(w, a); *w++ = '\t';
-    w = put_cstr(w, DEVICE[a]); *w++ = '\t';
-    return w;
-}
-
-// the garbage run
-static unsigned char garb[64]; static int garb_len, garb_false, garb_before; static uint64_t garb_off;
-
-static void garbage_flush(void) {
-    if (!garb_len) return;
-    char *w = row_start(garb_off);
-    w = PUTS(w, "\t\tGarbage\t\t\t");
-    w = put_hex_bytes(w, garb, garb_len);
-    w = PUTS(w, "\t\t\t");
-    w = put_u64(w, (uint64_t)garb_len);
-    w = garb_len == 1 ? PUTS(w, " byte") : PUTS(w, " bytes");
-    w = garb_before ? PUTS(w, " before the first frame") : PUTS(w, " outside any frame");
-    if (garb_false) {
-        w = PUTS(w, "; "); w = put_u64(w, (uint64_t)garb_false);
-        w = garb_false == 1 ? PUTS(w, " false frame start (a frame began inside it)")
-                            : PUTS(w, " false frame starts (a frame began inside each)");
-    }
-    *w++ = '\n';
-    o = w; garb_len = 0; garb_false = 0;
-}
-static inline void garbage_byte(unsigned char b, uint64_t off) {
-    if (!garb_len) { garb_off = off; garb_before = frames == 0; }
-    garb[garb_len++] = b;
-    if (garb_len == 64) garbage_flush();
-}
-
-// a frame whose CRC failed, with no valid frame inside it
-static void bad_frame(const unsigned char *f, int len, uint64_t off, unsigned crc) {
-    garbage_flush();
-    char *w = row_start(off);
-    w = put_addr(w, f[0]);
-    w = PUTS(w, "BadCRC\t"); w = put_0x(w, f[2]); w = PUTS(w, "\t\t");
-    w = put_hex_bytes(w, f + 3, len - 4);
-    w = PUTS(w, "\t\t\tCRC "); w = put_0x(w, f[len - 1]); w = PUTS(w, ", expected "); w = put_0x(w, crc);
-    const char *name = type_name(f[0], f[2]);
-    if (name) { w = PUTS(w, " ("); w = put_cstr(w, name); w = PUTS(w, " frame)"); }
-    else w = PUTS(w, " (a frame of unknown type)");
-    *w++ = '\n'; o = w;
-}
+#define REF_NAME "ghst_ref"
+#include "crsf_frame.h"
 
 static inline unsigned le16(const unsigned char *p) { return (unsigned)(p[0] | p[1] << 8); }
 static inline int sle16(const unsigned char *p) { return (int16_t)(p[0] | p[1] << 8); }
@@ -274,78 +164,4 @@ static void frame_row(const unsigned char *f, int len, uint64_t off) {
         w = PUTS(w, "\t\t\t");
     }
     *w++ = '\n'; o = w;
-}
-
-// ---- reassembly ---------------------------------------------------------------------------
-static inline unsigned crc8(const unsigned char *b, int n) {
-    unsigned c = 0;
-    for (int i = 0; i < n; i++) c = CRC[c ^ b[i]];
-    return c;
-}
-// a valid frame starts at b[q] (with `avail` bytes there)
-static inline int valid_at(const unsigned char *b, size_t avail) {
-    if (avail < 2 || !ADDR[b[0]]) return 0;
-    unsigned len = b[1];
-    if (len < 2 || len > 62 || len + 2 > avail) return 0;
-    return crc8(b + 2, (int)len - 1) == b[len + 1];
-}
-
-int main(int argc, char **argv) {
-    if (argc < 2) { fprintf(stderr, "usage: ghst_ref FILE\n"); return 2; }
-    int fd = open(argv[1], O_RDONLY);
-    if (fd < 0) { perror(argv[1]); return 3; }
-    init_tables();
-    memset(ctr, '0', sizeof ctr);
-    o = PUTS(o, "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tNote\n");
-    size_t carry = 0;
-    uint64_t base = 0;  // stream offset of ibuf[0]
-    for (;;) {
-        ssize_t r = read(fd, ibuf + carry, RD);
-        if (r < 0) return 3;
-        int eof = r == 0;
-        size_t n = carry + (size_t)r, i = 0;
-        const unsigned char *b = ibuf;
-        size_t stop = eof ? n : (n > LOOK ? n - LOOK : 0);  // decide positions below it
-        while (i < stop) {
-            unsigned a = b[i];
-            if (!ADDR[a]) { garbage_byte((unsigned char)a, base + i); i++; continue; }
-            unsigned len = i + 1 < n ? b[i + 1] : 2;  // a lone address at the end: cut
-            if (len < 2 || len > 62) { garbage_byte((unsigned char)a, base + i); i++; continue; }
-            size_t end = i + len + 2;
-            if (end > n) {  // cut by the end of the input (eof): a truncated frame
-                int inside = 0;
-                for (size_t q = i + 1; q < n && !inside; q++) inside = valid_at(b + q, n - q);
-                if (inside) { garb_false++; garbage_byte((unsigned char)a, base + i); i++; continue; }
-                garbage_flush();
-                char *w = row_start(base + i);
-                w = put_addr(w, a); w = PUTS(w, "Truncated\t");
-                if (n - i >= 3) w = put_0x(w, b[i + 2]);
-                w = PUTS(w, "\t\t");
-                w = put_hex_bytes(w, b + i, (int)(n - i)); w = PUTS(w, "\t\t\t");
-                w = put_u64(w, n - i);
-                if (n - i >= 2) { w = PUTS(w, " of "); w = put_u64(w, len + 2); }
-                w = PUTS(w, " bytes, cut by the end of the input\n");
-                o = w; i = n; break;
-            }
-            unsigned c = crc8(b + i + 2, (int)len - 1);
-            if (c == b[end - 1]) { frame_row(b + i, (int)len + 2, base + i); i = end; continue; }
-            // a failed candidate: a false start when a valid frame starts inside it
-            int inside = 0;
-            for (size_t q = i + 1; q < end && !inside; q++) inside = valid_at(b + q, n - q);
-            if (inside) {
-                if (!garb_len) garb_false = 0;
-                garb_false++;
-                garbage_byte((unsigned char)a, base + i); i++; continue;
-            }
-            bad_frame(b + i, (int)len + 2, base + i, c);
-            i = end;
-        }
-        carry = n - i;
-        if (carry) memmove(ibuf, ibuf + i, carry);
-        base += i;
-        if (eof) break;
-    }
-    garbage_flush();
-    flush_out();
-    return 0;
 }
