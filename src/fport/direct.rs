@@ -155,7 +155,7 @@ impl WriteRow for FportRow {
             }
             What::Data(app_id, value, common) => {
                 let sensor = match common {
-                    Common::Scalar { sensor, .. } => sensor,
+                    Common::Scalar { s, .. } => s.label,
                     _ => "GPS",
                 };
                 let gps_lon = matches!(common, Common::Gps) && value & 0x8000_0000 != 0;
@@ -174,16 +174,10 @@ impl WriteRow for FportRow {
                 }
                 c.begin();
                 let (name, unit, m) = match common {
-                    Common::Scalar {
-                        name,
-                        unit,
-                        raw,
-                        prec,
-                        ..
-                    } => {
+                    Common::Scalar { s, raw, prec } => {
                         let a = c.here();
                         c.fixed(raw, prec);
-                        (name, unit, Mark::new(a, c.here()))
+                        (s.name, s.unit, Mark::new(a, c.here()))
                     }
                     _ => {
                         // As `sport::values::gps`.

@@ -60,8 +60,12 @@ impl<const N: usize> Text<N> {
         } else {
             (word, (word >> 56) as usize)
         };
-        let at = self.n.min(N - 8);
-        self.b[at..at + 8].copy_from_slice(&word.to_le_bytes());
+        // Nothing but the addition in the chain of positions from one number to the next
+        // (the check for room is a branch, not a clamp in the chain).
+        let at = self.n;
+        if let Some(room) = self.b.get_mut(at..at + 8) {
+            room.copy_from_slice(&word.to_le_bytes());
+        }
         self.n = at + len;
     }
 

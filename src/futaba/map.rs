@@ -122,11 +122,11 @@ impl Mapper {
             } => {
                 let micros = self.micros(time, offset);
                 if let Some(d) = out.direct(super::COLUMNS) {
-                    let (n, other) = self.slot_stats(bytes, group);
-                    super::direct::slot(d, micros, &bytes, n, other);
+                    let (n, other) = self.slot_stats(*bytes, group);
+                    super::direct::slot(d, micros, bytes, n, other);
                     return;
                 }
-                self.slot(micros, bytes, group, out)
+                self.slot(micros, *bytes, group, out)
             }
             Event::Broken {
                 offset,

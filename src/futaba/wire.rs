@@ -149,7 +149,9 @@ pub enum Event<'a> {
     Slot {
         offset: u64,
         time: Option<u64>,
-        bytes: [u8; SLOT_LEN],
+        /// Borrowed like a frame's: a copy of three single bytes, read back as a word by the
+        /// mapper, stalled the load (no store forwarding from narrower stores).
+        bytes: &'a [u8; SLOT_LEN],
         /// The group the frame before announced (0..=3).
         group: u8,
         /// Position in the group's run of answers (0..8).
@@ -278,10 +280,14 @@ fn run_on(
                 let (group, index) = slots.unwrap_or((0, 0));
                 let next = index + 1;
                 *slots = (next < SLOTS_PER_GROUP).then_some((group, next));
+                let slot: &[u8; SLOT_LEN] = match bytes.try_into() {
+                    Ok(b) => b,
+                    Err(_) => unreachable!("a slot step is 3 bytes"),
+                };
                 emit(Event::Slot {
                     offset,
                     time,
-                    bytes: [bytes[0], bytes[1], bytes[2]],
+                    bytes: slot,
                     group,
                     index,
                 });

@@ -53,7 +53,7 @@ impl WriteRow for SportRow {
                     c.hex2(app_id as u8);
                     c.end();
                     c.text(match common {
-                        Common::Scalar { sensor, .. } => sensor,
+                        Common::Scalar { s, .. } => s.label,
                         Common::Cells => "Cels",
                         Common::Gps => "GPS",
                     });
@@ -70,13 +70,8 @@ impl WriteRow for SportRow {
         };
         c.begin();
         match common {
-            Common::Scalar {
-                name,
-                unit,
-                raw,
-                prec,
-                ..
-            } => {
+            Common::Scalar { s, raw, prec } => {
+                let (name, unit) = (s.name, s.unit);
                 let a = c.here();
                 c.fixed(raw, prec);
                 let m = Mark::new(a, c.here());
@@ -186,14 +181,8 @@ pub(super) fn slot(map: &mut Mapper, s: &Slot, out: &mut Latch<'_>) -> bool {
     let ps = super::PhysStats::poll(&mut st.per, phys, micros);
     match what {
         What::Poll => {}
-        What::Null => {
-            ps.answers += 1;
-            ps.null += 1;
-        }
-        What::Data(..) => {
-            ps.answers += 1;
-            ps.data += 1;
-        }
+        What::Null => ps.null += 1,
+        What::Data(..) => ps.data += 1,
     }
     direct.row(
         Some(micros),

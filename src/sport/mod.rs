@@ -80,15 +80,14 @@ pub const COLUMNS: &[&str] = &["Unit", "Note"];
 #[derive(Clone, Debug, Default)]
 struct PhysStats {
     polls: u64,
-    answers: u64,
     null: u64,
     data: u64,
     other: u64,
     crc_errors: u64,
     truncated: u64,
-    last_poll: Option<u64>,
+    /// The time of the last poll (when `polls > 0`).
+    last_poll: u64,
     interval_sum: u64,
-    intervals: u64,
     interval_max: u64,
 }
 
@@ -112,15 +111,24 @@ impl PhysStats {
     #[inline]
     fn poll(per: &mut [PhysStats], phys: u8, micros: u64) -> &mut PhysStats {
         let ps = &mut per[usize::from(phys & 0x1F)];
-        ps.polls += 1;
-        if let Some(last) = ps.last_poll {
-            let d = micros.saturating_sub(last);
+        if ps.polls > 0 {
+            let d = micros.saturating_sub(ps.last_poll);
             ps.interval_sum += d;
-            ps.intervals += 1;
             ps.interval_max = ps.interval_max.max(d);
         }
-        ps.last_poll = Some(micros);
+        ps.polls += 1;
+        ps.last_poll = micros;
         ps
+    }
+
+    /// Frames the ID sent: each counts as exactly one of these.
+    fn answers(&self) -> u64 {
+        self.null + self.data + self.other + self.crc_errors
+    }
+
+    /// Intervals between its polls.
+    fn intervals(&self) -> u64 {
+        self.polls.saturating_sub(1)
     }
 }
 
@@ -232,6 +240,9 @@ impl Mapper {
         };
     }
 
+    /// A slot's row as a [`crate::row::Row`] (the rows [`direct::slot`] leaves): out of line,
+    /// so that the common rows' path does not pay for its registers and stack.
+    #[inline(never)]
     fn slot_row(&mut self, s: &Slot, out: &mut dyn RowOut) -> RowResult {
         let micros = s.time.unwrap_or(s.index * SLOT_MICROS);
         let phys = s.phys();
@@ -262,7 +273,6 @@ impl Mapper {
                 crate::row::kind::TRUNCATED
             }
             Body::Complete(b) => {
-                ps.answers += 1;
                 if st.last_body == Some(b) {
                     st.repeats += 1;
                 }
@@ -400,6 +410,7 @@ impl Mapper {
         })
     }
 
+    #[inline(never)]
     fn garbage_row(&mut self, g: &Garbage, out: &mut dyn RowOut) -> RowResult {
         let micros = g
             .time
@@ -632,7 +643,7 @@ impl Decoder for SportDecoder {
         let counts = |p: &PhysStats| {
             [
                 p.polls,
-                p.answers,
+                p.answers(),
                 p.null,
                 p.data,
                 p.other,
@@ -647,15 +658,17 @@ impl Decoder for SportDecoder {
                 continue;
             }
             total.polls += p.polls;
-            total.answers += p.answers;
             total.null += p.null;
             total.data += p.data;
             total.other += p.other;
             total.crc_errors += p.crc_errors;
             total.truncated += p.truncated;
-            let (mean, max) = if p.intervals > 0 {
+            let (mean, max) = if p.intervals() > 0 {
                 (
-                    format!("{:.1}", p.interval_sum as f64 / p.intervals as f64 / 1000.0),
+                    format!(
+                        "{:.1}",
+                        p.interval_sum as f64 / p.intervals() as f64 / 1000.0
+                    ),
                     format!("{:.1}", p.interval_max as f64 / 1000.0),
                 )
             } else {

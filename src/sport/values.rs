@@ -25,12 +25,12 @@ pub const FC_PHYS: u8 = 0x1B;
 
 /// The name EdgeTX gives a sensor in its logs and the wide export (`VFAS(V)`), where busnoop's
 /// `Sensor` column follows the S-Port_Snoop sample (`Volts`).
-fn log_name(label: &'static str) -> &'static str {
-    match label {
-        "Vario" => "VSpd",
-        "Amps" => "Curr",
-        "Volts" => "VFAS",
-        l => l,
+const fn log_name(label: &'static str) -> &'static str {
+    match label.as_bytes() {
+        b"Vario" => "VSpd",
+        b"Amps" => "Curr",
+        b"Volts" => "VFAS",
+        _ => label,
     }
 }
 
@@ -43,62 +43,115 @@ pub fn acc_prec(phys: u8) -> u8 {
 }
 
 /// What kind of value an app ID carries, for the scalar table.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 enum Sign {
     S32,
     U32,
 }
 
-/// A plain scalar sensor: label, unit, implied decimals, signedness.
-struct Scalar {
-    label: &'static str,
-    unit: &'static str,
+/// A plain scalar sensor: label, the name its number has in logs ([`log_name`]), unit,
+/// implied decimals, signedness.
+#[derive(Debug)]
+pub(crate) struct Scalar {
+    pub label: &'static str,
+    pub name: &'static str,
+    pub unit: &'static str,
     prec: u8,
     sign: Sign,
 }
 
-const fn sc(label: &'static str, unit: &'static str, prec: u8, sign: Sign) -> Scalar {
-    Scalar {
-        label,
-        unit,
-        prec,
-        sign,
+const fn sc(
+    base: u16,
+    label: &'static str,
+    unit: &'static str,
+    prec: u8,
+    sign: Sign,
+) -> (u16, Scalar) {
+    (
+        base,
+        Scalar {
+            label,
+            name: label,
+            unit,
+            prec,
+            sign,
+        },
+    )
+}
+
+/// Scalar sensors with the app ID of their first instance (the instance nibble cleared).
+static SCALARS: [(u16, Scalar); 27] = {
+    use Sign::*;
+    let mut t = [
+        sc(0x0100, "Alt", "m", 2, S32),
+        sc(0x0110, "Vario", "m/s", 2, S32),
+        sc(0x0200, "Amps", "A", 1, U32),
+        sc(0x0210, "Volts", "V", 2, U32),
+        sc(0x0400, "Tmp1", "degC", 0, S32),
+        sc(0x0410, "Tmp2", "degC", 0, S32),
+        sc(0x0500, "RPM", "rpm", 0, U32),
+        sc(0x0600, "Fuel", "%", 0, U32),
+        sc(0x0700, "AccX", "g", 3, S32),
+        sc(0x0710, "AccY", "g", 3, S32),
+        sc(0x0720, "AccZ", "g", 3, S32),
+        sc(0x0820, "GAlt", "m", 2, S32),
+        sc(0x0830, "GSpd", "kts", 3, U32),
+        sc(0x0840, "Hdg", "deg", 2, U32),
+        sc(0x0900, "A3", "V", 2, S32),
+        sc(0x0910, "A4", "V", 2, S32),
+        sc(0x0A00, "ASpd", "kts", 1, U32),
+        sc(0x0A10, "Fuel", "ml", 2, U32),
+        sc(0x0B40, "Chan", "", 0, U32),
+        sc(0x0D00, "GTp1", "degC", 0, S32),
+        sc(0x0D10, "GTp2", "degC", 0, S32),
+        sc(0x0D20, "GRPM", "rpm", 0, U32),
+        sc(0x0D30, "GRVl", "ml", 0, U32),
+        sc(0x0D40, "GRPc", "%", 0, U32),
+        sc(0x0D50, "GFlo", "ml/min", 0, U32),
+        sc(0x0D60, "GMFl", "ml/min", 0, U32),
+        sc(0x0D70, "GAFl", "ml/min", 0, U32),
+    ];
+    let mut i = 0;
+    while i < t.len() {
+        t[i].1.name = log_name(t[i].1.label);
+        i += 1;
     }
+    t
+};
+
+/// App IDs (instance nibble cleared) by `base >> 4` below this have a kind in [`KINDS`].
+const KINDS_LEN: usize = 0xE0;
+/// [`KINDS`]: no common sensor.
+const K_NONE: u8 = 0xFF;
+/// [`KINDS`]: FLVSS cells.
+const K_CELLS: u8 = 0xFE;
+/// [`KINDS`]: a GPS coordinate.
+const K_GPS: u8 = 0xFD;
+
+/// What an app ID (instance nibble cleared) carries, by `base >> 4`: the index of its scalar
+/// in [`SCALARS`], or [`K_CELLS`], [`K_GPS`], [`K_NONE`]. One load instead of a search.
+static KINDS: [u8; KINDS_LEN] = {
+    let mut k = [K_NONE; KINDS_LEN];
+    let mut i = 0;
+    while i < SCALARS.len() {
+        k[(SCALARS[i].0 >> 4) as usize] = i as u8;
+        i += 1;
+    }
+    k[0x030] = K_CELLS;
+    k[0x080] = K_GPS;
+    k
+};
+
+/// The kind of `base` (see [`KINDS`]).
+#[inline(always)]
+fn kind(base: u16) -> u8 {
+    KINDS.get(usize::from(base >> 4)).copied().unwrap_or(K_NONE)
 }
 
 /// Scalar sensors keyed by the app ID with its instance nibble cleared.
-fn scalar(base: u16) -> Option<Scalar> {
-    use Sign::*;
-    Some(match base {
-        0x0100 => sc("Alt", "m", 2, S32),
-        0x0110 => sc("Vario", "m/s", 2, S32),
-        0x0200 => sc("Amps", "A", 1, U32),
-        0x0210 => sc("Volts", "V", 2, U32),
-        0x0400 => sc("Tmp1", "degC", 0, S32),
-        0x0410 => sc("Tmp2", "degC", 0, S32),
-        0x0500 => sc("RPM", "rpm", 0, U32),
-        0x0600 => sc("Fuel", "%", 0, U32),
-        0x0700 => sc("AccX", "g", 3, S32),
-        0x0710 => sc("AccY", "g", 3, S32),
-        0x0720 => sc("AccZ", "g", 3, S32),
-        0x0820 => sc("GAlt", "m", 2, S32),
-        0x0830 => sc("GSpd", "kts", 3, U32),
-        0x0840 => sc("Hdg", "deg", 2, U32),
-        0x0900 => sc("A3", "V", 2, S32),
-        0x0910 => sc("A4", "V", 2, S32),
-        0x0A00 => sc("ASpd", "kts", 1, U32),
-        0x0A10 => sc("Fuel", "ml", 2, U32),
-        0x0B40 => sc("Chan", "", 0, U32),
-        0x0D00 => sc("GTp1", "degC", 0, S32),
-        0x0D10 => sc("GTp2", "degC", 0, S32),
-        0x0D20 => sc("GRPM", "rpm", 0, U32),
-        0x0D30 => sc("GRVl", "ml", 0, U32),
-        0x0D40 => sc("GRPc", "%", 0, U32),
-        0x0D50 => sc("GFlo", "ml/min", 0, U32),
-        0x0D60 => sc("GMFl", "ml/min", 0, U32),
-        0x0D70 => sc("GAFl", "ml/min", 0, U32),
-        _ => return None,
-    })
+#[inline]
+fn scalar(base: u16) -> Option<&'static Scalar> {
+    SCALARS.get(usize::from(kind(base))).map(|(_, s)| s)
 }
 
 /// A data frame's value as a table row shows the most common sensors, for rows written
@@ -108,7 +161,8 @@ fn scalar(base: u16) -> Option<Scalar> {
 #[inline]
 pub(crate) fn common(phys: u8, app_id: u16, value: u32) -> Option<Common> {
     let base = app_id & 0xFFF0;
-    if let Some(s) = scalar(base) {
+    let k = kind(base);
+    if let Some((_, s)) = SCALARS.get(usize::from(k)) {
         let raw = match s.sign {
             Sign::S32 => value as i32 as i64,
             Sign::U32 => value as i64,
@@ -118,17 +172,11 @@ pub(crate) fn common(phys: u8, app_id: u16, value: u32) -> Option<Common> {
         } else {
             s.prec
         };
-        return Some(Common::Scalar {
-            sensor: s.label,
-            name: log_name(s.label),
-            unit: s.unit,
-            raw,
-            prec,
-        });
+        return Some(Common::Scalar { s, raw, prec });
     }
-    match base {
-        0x0300 => Some(Common::Cells),
-        0x0800 => Some(Common::Gps),
+    match k {
+        K_CELLS => Some(Common::Cells),
+        K_GPS => Some(Common::Gps),
         _ => None,
     }
 }
@@ -137,9 +185,7 @@ pub(crate) fn common(phys: u8, app_id: u16, value: u32) -> Option<Common> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Common {
     Scalar {
-        sensor: &'static str,
-        name: &'static str,
-        unit: &'static str,
+        s: &'static Scalar,
         raw: i64,
         prec: u8,
     },
@@ -354,7 +400,7 @@ pub(crate) fn decode_row(
         } else {
             s.prec
         };
-        nums.fixed(log_name(s.label), s.unit, raw, prec);
+        nums.fixed(s.name, s.unit, raw, prec);
         return Decoded::value(s.unit, s.label);
     }
     if let Some(p) = pair(base) {
