@@ -16,7 +16,8 @@
 // detection would also read every byte with the SAB v1 reassembler). Not covered (busnoop has
 // them): SAB v1 framing, garbage, runts, aborts, overlong frames, unusual escapes, the input
 // ending inside a frame or a request, responses after the next request; they are left out of
-// the bench's capture.
+// the bench's capture. `sab1_ref.c` includes this file with SAB_V1 defined (the Framing
+// column, the framing note, the CRC-8 note) and brings its own reading loop, `reassemble`.
 //
 //   cc -O2 -march=x86-64-v2 -o sab_ref sab_ref.c
 //   ./sab_ref FILE > out.tsv
