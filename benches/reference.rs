@@ -268,6 +268,15 @@ fn cases(only: &[String]) -> Vec<Case> {
             size: mb << 20,
         },
         Spec {
+            name: "sab1",
+            c: "sab1_ref",
+            // Forced, as for SAB2: detection would also run the SAB2 reassembler.
+            args: &["sab", "--no-config", "--framing", "sync"],
+            file: format!("ref-sab1-{mb}mib.bin"),
+            make: sab::sab1,
+            size: mb << 20,
+        },
+        Spec {
             name: "modbus",
             c: "modbus_ref",
             args: &["modbus", "--no-config"],

@@ -16,7 +16,8 @@
 // detection would also read every byte with the SAB v1 reassembler). Not covered (busnoop has
 // them): SAB v1 framing, garbage, runts, aborts, overlong frames, unusual escapes, the input
 // ending inside a frame or a request, responses after the next request; they are left out of
-// the bench's capture.
+// the bench's capture. `sab1_ref.c` includes this file with SAB_V1 defined (the Framing
+// column, the framing note, the CRC-8 note) and brings its own reading loop, `reassemble`.
 //
 //   cc -O2 -march=x86-64-v2 -o sab_ref sab_ref.c
 //   ./sab_ref FILE > out.tsv
@@ -99,7 +100,13 @@ static Open op;
 // ---- rows ---------------------------------------------------------------------------------
 static char ctr[48]; static int ctr_start = 31;  // the Counter, kept as text (digits ctr[start..32))
 static int framing_note = 1;                     // said on the first row
+#ifdef SAB_V1
+#define FRAMING_COL "sync"
+#define FRAMING_NOTE "framing sync: SAB v1 framing (0x54 SYNC, LENGTH, CRC-8/MAXIM-DOW), forced by --framing"
+#else
+#define FRAMING_COL "hdlc"
 #define FRAMING_NOTE "framing hdlc: SAB2 framing (0x7E flags, byte stuffing, CRC-16/MODBUS), forced by --framing"
+#endif
 
 static inline char *row_start(uint64_t ns) {
     if (o - obuf >= HIGH) flush_out();
@@ -159,7 +166,7 @@ static void timeout_row(const Open *r, uint64_t at, int next_request, uint64_t w
     w = ident(w, r->addr, TYPES[4], 7, r->cmd);
     w = PUTS(w, "\t\t\t");  // Data, Value, Unit
     w = put_0x(w, r->addr);
-    w = PUTS(w, "\t\thdlc\t");
+    w = PUTS(w, "\t\t" FRAMING_COL "\t");
     int notes = 0;
     w = note_start(w, &notes);
     if (next_request) {
@@ -214,7 +221,7 @@ static inline void frame(const unsigned char *body, size_t n, uint64_t start, ui
     *w++ = '\t';  // Unit
     w = put_0x(w, addr); *w++ = '\t';
     if (paired) w = put_ms3(w, micros);
-    w = PUTS(w, "\thdlc\t");
+    w = PUTS(w, "\t" FRAMING_COL "\t");
     int notes = 0;
     if (flags == 1) { w = note_start(w, &notes); w = PUTS(w, "reserved flag bits 01 (never sent by modm; handled as a request)"); }
     if (flags == 2) {
@@ -241,7 +248,9 @@ static inline void frame(const unsigned char *body, size_t n, uint64_t start, ui
     o = row_end(w, notes);
 }
 
-static void bad_crc(const unsigned char *body, size_t n, unsigned received, unsigned computed, uint64_t start) {
+// A bad frame: body = header, command, payload (CRC removed); `with_sync`: the CRC matches when
+// SYNC is covered too (SAB v1)
+static void bad_crc(const unsigned char *body, size_t n, unsigned received, unsigned computed, int with_sync, uint64_t start) {
 #ifdef DECODE_ONLY
     extern uint64_t sink_sum; sink_sum += received + computed; return;
 #endif
@@ -251,13 +260,18 @@ static void bad_crc(const unsigned char *body, size_t n, unsigned received, unsi
     w = data_value(w, body + 2, n - 2, 0);
     *w++ = '\t';
     w = put_0x(w, addr);
-    w = PUTS(w, "\t\thdlc\t");
+    w = PUTS(w, "\t\t" FRAMING_COL "\t");
     int notes = 0;
     w = note_start(w, &notes);
+#ifdef SAB_V1
+    w = PUTS(w, "CRC-8 "); w = put_0x(w, received); w = PUTS(w, ", expected "); w = put_0x(w, computed);
+#else
     w = PUTS(w, "CRC-16 "); w = put_0x16(w, received); w = PUTS(w, ", expected "); w = put_0x16(w, computed);
+#endif
     w = PUTS(w, "; read as ");
     static const unsigned char TLEN[4] = {7, 8, 4, 3};
     memcpy(w, TYPES[flags], 8); w += TLEN[flags];
+    if (with_sync) w = PUTS(w, "; the CRC matches if SYNC is covered too (not modm's rule)");
     o = row_end(w, notes);
 }
 
@@ -265,6 +279,17 @@ static void bad_crc(const unsigned char *body, size_t n, unsigned received, unsi
 uint64_t sink_sum;
 static inline uint64_t ns_at(uint64_t pos) { return pos * 10000000000ull / 115200; }
 
+// Before every event starting at `start`: a request's deadline that passed, its Timeout row
+static inline void deadline(uint64_t start) {
+    if (op.open && !op.reported && (op.answers == 0 || op.late) && start > op.time + TIMEOUT_NS) {
+        op.reported = 1;
+        timeout_row(&op, op.time + TIMEOUT_NS, 0, TIMEOUT_NS);
+    }
+}
+
+#ifdef SAB_V1
+static void reassemble(int fd);  // sab1_ref.c: the SAB v1 framing
+#else
 // The run between two flags (none in it): [open, close) of the stream, `run` its wire bytes
 static inline void run_between(const unsigned char *run, size_t len, uint64_t open_pos) {
     if (len == 0) return;  // back-to-back flags
@@ -288,36 +313,27 @@ static inline void run_between(const unsigned char *run, size_t len, uint64_t op
     }
     if (n < 4 || n > 259) { fprintf(stderr, "runt/overlong frame: not covered\n"); exit(4); }
     uint64_t start = ns_at(open_pos);
-    // a request's deadline that passed before this frame: its Timeout row first
-    if (op.open && !op.reported && (op.answers == 0 || op.late) && start > op.time + TIMEOUT_NS) {
-        op.reported = 1;
-        timeout_row(&op, op.time + TIMEOUT_NS, 0, TIMEOUT_NS);
-    }
+    deadline(start);
     unsigned received = (unsigned)body[n - 2] | (unsigned)body[n - 1] << 8, computed = crc16(body, n - 2);
     if (received == computed) frame(body, n - 2, start, ns_at(open_pos + len + 2));
-    else bad_crc(body, n - 2, received, computed, start);
+    else bad_crc(body, n - 2, received, computed, 0, start);
 }
 
-int main(int argc, char **argv) {
-    if (argc < 2) { fprintf(stderr, "usage: sab_ref FILE\n"); return 2; }
-    int fd = open(argv[1], O_RDONLY);
-    if (fd < 0) { perror(argv[1]); return 3; }
-    init_tables();
-    memset(ctr, '0', sizeof ctr);
-    o = PUTS(o, "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tAddr\tResp ms\tFraming\tNote\n");
+// Reads the capture and hands every run between two flags to run_between
+static void reassemble(int fd) {
     size_t carry = 0;     // bytes from the last opening flag on, kept for the next read
     uint64_t base = 0;    // stream position of ibuf[0]
     int seen_flag = 0;
     for (;;) {
         ssize_t r = read(fd, ibuf + carry, RD);
-        if (r < 0) return 3;
+        if (r < 0) exit(3);
         if (r == 0) break;
         size_t n = carry + (size_t)r;
         const unsigned char *b = ibuf, *end = ibuf + n;
         const unsigned char *f = b;
         if (!seen_flag) {
             f = memchr(b, 0x7E, n);
-            if (f != b) { fprintf(stderr, "garbage before the first flag: not covered\n"); return 4; }
+            if (f != b) { fprintf(stderr, "garbage before the first flag: not covered\n"); exit(4); }
             seen_flag = 1;
         }
         // f points at an opening flag
@@ -328,11 +344,22 @@ int main(int argc, char **argv) {
             f = g;
         }
         carry = (size_t)(end - f);
-        if (carry > CARRY_MAX) { fprintf(stderr, "run too long: not covered\n"); return 4; }
+        if (carry > CARRY_MAX) { fprintf(stderr, "run too long: not covered\n"); exit(4); }
         memmove(ibuf, f, carry);
         base += (uint64_t)(f - b);
     }
-    if (carry > 1) { fprintf(stderr, "input ends inside a frame: not covered\n"); return 4; }
+    if (carry > 1) { fprintf(stderr, "input ends inside a frame: not covered\n"); exit(4); }
+}
+#endif  // SAB_V1
+
+int main(int argc, char **argv) {
+    if (argc < 2) { fprintf(stderr, "usage: %s FILE\n", argv[0]); return 2; }
+    int fd = open(argv[1], O_RDONLY);
+    if (fd < 0) { perror(argv[1]); return 3; }
+    init_tables();
+    memset(ctr, '0', sizeof ctr);
+    o = PUTS(o, "Counter\tMillis\tID\tDevice\tType\tSensor #\tSensor\tData\tValue\tUnit\tAddr\tResp ms\tFraming\tNote\n");
+    reassemble(fd);
     // the end of the capture: a request still waiting is not covered
     if (op.open && op.answers == 0 && !op.reported) { fprintf(stderr, "a request open at the end: not covered\n"); return 4; }
 #ifdef DECODE_ONLY

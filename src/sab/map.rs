@@ -449,7 +449,12 @@ impl Mapper {
     pub(super) fn nanos_at(&self, pos: u64) -> u64 {
         const NS_PER_BIT_BYTE: u64 = BITS_PER_BYTE * 1_000_000_000;
         match pos.checked_mul(NS_PER_BIT_BYTE) {
-            // The same quotient in 64 bits (the usual case: below 1.8 GB into the stream).
+            // The same quotient in 64 bits (the usual case: below 1.8 GB into the stream);
+            // SAB's own baud rate as a constant divisor (a multiplication, not a division:
+            // two per frame).
+            Some(n) if self.baud == super::config::DEFAULT_BAUD => {
+                n / super::config::DEFAULT_BAUD as u64
+            }
             Some(n) => n / self.baud as u64,
             None => {
                 let ns = pos as u128 * NS_PER_BIT_BYTE as u128 / self.baud as u128;

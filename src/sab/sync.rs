@@ -111,9 +111,28 @@ fn check_bytes(bytes: &[u8]) -> Check {
     }
 }
 
-/// The end of the frame at the start of `bytes` when it is complete there and valid.
+/// CRC-8/MAXIM-DOW a byte at a time ([`CRC8`]'s table), for [`valid_frame`]'s fused loop.
+static CRC8_TABLE: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u8;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 { (c >> 1) ^ 0x8C } else { c >> 1 };
+            k += 1;
+        }
+        t[i] = c;
+        i += 1;
+    }
+    t
+};
+
+/// The end of the frame at the start of `bytes` when it is complete there and valid, and
+/// whether a 0x54 stands in it after its SYNC (only then can a frame start inside it, which
+/// [`overlap`] weighs): one pass computes both.
 #[inline]
-fn valid_frame(bytes: &[u8]) -> Option<usize> {
+fn valid_frame(bytes: &[u8]) -> Option<(usize, bool)> {
     let (&SYNC, rest) = bytes.split_first()? else {
         return None;
     };
@@ -123,7 +142,13 @@ fn valid_frame(bytes: &[u8]) -> Option<usize> {
     }
     let end = length + OVERHEAD;
     let frame = bytes.get(..end)?;
-    (crc8(&frame[1..end - 1]) == frame[end - 1]).then_some(end)
+    let (covered, crc) = (&frame[1..end - 1], frame[end - 1]);
+    let (mut c, mut sync) = (0u8, crc == SYNC);
+    for &b in covered {
+        c = CRC8_TABLE[(c ^ b) as usize];
+        sync |= b == SYNC;
+    }
+    (c == crc).then_some((end, sync))
 }
 
 /// For a valid frame ending at `end` at the start of `bytes`: whether it stands (rule 1 of
@@ -330,8 +355,14 @@ impl Reassembler {
                     i += n;
                     continue;
                 }
-                if let Some(end) = valid_frame(rest) {
-                    match overlap(rest, end, false) {
+                if let Some((end, inner_sync)) = valid_frame(rest) {
+                    let stands = if inner_sync {
+                        overlap(rest, end, false)
+                    } else {
+                        // No 0x54 inside: no frame starts in it, it stands.
+                        Some(None)
+                    };
+                    match stands {
                         Some(None) => {
                             self.emit_in_place(&rest[..end], time, emit);
                             i += end;
