@@ -11,21 +11,22 @@ use super::frame::{Check, Frame, Role};
 use super::map::{COLUMNS, Mapper, RECEIVER, V1_PHYS};
 use super::wire::{
     self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, V1_CONTROL_LEN, V1_TELEMETRY_LEN,
-    V2_CHANNELS, V2_CONTROL_16,
+    V2_CHANNELS, V2_CONTROL_16, V2_TELEMETRY_LEN,
 };
 use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
 use crate::sport::names;
 use crate::sport::values::{self, Common};
+use crate::sport::wire::header_ok;
 
 /// What the row shows.
 #[derive(Clone, Copy)]
 enum What {
     /// A control frame: its 16 channels, flags and RSSI.
     Control([u16; 16], u8, u8),
-    /// The receiver's null poll.
-    Poll,
-    /// The flight controller's answer of a common sensor.
-    Data(u16, u32, Common),
+    /// The receiver's null poll of a physical ID.
+    Poll(u8),
+    /// A device's answer (physical ID) of a common sensor.
+    Data(u8, u16, u32, Common),
 }
 
 struct FportRow {
@@ -35,9 +36,51 @@ struct FportRow {
 /// The channels' texts, made once: whole µs after a blank (the Data cell), exact µs (Value
 /// and parts), raw after a blank (the Note).
 struct Texts {
-    whole: Vec<&'static str>,
+    whole: Vec<Short>,
     exact: Vec<&'static str>,
     raw: Vec<&'static str>,
+    raw8: Vec<Short>,
+}
+
+/// A text of at most 8 ASCII bytes, padded, and its length: copied with one fixed-size copy.
+#[derive(Clone, Copy)]
+struct Short([u8; 8], usize);
+
+impl Short {
+    fn of(s: &str) -> Short {
+        let mut b = [b' '; 8];
+        b[..s.len()].copy_from_slice(s.as_bytes());
+        Short(b, s.len())
+    }
+}
+
+/// Texts of short pieces put together on the stack, then written as one.
+struct Joined<const N: usize> {
+    buf: [u8; N],
+    len: usize,
+}
+
+impl<const N: usize> Joined<N> {
+    fn new() -> Self {
+        Joined {
+            buf: [b' '; N],
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, s: Short) {
+        if let Some(room) = self.buf.get_mut(self.len..self.len + 8) {
+            room.copy_from_slice(&s.0);
+            self.len += s.1;
+        }
+    }
+
+    /// The text from byte `from` on (ASCII only: never fails).
+    #[inline(always)]
+    fn text(&self, from: usize) -> &str {
+        std::str::from_utf8(self.buf.get(from..self.len).unwrap_or_default()).unwrap_or_default()
+    }
 }
 
 fn texts() -> &'static Texts {
@@ -52,11 +95,18 @@ fn texts() -> &'static Texts {
                 })
                 .collect()
         };
+        let raw = leak(&|r, s| {
+            s.push(' ');
+            crate::fmt::push_u64(s, u64::from(r));
+        });
         Texts {
             whole: leak(&|r, s| {
                 s.push(' ');
                 crate::fmt::push_u64(s, (wire::micros_milli(r) / 1000) as u64);
-            }),
+            })
+            .into_iter()
+            .map(Short::of)
+            .collect(),
             exact: leak(&|r, s| {
                 let (mut v, mut prec) = (wire::micros_milli(r), 3u8);
                 while prec > 0 && v % 10 == 0 {
@@ -65,10 +115,8 @@ fn texts() -> &'static Texts {
                 }
                 crate::fmt::push_fixed(s, v, prec);
             }),
-            raw: leak(&|r, s| {
-                s.push(' ');
-                crate::fmt::push_u64(s, u64::from(r));
-            }),
+            raw8: raw.iter().map(|s| Short::of(s)).collect(),
+            raw,
         }
     })
 }
@@ -92,11 +140,12 @@ impl WriteRow for FportRow {
                     c.stamp_end();
                 }
                 let t = texts();
-                c.begin();
-                c.str(&t.whole[usize::from(ch[0])][1..]);
-                for &r in &ch[1..8] {
-                    c.str(t.whole[usize::from(r)]);
+                let mut data = Joined::<48>::new();
+                for &r in &ch[..8] {
+                    data.push(t.whole[usize::from(r)]);
                 }
+                c.begin();
+                c.str(data.text(1));
                 c.str(" …");
                 c.end();
                 c.value_text(Some(t.exact[usize::from(ch[0])]));
@@ -123,10 +172,12 @@ impl WriteRow for FportRow {
                     }
                     c.str("; ");
                 }
-                c.str("raw");
+                let mut raw = Joined::<96>::new();
+                raw.push(Short::of("raw"));
                 for &r in &ch {
-                    c.str(t.raw[usize::from(r)]);
+                    raw.push(t.raw8[usize::from(r)]);
                 }
+                c.str(raw.text(0));
                 c.end();
                 for (name, &r) in CH.iter().zip(&ch) {
                     c.part_text(name, t.exact[usize::from(r)]);
@@ -138,10 +189,10 @@ impl WriteRow for FportRow {
                 c.part_text("Failsafe", bit(FLAG_FAILSAFE));
                 c.part_text("RSSI", &t.raw[usize::from(rssi)][1..]);
             }
-            What::Poll => {
-                if c.stamp(1 << 31 | 2) {
-                    c.id(Some(u32::from(V1_PHYS)));
-                    c.text(names::device(V1_PHYS));
+            What::Poll(phys) => {
+                if c.stamp(1 << 31 | 2 | u32::from(phys) << 8) {
+                    c.id(Some(u32::from(phys)));
+                    c.text(names::device(phys));
                     c.empty();
                     c.empty();
                     c.empty();
@@ -153,16 +204,17 @@ impl WriteRow for FportRow {
                 c.text("Downlink");
                 c.empty();
             }
-            What::Data(app_id, value, common) => {
+            What::Data(phys, app_id, value, common) => {
                 let sensor = match common {
                     Common::Scalar { sensor, .. } => sensor,
                     _ => "GPS",
                 };
                 let gps_lon = matches!(common, Common::Gps) && value & 0x8000_0000 != 0;
-                let stamp = 1 << 30 | u32::from(app_id) << 1 | u32::from(gps_lon);
+                let stamp =
+                    1 << 30 | u32::from(phys) << 17 | u32::from(app_id) << 1 | u32::from(gps_lon);
                 if c.stamp(stamp) {
-                    c.id(Some(u32::from(V1_PHYS)));
-                    c.text(names::device(V1_PHYS));
+                    c.id(Some(u32::from(phys)));
+                    c.text(names::device(phys));
                     c.text("Data");
                     c.begin();
                     c.str("0x");
@@ -228,15 +280,19 @@ pub(super) fn frame(
             control(data)
         }
         (Framing::V1, Role::Downlink) if len == V1_TELEMETRY_LEN && data == [0; 7] => {
-            Some(What::Poll)
+            Some(What::Poll(V1_PHYS))
         }
         (Framing::V1, Role::Uplink) if len == V1_TELEMETRY_LEN && data[0] == 0x10 => {
-            let app_id = u16::from_le_bytes([data[1], data[2]]);
-            let value = u32::from_le_bytes([data[3], data[4], data[5], data[6]]);
-            match values::common(V1_PHYS, app_id, value) {
-                Some(c @ (Common::Scalar { .. } | Common::Gps)) => {
-                    Some(What::Data(app_id, value, c))
-                }
+            answer(V1_PHYS, data)
+        }
+        // F.Port 2: the physical ID byte with valid check bits (as `busnoop sport`).
+        (Framing::V2, Role::Downlink | Role::Uplink)
+            if len == V2_TELEMETRY_LEN && f.kind().is_some_and(header_ok) =>
+        {
+            let phys = f.body[1] & 0x1F;
+            match (f.role, data) {
+                (Role::Downlink, [0, 0, 0, 0, 0, 0, 0]) => Some(What::Poll(phys)),
+                (Role::Uplink, [0x10, ..]) => answer(phys, data),
                 _ => None,
             }
         }
@@ -265,9 +321,9 @@ pub(super) fn frame(
                 class = Class::Warning;
             }
         }
-        What::Poll => st.per[usize::from(V1_PHYS)].polls += 1,
-        What::Data(..) => {
-            let ps = &mut st.per[usize::from(V1_PHYS)];
+        What::Poll(phys) => st.per[usize::from(phys)].polls += 1,
+        What::Data(phys, ..) => {
+            let ps = &mut st.per[usize::from(phys)];
             ps.answers += 1;
             ps.data += 1;
         }
@@ -276,12 +332,30 @@ pub(super) fn frame(
     true
 }
 
+/// A data answer (`data`: the S.Port payload `10 [app ID] [value]`) of a common sensor.
+#[inline(always)]
+fn answer(phys: u8, data: &[u8]) -> Option<What> {
+    let app_id = u16::from_le_bytes([*data.get(1)?, *data.get(2)?]);
+    let value = u32::from_le_bytes(data.get(3..7)?.try_into().ok()?);
+    match values::common(phys, app_id, value) {
+        Some(c @ (Common::Scalar { .. } | Common::Gps)) => Some(What::Data(phys, app_id, value, c)),
+        _ => None,
+    }
+}
+
 /// A control frame's 16 channels, flags and RSSI.
 #[inline(always)]
 fn control(data: &[u8]) -> Option<What> {
-    let bytes = wire::channel_bytes(16);
-    let (&flags, &rssi) = (data.get(bytes)?, data.get(bytes + 1)?);
-    let mut ch = [0u16; 16];
-    wire::unpack_channels(&data[..bytes], &mut ch);
+    const BYTES: usize = wire::channel_bytes(16);
+    let (&flags, &rssi) = (data.get(BYTES)?, data.get(BYTES + 1)?);
+    // As `wire::unpack_channels`, for a fixed count: the 22 bytes padded to 24, each channel
+    // from three bytes at a place known when compiled (no bounds checks, unrolled).
+    let mut p = [0u8; BYTES + 2];
+    p[..BYTES].copy_from_slice(data.get(..BYTES)?);
+    let ch: [u16; 16] = std::array::from_fn(|i| {
+        let (byte, shift) = (i * 11 / 8, i * 11 % 8);
+        let word = u32::from_le_bytes([p[byte], p[byte + 1], p[byte + 2], 0]);
+        ((word >> shift) & 0x7FF) as u16
+    });
     Some(What::Control(ch, flags, rssi))
 }
