@@ -14,9 +14,10 @@
 // (12 columns: Counter, Millis, ID, Device, Type, Sensor #, Sensor, Data, Value, Unit, Frame,
 // Note) through a 64 KiB output buffer; Millis is the byte offset's time at 115200 baud 8N1.
 // For a capture of those frames the output is byte-identical to busnoop's (with the framing
-// busnoop detects). Not covered (busnoop has them): F.Port 2 / FBUS (fport2_ref.c), other S.Port frames and
-// sensors, MSP requests, frames cut short, unusual escapes and ArduPilot's pad byte: these
-// fall back to a generic row, so their cells differ from busnoop's, not their cost.
+// busnoop detects). Not covered (busnoop has them): F.Port 2 / FBUS (fport2_ref.c), other
+// S.Port frames and sensors, MSP requests, frames cut short, unusual escapes and ArduPilot's
+// pad byte: these fall back to a generic row, so their cells differ from busnoop's, not their
+// cost. The tables and the control and data cells are in fport_rows.h (shared with F.Port 2).
 //
 //   cc -O2 -march=x86-64-v2 -o fport_ref fport_ref.c
 //   ./fport_ref FILE > out.tsv

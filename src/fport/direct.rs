@@ -36,51 +36,9 @@ struct FportRow {
 /// The channels' texts, made once: whole µs after a blank (the Data cell), exact µs (Value
 /// and parts), raw after a blank (the Note).
 struct Texts {
-    whole: Vec<Short>,
+    whole: Vec<&'static str>,
     exact: Vec<&'static str>,
     raw: Vec<&'static str>,
-    raw8: Vec<Short>,
-}
-
-/// A text of at most 8 ASCII bytes, padded, and its length: copied with one fixed-size copy.
-#[derive(Clone, Copy)]
-struct Short([u8; 8], usize);
-
-impl Short {
-    fn of(s: &str) -> Short {
-        let mut b = [b' '; 8];
-        b[..s.len()].copy_from_slice(s.as_bytes());
-        Short(b, s.len())
-    }
-}
-
-/// Texts of short pieces put together on the stack, then written as one.
-struct Joined<const N: usize> {
-    buf: [u8; N],
-    len: usize,
-}
-
-impl<const N: usize> Joined<N> {
-    fn new() -> Self {
-        Joined {
-            buf: [b' '; N],
-            len: 0,
-        }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, s: Short) {
-        if let Some(room) = self.buf.get_mut(self.len..self.len + 8) {
-            room.copy_from_slice(&s.0);
-            self.len += s.1;
-        }
-    }
-
-    /// The text from byte `from` on (ASCII only: never fails).
-    #[inline(always)]
-    fn text(&self, from: usize) -> &str {
-        std::str::from_utf8(self.buf.get(from..self.len).unwrap_or_default()).unwrap_or_default()
-    }
 }
 
 fn texts() -> &'static Texts {
@@ -95,18 +53,11 @@ fn texts() -> &'static Texts {
                 })
                 .collect()
         };
-        let raw = leak(&|r, s| {
-            s.push(' ');
-            crate::fmt::push_u64(s, u64::from(r));
-        });
         Texts {
             whole: leak(&|r, s| {
                 s.push(' ');
                 crate::fmt::push_u64(s, (wire::micros_milli(r) / 1000) as u64);
-            })
-            .into_iter()
-            .map(Short::of)
-            .collect(),
+            }),
             exact: leak(&|r, s| {
                 let (mut v, mut prec) = (wire::micros_milli(r), 3u8);
                 while prec > 0 && v % 10 == 0 {
@@ -115,8 +66,10 @@ fn texts() -> &'static Texts {
                 }
                 crate::fmt::push_fixed(s, v, prec);
             }),
-            raw8: raw.iter().map(|s| Short::of(s)).collect(),
-            raw,
+            raw: leak(&|r, s| {
+                s.push(' ');
+                crate::fmt::push_u64(s, u64::from(r));
+            }),
         }
     })
 }
@@ -140,12 +93,11 @@ impl WriteRow for FportRow {
                     c.stamp_end();
                 }
                 let t = texts();
-                let mut data = Joined::<48>::new();
-                for &r in &ch[..8] {
-                    data.push(t.whole[usize::from(r)]);
-                }
                 c.begin();
-                c.str(data.text(1));
+                c.str(&t.whole[usize::from(ch[0])][1..]);
+                for &r in &ch[1..8] {
+                    c.str(t.whole[usize::from(r)]);
+                }
                 c.str(" …");
                 c.end();
                 c.value_text(Some(t.exact[usize::from(ch[0])]));
@@ -172,12 +124,10 @@ impl WriteRow for FportRow {
                     }
                     c.str("; ");
                 }
-                let mut raw = Joined::<96>::new();
-                raw.push(Short::of("raw"));
+                c.str("raw");
                 for &r in &ch {
-                    raw.push(t.raw8[usize::from(r)]);
+                    c.str(t.raw[usize::from(r)]);
                 }
-                c.str(raw.text(0));
                 c.end();
                 for (name, &r) in CH.iter().zip(&ch) {
                     c.part_text(name, t.exact[usize::from(r)]);
@@ -352,10 +302,11 @@ fn control(data: &[u8]) -> Option<What> {
     // from three bytes at a place known when compiled (no bounds checks, unrolled).
     let mut p = [0u8; BYTES + 2];
     p[..BYTES].copy_from_slice(data.get(..BYTES)?);
-    let ch: [u16; 16] = std::array::from_fn(|i| {
+    let mut ch = [0u16; 16];
+    for (i, c) in ch.iter_mut().enumerate() {
         let (byte, shift) = (i * 11 / 8, i * 11 % 8);
         let word = u32::from_le_bytes([p[byte], p[byte + 1], p[byte + 2], 0]);
-        ((word >> shift) & 0x7FF) as u16
-    });
+        *c = ((word >> shift) & 0x7FF) as u16;
+    }
     Some(What::Control(ch, flags, rssi))
 }
