@@ -38,6 +38,8 @@ mod common;
 mod crsf;
 #[path = "reference/fport.rs"]
 mod fport;
+#[path = "reference/fport2.rs"]
+mod fport2;
 #[path = "reference/futaba.rs"]
 mod futaba;
 #[path = "reference/ghst.rs"]
@@ -208,6 +210,7 @@ fn cases(only: &[String]) -> Vec<Case> {
     let exchanges = env("BUSNOOP_BENCH_EXCHANGES", 600_000);
     let ghst_frames = env("BUSNOOP_BENCH_GHST_FRAMES", 1_200_000);
     let fport_frames = env("BUSNOOP_BENCH_FPORT_FRAMES", 500_000);
+    let fport2_frames = env("BUSNOOP_BENCH_FPORT2_FRAMES", 500_000);
     let table = [
         Spec {
             name: "sport",
@@ -299,6 +302,14 @@ fn cases(only: &[String]) -> Vec<Case> {
             file: format!("ref-fport-{fport_frames}.bin"),
             make: fport::fport,
             size: fport_frames,
+        },
+        Spec {
+            name: "fport2",
+            c: "fport2_ref",
+            args: &["fport", "--no-config"],
+            file: format!("ref-fport2-{fport2_frames}.bin"),
+            make: fport2::fport2,
+            size: fport2_frames,
         },
     ];
     let dir = common::data_dir();

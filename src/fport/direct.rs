@@ -11,21 +11,22 @@ use super::frame::{Check, Frame, Role};
 use super::map::{COLUMNS, Mapper, RECEIVER, V1_PHYS};
 use super::wire::{
     self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, V1_CONTROL_LEN, V1_TELEMETRY_LEN,
-    V2_CHANNELS, V2_CONTROL_16,
+    V2_CHANNELS, V2_CONTROL_16, V2_TELEMETRY_LEN,
 };
 use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
 use crate::sport::names;
 use crate::sport::values::{self, Common};
+use crate::sport::wire::header_ok;
 
 /// What the row shows.
 #[derive(Clone, Copy)]
 enum What {
     /// A control frame: its 16 channels, flags and RSSI.
     Control([u16; 16], u8, u8),
-    /// The receiver's null poll.
-    Poll,
-    /// The flight controller's answer of a common sensor.
-    Data(u16, u32, Common),
+    /// The receiver's null poll of a physical ID.
+    Poll(u8),
+    /// A device's answer (physical ID) of a common sensor.
+    Data(u8, u16, u32, Common),
 }
 
 struct FportRow {
@@ -138,10 +139,10 @@ impl WriteRow for FportRow {
                 c.part_text("Failsafe", bit(FLAG_FAILSAFE));
                 c.part_text("RSSI", &t.raw[usize::from(rssi)][1..]);
             }
-            What::Poll => {
-                if c.stamp(1 << 31 | 2) {
-                    c.id(Some(u32::from(V1_PHYS)));
-                    c.text(names::device(V1_PHYS));
+            What::Poll(phys) => {
+                if c.stamp(1 << 31 | 2 | u32::from(phys) << 8) {
+                    c.id(Some(u32::from(phys)));
+                    c.text(names::device(phys));
                     c.empty();
                     c.empty();
                     c.empty();
@@ -153,16 +154,17 @@ impl WriteRow for FportRow {
                 c.text("Downlink");
                 c.empty();
             }
-            What::Data(app_id, value, common) => {
+            What::Data(phys, app_id, value, common) => {
                 let sensor = match common {
                     Common::Scalar { s, .. } => s.label,
                     _ => "GPS",
                 };
                 let gps_lon = matches!(common, Common::Gps) && value & 0x8000_0000 != 0;
-                let stamp = 1 << 30 | u32::from(app_id) << 1 | u32::from(gps_lon);
+                let stamp =
+                    1 << 30 | u32::from(phys) << 17 | u32::from(app_id) << 1 | u32::from(gps_lon);
                 if c.stamp(stamp) {
-                    c.id(Some(u32::from(V1_PHYS)));
-                    c.text(names::device(V1_PHYS));
+                    c.id(Some(u32::from(phys)));
+                    c.text(names::device(phys));
                     c.text("Data");
                     c.begin();
                     c.str("0x");
@@ -222,15 +224,19 @@ pub(super) fn frame(
             control(data)
         }
         (Framing::V1, Role::Downlink) if len == V1_TELEMETRY_LEN && data == [0; 7] => {
-            Some(What::Poll)
+            Some(What::Poll(V1_PHYS))
         }
         (Framing::V1, Role::Uplink) if len == V1_TELEMETRY_LEN && data[0] == 0x10 => {
-            let app_id = u16::from_le_bytes([data[1], data[2]]);
-            let value = u32::from_le_bytes([data[3], data[4], data[5], data[6]]);
-            match values::common(V1_PHYS, app_id, value) {
-                Some(c @ (Common::Scalar { .. } | Common::Gps)) => {
-                    Some(What::Data(app_id, value, c))
-                }
+            answer(V1_PHYS, data)
+        }
+        // F.Port 2: the physical ID byte with valid check bits (as `busnoop sport`).
+        (Framing::V2, Role::Downlink | Role::Uplink)
+            if len == V2_TELEMETRY_LEN && f.kind().is_some_and(header_ok) =>
+        {
+            let phys = f.body[1] & 0x1F;
+            match (f.role, data) {
+                (Role::Downlink, [0, 0, 0, 0, 0, 0, 0]) => Some(What::Poll(phys)),
+                (Role::Uplink, [0x10, ..]) => answer(phys, data),
                 _ => None,
             }
         }
@@ -259,9 +265,9 @@ pub(super) fn frame(
                 class = Class::Warning;
             }
         }
-        What::Poll => st.per[usize::from(V1_PHYS)].polls += 1,
-        What::Data(..) => {
-            let ps = &mut st.per[usize::from(V1_PHYS)];
+        What::Poll(phys) => st.per[usize::from(phys)].polls += 1,
+        What::Data(phys, ..) => {
+            let ps = &mut st.per[usize::from(phys)];
             ps.answers += 1;
             ps.data += 1;
         }
@@ -270,12 +276,31 @@ pub(super) fn frame(
     true
 }
 
+/// A data answer (`data`: the S.Port payload `10 [app ID] [value]`) of a common sensor.
+#[inline(always)]
+fn answer(phys: u8, data: &[u8]) -> Option<What> {
+    let app_id = u16::from_le_bytes([*data.get(1)?, *data.get(2)?]);
+    let value = u32::from_le_bytes(data.get(3..7)?.try_into().ok()?);
+    match values::common(phys, app_id, value) {
+        Some(c @ (Common::Scalar { .. } | Common::Gps)) => Some(What::Data(phys, app_id, value, c)),
+        _ => None,
+    }
+}
+
 /// A control frame's 16 channels, flags and RSSI.
 #[inline(always)]
 fn control(data: &[u8]) -> Option<What> {
-    let bytes = wire::channel_bytes(16);
-    let (&flags, &rssi) = (data.get(bytes)?, data.get(bytes + 1)?);
+    const BYTES: usize = wire::channel_bytes(16);
+    let (&flags, &rssi) = (data.get(BYTES)?, data.get(BYTES + 1)?);
+    // As `wire::unpack_channels`, for a fixed count: the 22 bytes padded to 24, each channel
+    // from three bytes at a place known when compiled (no bounds checks, unrolled).
+    let mut p = [0u8; BYTES + 2];
+    p[..BYTES].copy_from_slice(data.get(..BYTES)?);
     let mut ch = [0u16; 16];
-    wire::unpack_channels(&data[..bytes], &mut ch);
+    for (i, c) in ch.iter_mut().enumerate() {
+        let (byte, shift) = (i * 11 / 8, i * 11 % 8);
+        let word = u32::from_le_bytes([p[byte], p[byte + 1], p[byte + 2], 0]);
+        *c = ((word >> shift) & 0x7FF) as u16;
+    }
     Some(What::Control(ch, flags, rssi))
 }
