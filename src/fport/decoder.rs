@@ -3,7 +3,8 @@
 
 use super::detect::{self, HOLD_BYTES, HOLD_MICROS};
 use super::frame::Event;
-use super::map::{COLUMNS, Mapper};
+use super::map::Mapper;
+use super::table::COLUMNS;
 use super::v1::V1;
 use super::v2::V2;
 use super::{Framing, Options, Variant};

@@ -8,7 +8,8 @@
 
 use super::Framing;
 use super::frame::{Check, Frame, Role};
-use super::map::{COLUMNS, Mapper, RECEIVER, V1_PHYS};
+use super::stats::Stats;
+use super::table::{self, COLUMNS, RECEIVER, V1_PHYS};
 use super::wire::{
     self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, V1_CONTROL_LEN, V1_TELEMETRY_LEN,
     V2_CHANNELS, V2_CONTROL_16, V2_TELEMETRY_LEN,
@@ -208,7 +209,8 @@ impl WriteRow for FportRow {
 /// statistics) to the mapper.
 #[inline]
 pub(super) fn frame(
-    map: &mut Mapper,
+    stats: &mut Stats,
+    baud: u32,
     framing: Framing,
     f: &Frame<'_>,
     out: &mut Latch<'_>,
@@ -248,8 +250,8 @@ pub(super) fn frame(
     let Some(direct) = out.direct(COLUMNS) else {
         return false;
     };
-    let micros = map.micros(f.time, f.offset);
-    let st = &mut map.stats;
+    let micros = table::micros(f.time, f.offset, baud);
+    let st = stats;
     st.valid();
     let mut class = Class::Plain;
     match what {

@@ -5,6 +5,7 @@
 use super::Framing;
 use super::frame::{Check, Event, Frame, Garbage, Role};
 use super::stats::Stats;
+use super::table::{RECEIVER, V1_PHYS, V1_REQUEST_PHYS};
 use super::wire::{
     self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, OTA_DATA, OTA_START, OTA_STOP,
     PAYLOAD_LEN, V1_CONTROL_LEN, V1_TELEMETRY_LEN, V2_CONTROL_8, V2_CONTROL_16, V2_CONTROL_24,
@@ -14,18 +15,6 @@ use crate::fmt::{push_0x, push_hex, push_u64};
 use crate::numbers::{Numbers, push_uint};
 use crate::row::{Class, Latch, Parts, Row, RowOut, RowResult, kind};
 use crate::sport::{names, values::SportNumbers};
-
-/// Extra columns after the eight base columns.
-pub const COLUMNS: &[&str] = &["Unit", "Frame", "Note"];
-
-/// The Device column of the receiver's control frames.
-pub const RECEIVER: &str = "Receiver";
-/// The physical ID F.Port v1 telemetry is shown with: the flight controller's (Betaflight's
-/// FSSP_SENSOR_ID1 0x1B), the only device an F.Port v1 line has.
-pub const V1_PHYS: u8 = 27;
-/// The physical ID of MSP requests in S.Port (the radio's uplink ID 0x0D); F.Port v1 carries
-/// none, so read and write requests are shown with it.
-pub const V1_REQUEST_PHYS: u8 = 13;
 
 /// Channels shown in the Data cell of a control row (in whole µs); the rest follow as `…`.
 const DATA_CHANNELS: usize = 8;
@@ -107,7 +96,7 @@ impl Mapper {
         }
         let _ = match ev {
             Event::Frame(f) => {
-                if super::direct::frame(self, framing, &f, out) {
+                if super::direct::frame(&mut self.stats, self.baud, framing, &f, out) {
                     return;
                 }
                 self.frame(framing, &f, out)
@@ -118,7 +107,7 @@ impl Mapper {
 
     /// Time of a row: the source's, or 10 bits per byte at the line's speed.
     pub(super) fn micros(&self, time: Option<u64>, offset: u64) -> u64 {
-        time.unwrap_or_else(|| crate::protocol::untimed_micros(offset, 10, self.baud))
+        super::table::micros(time, offset, self.baud)
     }
 
     fn frame(&mut self, framing: Framing, f: &Frame<'_>, out: &mut dyn RowOut) -> RowResult {

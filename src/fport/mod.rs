@@ -11,14 +11,15 @@ mod map;
 #[cfg(feature = "selfcheck")]
 pub mod selfcheck;
 mod stats;
+mod table;
 pub mod v1;
 pub mod v2;
 pub(crate) mod vocab;
 pub mod wire;
 
 pub use decoder::{FportDecoder, Reason};
-pub use map::{COLUMNS, RECEIVER, V1_PHYS, V1_REQUEST_PHYS};
 pub use stats::{PhysStats, Stats};
+pub use table::{COLUMNS, RECEIVER, V1_PHYS, V1_REQUEST_PHYS};
 
 use crate::protocol::{Decoder, Front, InputKind, Line, Probe, Protocol};
 
