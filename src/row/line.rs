@@ -486,7 +486,7 @@ impl W<'_> {
         self.json_member_slow(pre, name, a, b);
     }
 
-    /// A member of `parts` from its kept key ([`PartKeys::get`], `k` bytes long: `,"name":`)
+    /// A member of `parts` from its kept key ([`super::part_keys::PartKeys::get`], `k` bytes long: `,"name":`)
     /// and the line's own bytes `a..b` (a number written before in the line): after
     /// `,"parts":{` instead of the key's comma when `first`. As [`W::json_member_within`]
     /// writes it; usually one bounds check and fixed-size copies.
@@ -665,91 +665,6 @@ impl W<'_> {
     }
 }
 
-/// JSON Lines: the keys of `parts`' members (`,"CH1":`), each written once per name and kept
-/// in a table of [`PartKeys::SLOTS`] places, found by the name's address and checked against
-/// the name's bytes (so a name is found only when it is the same text). A name whose place is
-/// taken by another is written again when it comes. Only names of 1 to [`PartKeys::NAME`]
-/// bytes with nothing to escape are kept; the rest are written piece by piece.
-pub(crate) struct PartKeys {
-    slots: Box<[KeySlot]>,
-}
-
-#[derive(Clone, Copy, Default)]
-struct KeySlot {
-    /// The name's bytes as [`name_words`] gives them, and its length (0: empty).
-    words: (u64, u64),
-    len: usize,
-    /// `,"name":`, padded with zeros.
-    key: [u8; 16],
-}
-
-/// A name of 1 to 12 bytes in two words that tell every such name of its length apart (each
-/// byte is in them, some twice): `None` for another length.
-#[inline(always)]
-fn name_words(s: &[u8]) -> Option<(u64, u64)> {
-    let n = s.len();
-    let load8 = |i: usize| u64::from_le_bytes(s[i..i + 8].try_into().unwrap_or([0; 8]));
-    let load4 = |i: usize| u32::from_le_bytes(s[i..i + 4].try_into().unwrap_or([0; 4]));
-    match n {
-        1..=3 => Some((
-            s[0] as u64 | (s[n / 2] as u64) << 8 | (s[n - 1] as u64) << 16,
-            0,
-        )),
-        4..=7 => Some((load4(0) as u64 | (load4(n - 4) as u64) << 32, 0)),
-        8..=PartKeys::NAME => Some((load8(0), load8(n - 8))),
-        _ => None,
-    }
-}
-
-impl PartKeys {
-    const SLOTS: usize = 256;
-    /// The longest name kept: its key fills the 16 bytes.
-    pub(crate) const NAME: usize = 12;
-
-    pub(crate) fn new() -> Self {
-        PartKeys {
-            slots: vec![KeySlot::default(); Self::SLOTS].into_boxed_slice(),
-        }
-    }
-
-    /// The key of `name` (`,"name":`, `name.len() + 4` bytes of the 16), when it is kept or
-    /// can be.
-    #[inline(always)]
-    pub(crate) fn get(&mut self, name: &str) -> Option<&[u8; 16]> {
-        let nb = name.as_bytes();
-        let words = name_words(nb)?;
-        let p = nb.as_ptr() as usize;
-        let h = (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) % Self::SLOTS;
-        let hit = self
-            .slots
-            .get(h)
-            .is_some_and(|s| s.words == words && s.len == nb.len());
-        if hit {
-            return self.slots.get(h).map(|s| &s.key);
-        }
-        self.fill(h, nb, words)
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn fill(&mut self, h: usize, nb: &[u8], words: (u64, u64)) -> Option<&[u8; 16]> {
-        if nb.is_empty() || nb.len() > Self::NAME || scan(nb, json_escape) != 0 {
-            return None;
-        }
-        let slot = self.slots.get_mut(h)?;
-        let mut key = [0u8; 16];
-        key[..2].copy_from_slice(b",\"");
-        key[2..2 + nb.len()].copy_from_slice(nb);
-        key[2 + nb.len()..4 + nb.len()].copy_from_slice(b"\":");
-        *slot = KeySlot {
-            words,
-            len: nb.len(),
-            key,
-        };
-        Some(&slot.key)
-    }
-}
-
 /// Copies `src` (at most 16 bytes) to the start of `dst` (at least as long) and returns
 /// `test` ORed over words that cover it (as [`scan`]), from the same loads that copy it.
 #[inline(always)]
@@ -899,6 +814,7 @@ pub(crate) fn is_json_number(s: &[u8]) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::part_keys::PartKeys;
     use super::*;
 
     /// Every length up to 40 and every position of a marked byte: the word tests agree with

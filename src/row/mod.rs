@@ -7,6 +7,7 @@
 
 pub mod direct;
 pub(crate) mod line;
+pub(crate) mod part_keys;
 pub(crate) mod pretty;
 pub(crate) mod spans;
 pub mod text;

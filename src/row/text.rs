@@ -110,7 +110,7 @@ pub struct Text {
     /// cells are numbers.
     pub(crate) json_keys: Vec<(Vec<u8>, bool)>,
     /// JSON Lines: the keys of `parts`' members, written once per name.
-    pub(crate) part_keys: super::line::PartKeys,
+    pub(crate) part_keys: super::part_keys::PartKeys,
     /// The cells ID to Sensor as written, per [`super::Row::stamp`].
     pub(crate) spans: Spans,
     /// A cell written again (quoted, escaped) keeps its first text here.
@@ -140,7 +140,7 @@ impl Text {
                 .iter()
                 .map(|name| (json_key(name), NUMERIC_EXTRA.contains(name)))
                 .collect(),
-            part_keys: super::line::PartKeys::new(),
+            part_keys: super::part_keys::PartKeys::new(),
             spans: Spans::new(),
             scratch: Vec::new(),
             check: Vec::new(),
