@@ -5,7 +5,7 @@ mod common;
 use assert_cmd::Command;
 use common::fixture;
 
-/// Where the legend starts: the data are left of it (src/plot.rs, `WIDTH - LEGEND`).
+/// Where the legend starts: the data are left of it (src/plot/mod.rs, `WIDTH - LEGEND`).
 const LEGEND_X: f64 = 960.0;
 
 /// The value of attribute `name` in the tag `tag`.

@@ -9,7 +9,7 @@
 //! number; its moment is a red vertical line in every panel.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use plotters::prelude::*;
 
@@ -17,9 +17,16 @@ use crate::exit::Failure;
 use crate::row::{Class, Row};
 use crate::time::Anchor;
 
+mod image;
+mod thin;
+
+pub use image::check;
+use image::{IMAGE_NAMES, ImageFormat, png, write_image};
+use thin::Thinned;
+
 /// The DejaVu Sans font (Bitstream Vera licence, assets/DejaVuSans-LICENSE.txt) for the PNG's
 /// text: the bitmap backend draws with it, without any font of the system.
-const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+const FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 /// A moment of `--from`/`--to`: seconds since the capture's start, or a wall-clock time of day
 /// (for sources that have one).
@@ -92,202 +99,6 @@ pub struct PlotSpec {
     pub to: Option<When>,
 }
 
-/// The image formats `busnoop plot` writes, by the file's extension (any case).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum ImageFormat {
-    Svg,
-    Png,
-}
-
-impl ImageFormat {
-    fn of(path: &Path) -> Option<ImageFormat> {
-        let ext = path.extension()?.to_str()?;
-        if ext.eq_ignore_ascii_case("svg") {
-            Some(ImageFormat::Svg)
-        } else if ext.eq_ignore_ascii_case("png") {
-            Some(ImageFormat::Png)
-        } else {
-            None
-        }
-    }
-}
-
-const IMAGE_NAMES: &str = "plot writes .svg or .png: name the file FLIGHT.svg or FLIGHT.png";
-
-/// Checks the image's name before the capture is read: the image is drawn only at the end, and
-/// finding then that it cannot be would waste the whole input (a pipe cannot be read twice). A
-/// name without `.svg`/`.png` is a usage error (exit 2). Its folder is checked with the other
-/// outputs' before the input is opened (`cli::run_capture`).
-pub fn check(path: &Path) -> Result<(), Failure> {
-    if ImageFormat::of(path).is_none() {
-        return Err(Failure::Usage(format!(
-            "-o {}: {IMAGE_NAMES}",
-            path.display()
-        )));
-    }
-    // The image goes to a temporary file beside it, renamed over it at the end: the folder must
-    // take a new file, and an image already there must be writable (a FIFO, a device: written
-    // directly). Found only after decoding, the whole input was wasted.
-    if special(path) {
-        return Ok(());
-    }
-    let cannot =
-        |e: std::io::Error| Failure::Output(format!("cannot create {}: {e}", path.display()));
-    if std::fs::symlink_metadata(path).is_ok() {
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(path)
-            .map_err(cannot)?;
-    }
-    let (probe, _) = temporary(path).map_err(cannot)?;
-    let _ = std::fs::remove_file(probe);
-    Ok(())
-}
-
-/// A FIFO, a device or another file that is not a regular file (or a link to one): written
-/// directly, never replaced.
-fn special(path: &Path) -> bool {
-    std::fs::metadata(path).is_ok_and(|m| !m.is_file())
-}
-
-/// A new file beside `path` for the image (`.NAME.busnoop-PID-N.tmp`), created exclusively;
-/// renamed over `path` once whole.
-fn temporary(path: &Path) -> std::io::Result<(PathBuf, std::fs::File)> {
-    use std::os::unix::fs::OpenOptionsExt;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .map_or_else(|| "plot".into(), |n| n.to_string_lossy().into_owned());
-    let mut n = 0u32;
-    loop {
-        let tmp = dir.join(format!(".{name}.busnoop-{}-{n}.tmp", std::process::id()));
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .mode(0o644)
-            .open(&tmp)
-        {
-            Ok(f) => return Ok((tmp, f)),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 1000 => n += 1,
-            Err(e) => return Err(e),
-        }
-    }
-}
-
-/// Writes the finished image to `path`: a regular file (or a new name) through a temporary file
-/// beside it, renamed over it, so that a full disk or a kill leaves the old image whole and no
-/// cut one; a FIFO or device directly, opened so that SIGINT/SIGTERM end the wait for a FIFO's
-/// reader ([`crate::files::create_file`]).
-fn write_image(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
-    use std::io::Write;
-    let failed =
-        |e: std::io::Error| Failure::Output(format!("cannot write {}: {e}", path.display()));
-    if special(path) {
-        let mut f = crate::files::create_file(path)
-            .map_err(|e| Failure::from_create(&format!("cannot create {}", path.display()), &e))?;
-        return f.write_all(bytes).map_err(failed);
-    }
-    let (tmp, mut f) = temporary(path)
-        .map_err(|e| Failure::Output(format!("cannot create {}: {e}", path.display())))?;
-    let written = f
-        .write_all(bytes)
-        .and_then(|()| f.sync_all())
-        .and_then(|()| std::fs::rename(&tmp, path));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(failed(e));
-    }
-    Ok(())
-}
-
-/// The most points a series keeps, and the most broken-frame marks: the image is 1000 pixels
-/// wide, so a plot of more says nothing more.
-const MAX_POINTS: usize = 16_384;
-
-/// Cells of time a full [`Thinned`] is cut into: four per pixel of the 1000-pixel-wide image.
-const CELLS: f64 = (MAX_POINTS / 4) as f64;
-
-/// Points (time, value) of a growing sequence, at most [`MAX_POINTS`], thinned by time so that
-/// the picture stays the same: when full, the span so far is cut into [`CELLS`] equal cells,
-/// and each run of points in one cell keeps its lowest and its highest point, in their order.
-/// A one-sample spike or dip and a lone mark survive however long the capture (dropping every
-/// other point would lose them half the time or more). Without a bound, memory grew with the
-/// capture, and a noisy one drew an SVG of gigabytes (a red line per broken frame). Broken
-/// frames' marks are kept with the value 0: one mark per cell.
-#[derive(Debug, Default)]
-struct Thinned {
-    kept: Vec<(f64, f64)>,
-}
-
-impl Thinned {
-    fn push(&mut self, t: f64, v: f64) {
-        self.kept.push((t, v));
-        if self.kept.len() >= MAX_POINTS {
-            self.thin();
-        }
-    }
-
-    /// Keeps each cell's extremes; when the times are too far out of order for runs in one
-    /// cell to form (a clock jumping back and forth), every other point, so that the bound
-    /// holds whatever the input.
-    fn thin(&mut self) {
-        let kept = &self.kept;
-        let (first, last) = kept
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.0), b.max(p.0))
-            });
-        let width = (last - first) / CELLS;
-        // `as` saturates: a width of 0 puts every point in cell 0.
-        let cell = |t: f64| {
-            if width > 0.0 {
-                ((t - first) / width) as u64
-            } else {
-                0
-            }
-        };
-        let mut out = Vec::with_capacity(MAX_POINTS);
-        let mut i = 0;
-        while i < kept.len() {
-            let c = cell(kept[i].0);
-            let (mut lo, mut hi, mut j) = (i, i, i + 1);
-            while j < kept.len() && cell(kept[j].0) == c {
-                if kept[j].1 < kept[lo].1 {
-                    lo = j;
-                }
-                if kept[j].1 > kept[hi].1 {
-                    hi = j;
-                }
-                j += 1;
-            }
-            out.push(kept[lo.min(hi)]);
-            if lo != hi {
-                out.push(kept[lo.max(hi)]);
-            }
-            i = j;
-        }
-        if out.len() > MAX_POINTS / 2 + 2 {
-            let mut keep = false;
-            out.retain(|_| {
-                keep = !keep;
-                keep
-            });
-        }
-        self.kept = out;
-    }
-
-    fn is_empty(&self) -> bool {
-        self.kept.is_empty()
-    }
-
-    fn iter(&self) -> std::slice::Iter<'_, (f64, f64)> {
-        self.kept.iter()
-    }
-}
-
 /// One series: its label, unit and points (seconds, value).
 #[derive(Debug, Default)]
 struct Series {
@@ -340,7 +151,7 @@ const TITLE_FONT: u32 = 22;
 const MARKERS_MAX: usize = 400;
 
 /// The most series a plot draws: 64 lines are already more than a reader tells apart, and
-/// each series keeps up to [`MAX_POINTS`] points. Without a bound, a crafted capture of
+/// each series keeps up to [`MAX_POINTS`](thin::MAX_POINTS) points. Without a bound, a crafted capture of
 /// thousands of numbers took a minute (a linear search per number) and drew an SVG of tens of
 /// megabytes.
 pub const MAX_SERIES: usize = 64;
@@ -826,18 +637,6 @@ fn number(v: f64, step: f64) -> String {
     s
 }
 
-/// A PNG of an RGB image of `size` pixels.
-fn png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, png::EncodingError> {
-    let mut out = Vec::new();
-    let mut e = png::Encoder::new(&mut out, size.0, size.1);
-    e.set_color(png::ColorType::Rgb);
-    e.set_depth(png::BitDepth::Eight);
-    let mut w = e.write_header()?;
-    w.write_image_data(rgb)?;
-    w.finish()?;
-    Ok(out)
-}
-
 /// One panel: its unit and its series.
 struct Panel<'a> {
     unit: String,
@@ -903,6 +702,7 @@ fn panels<'a>(chosen: &'a [(String, &'a Series)]) -> Vec<Panel<'a>> {
 
 #[cfg(test)]
 mod tests {
+    use super::thin::MAX_POINTS;
     use super::*;
 
     #[test]
