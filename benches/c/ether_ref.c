@@ -25,59 +25,8 @@
 #define MAXREC (256 * 1024)
 static unsigned char ibuf[RD + MAXREC + 64];
 
-// ---- text helpers (as in sport_ref.c) -----------------------------------------------------
-static inline int lead_digits(char *t, uint32_t v) {
-    uint64_t d = eight_digits(v);
-    int lead = v ? __builtin_ctzll(d) / 8 : 7;
-    d = (d >> (lead * 8)) | ZEROS; memcpy(t, &d, 8);
-    return 8 - lead;
-}
-static inline int udigits(char *t, uint64_t v) {
-    if (v < 100000000) return lead_digits(t, (uint32_t)v);
-    uint64_t hi = v / 100000000, d;
-    int k;
-    if (hi < 100000000) k = lead_digits(t, (uint32_t)hi);
-    else {
-        k = lead_digits(t, (uint32_t)(hi / 100000000));
-        d = eight_digits((uint32_t)(hi % 100000000)) | ZEROS; memcpy(t + k, &d, 8); k += 8;
-    }
-    d = eight_digits((uint32_t)(v % 100000000)) | ZEROS; memcpy(t + k, &d, 8);
-    return k + 8;
-}
-static inline char *put_u64(char *w, uint64_t v) { return w + udigits(w, v); }
-static inline char *put_i32(char *w, int32_t v) {
-    if (v < 0) { *w++ = '-'; return put_u64(w, (uint64_t)0 - (uint64_t)(int64_t)v); }
-    return put_u64(w, (uint64_t)v);
-}
-#define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
-static inline char *put_hex_bytes(char *w, const unsigned char *b, size_t n) {
-    for (size_t i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
-    return w;
-}
-static inline uint16_t be16(const unsigned char *p) { return (uint16_t)(p[0] << 8 | p[1]); }
-static inline uint32_t be32(const unsigned char *p) { return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]; }
-
-// ---- CRC-16/XMODEM, slice-by-8 --------------------------------------------------------------
-static uint16_t T[8][256];
-static void crc_init(void) {
-    for (int i = 0; i < 256; i++) {
-        uint16_t c = (uint16_t)(i << 8);
-        for (int k = 0; k < 8; k++) c = (uint16_t)(c & 0x8000 ? (c << 1) ^ 0x1021 : c << 1);
-        T[0][i] = c;
-    }
-    for (int i = 0; i < 256; i++)
-        for (int s = 1; s < 8; s++) T[s][i] = (uint16_t)((T[s - 1][i] << 8) ^ T[0][T[s - 1][i] >> 8]);
-}
-static inline uint16_t crc16(const unsigned char *p, size_t n) {
-    uint16_t c = 0;
-    while (n >= 8) {
-        c = (uint16_t)(T[7][(c >> 8) ^ p[0]] ^ T[6][(c & 0xFF) ^ p[1]] ^ T[5][p[2]] ^ T[4][p[3]] ^
-                       T[3][p[4]] ^ T[2][p[5]] ^ T[1][p[6]] ^ T[0][p[7]]);
-        p += 8; n -= 8;
-    }
-    while (n--) c = (uint16_t)((c << 8) ^ T[0][(c >> 8) ^ *p++]);
-    return c;
-}
+#include "ref_text.h"
+#include "sbus_crc.h"
 
 // ---- conversations --------------------------------------------------------------------------
 typedef struct {
@@ -139,7 +88,7 @@ static inline char *reg_list(char *w, uint32_t addr, const unsigned char *d, int
         if (i) *w++ = ' ';
         w = reg(w, addr + (uint32_t)i); *w++ = '=';
         if (!i) *v0 = w;
-        w = put_i32(w, (int32_t)be32(d + 4 * i));
+        w = put_i64(w, (int32_t)be32(d + 4 * i));
         if (!i) *v1 = w;
     }
     return w;

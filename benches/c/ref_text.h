@@ -1,5 +1,5 @@
-// busnoop's C reference decoders: the text helpers that crsf_ref.c, ghst_ref.c and fport_ref.c
-// share (decimal digits without leading zeros, signed and fixed-point numbers, hex, a short copy).
+// busnoop's C reference decoders: the text helpers that crsf_ref.c, ghst_ref.c, fport_ref.c,
+// ether_ref.c and sbus_ref.c share (decimal digits without leading zeros, signed and fixed-point numbers, hex, a short copy).
 // Same licence as busnoop (MIT OR Apache-2.0). Include after ref_io.h.
 #ifndef REF_TEXT_H
 #define REF_TEXT_H
@@ -43,8 +43,8 @@ static inline char *put_fixed(char *w, int64_t raw, int prec) {
 }
 #define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
 static inline char *put_cstr(char *w, const char *s) { size_t n = strlen(s); memcpy(w, s, n); return w + n; }
-static inline char *put_hex_bytes(char *w, const unsigned char *b, int n) {
-    for (int i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
+static inline char *put_hex_bytes(char *w, const unsigned char *b, size_t n) {
+    for (size_t i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
     return w;
 }
 static inline char *put_0x(char *w, unsigned b) { *w++ = '0'; *w++ = 'x'; *w++ = HEXU[(b >> 4) & 15]; *w++ = HEXU[b & 15]; return w; }
