@@ -97,18 +97,43 @@ pub(super) fn push_words(
     let words = data
         .chunks_exact(4)
         .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
-    // `-` is written before every number and kept only when the number is negative.
-    let text = move |v: u32, w: &mut [u8; VALUE_ROOM]| {
-        let neg = v & sign_bit != 0;
+    write_recorded(out, media, letter, addr, words, Words { sign_bit })
+}
+
+/// How a list writes each value's text: it returns the text's length and the number.
+trait ValueText {
+    fn text(&self, v: u32, w: &mut [u8; VALUE_ROOM]) -> (usize, f64);
+}
+
+/// A word's value, negative when `sign_bit` is set in it (0 for unsigned media).
+struct Words {
+    sign_bit: u32,
+}
+
+impl ValueText for Words {
+    #[inline(always)]
+    fn text(&self, v: u32, w: &mut [u8; VALUE_ROOM]) -> (usize, f64) {
+        let neg = v & self.sign_bit != 0;
         // |v as i32| (2^31 for i32::MIN)
         let magnitude = if neg { v.wrapping_neg() } else { v };
+        // `-` is written before every number and kept only when the number is negative.
         w[0] = b'-';
         let k = usize::from(neg);
         let n = k + put_u32(&mut w[k..], magnitude);
         let value = f64::from(magnitude);
         (n, if neg { -value } else { value })
-    };
-    write_recorded(out, media, letter, addr, words, text)
+    }
+}
+
+/// A bit's value, 0 or 1.
+struct Bits;
+
+impl ValueText for Bits {
+    #[inline(always)]
+    fn text(&self, bit: u32, w: &mut [u8; VALUE_ROOM]) -> (usize, f64) {
+        w[0] = b'0' + bit as u8;
+        (1, bit as f64)
+    }
 }
 
 /// `F0=1 F1=0 …`: element 0 is bit 0 of the first byte.
@@ -138,11 +163,7 @@ pub(super) fn push_bits(
         return 0;
     };
     let bits = (0..n).map(|i| u32::from(data[(i / 8) as usize] >> (i % 8) & 1));
-    let text = |bit: u32, w: &mut [u8; VALUE_ROOM]| {
-        w[0] = b'0' + bit as u8;
-        (1, bit as f64)
-    };
-    write_recorded(out, media, letter, addr, bits, text)
+    write_recorded(out, media, letter, addr, bits, Bits)
 }
 
 /// [`write_list`] recording into `media` (in its block), or into nothing (in a block of its
@@ -154,7 +175,7 @@ fn write_recorded(
     letter: u8,
     addr: u32,
     values: impl Iterator<Item = u32>,
-    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+    text: impl ValueText,
 ) -> usize {
     match media {
         Some(m) => {
@@ -217,7 +238,7 @@ fn write_list<R: Record>(
     addr: u32,
     values: impl Iterator<Item = u32>,
     mut rec: R,
-    text: impl Fn(u32, &mut [u8; VALUE_ROOM]) -> (usize, f64),
+    text: impl ValueText,
 ) -> usize {
     let mut list = ListText::new(out, block);
     let was = list.out.len();
@@ -231,7 +252,7 @@ fn write_list<R: Record>(
         let value_at: &mut [u8; VALUE_ROOM] = (&mut w[eq + 1..eq + 1 + VALUE_ROOM])
             .try_into()
             .expect("VALUE_ROOM bytes");
-        let (n, value) = text(v, value_at);
+        let (n, value) = text.text(v, value_at);
         let end = eq + 1 + n;
         list.n = p + end;
         rec.record(at, 0..end - 1, eq - 1, value);

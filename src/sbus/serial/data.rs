@@ -8,7 +8,7 @@ use super::{CrcCheck, Event, Frame, GapClock, GarbageRun, Secure, Tele, classify
 use crate::sbus::commands::{self, Expect};
 use crate::sbus::telegram::{
     AT_ACKNAK, AT_REQUEST, AT_RESPONSE, AT_SECURE_REQUEST, AT_SECURE_RESPONSE, CrcBasis, DLE, FS,
-    crc16,
+    crc_step, crc16, crc16_from,
 };
 
 /// Longest data-mode telegram kept on the wire (longer ones are cut and reported).
@@ -111,12 +111,75 @@ impl DataFramer {
             self.pos += 1;
             i += 1;
             if data[i - 1] == FS && self.phase == Phase::At {
-                // A telegram just started: take it whole if it is all in `data`.
-                let n = self.whole_telegram(&data[i..], emit);
+                // A telegram just started: take it whole if it is all in `data`, read in place
+                // when it holds no DLE pair.
+                let mut n = self.in_place(&data[i - 1..], emit);
+                if n == 0 {
+                    n = self.whole_telegram(&data[i..], emit);
+                }
                 i += n;
                 self.pos += n as u64;
             }
         }
+    }
+
+    /// The fastest path, for the usual telegram that [`Self::whole_telegram`] takes and that
+    /// holds no DLE pair (nor a raw B5) before its end: its logical bytes are then its wire
+    /// bytes, read in place from `framed` (its FS first) without a copy, and both readings of
+    /// the CRC are one. Returns how many bytes after the FS it took; 0 (nothing done) for
+    /// anything else, which [`Self::whole_telegram`] then reads as before.
+    fn in_place(&mut self, framed: &[u8], emit: &mut impl FnMut(&Event<'_>)) -> usize {
+        debug_assert!(self.wire.len() == 1 && self.tele.is_empty() && self.secure.is_none());
+        let data = &framed[1..];
+        let data = &data[..data.len().min(MAX_WIRE - 1)];
+        let plain = |b: u8| b != FS && b != DLE;
+        // The header, one byte more at a time until the length is known (as the byte-by-byte
+        // path works it out).
+        let mut m = 0;
+        let k = loop {
+            match data.get(m) {
+                Some(&b) if plain(b) => m += 1,
+                _ => return 0,
+            }
+            if m == 1 && (data[0] == AT_SECURE_REQUEST || data[0] == AT_SECURE_RESPONSE) {
+                return 0;
+            }
+            match standard_len(&data[..m], self.expect) {
+                Known::NotYet => {}
+                Known::Len(k) if k >= m && k >= 3 && k <= data.len() => break k,
+                _ => return 0,
+            }
+        };
+        // No B5 or C5 in the rest.
+        if has_fs_or_dle(&data[m..k]) {
+            return 0;
+        }
+        let tele = &data[..k];
+        let got = u16::from_be_bytes([tele[k - 2], tele[k - 1]]);
+        if crc16_from(crc_step(0, FS), &tele[..k - 2]) != got {
+            return 0;
+        }
+        // What `close_checked` emits for it.
+        let t = classify(tele[0], &tele[1..k - 2]);
+        match t {
+            Tele::Request { station, cmd, body } => self.expect = expect_of(station, cmd, body),
+            Tele::Response { .. } | Tele::AckNak { .. } => self.expect = Expect::Nothing,
+            _ => {}
+        }
+        emit(&Event::Frame(Frame {
+            time: self.time,
+            offset: self.offset,
+            wire: &framed[..1 + k],
+            tele: t,
+            crc: CrcCheck::Ok(CrcBasis::Both),
+            secure: None,
+            problem: None,
+            break_before: false,
+            length_mismatch: false,
+        }));
+        self.phase = Phase::Outside;
+        self.dle = false;
+        k
     }
 
     /// The fast path for the usual telegram: a standard one (no secure header) whose bytes
@@ -405,7 +468,7 @@ impl DataFramer {
 
     /// The logical length (AT … CRC) the open telegram must have, as far as its bytes tell.
     fn complete_len(&self) -> Known {
-        use Known::{Len, Never, NotYet};
+        use Known::{Len, Never};
         if let Some(s) = &self.secure {
             // LEN counts the inner FS too.
             return match (s.len as usize).checked_sub(1).filter(|&n| n > 0) {
@@ -413,35 +476,7 @@ impl DataFramer {
                 None => Never,
             };
         }
-        let t = &self.tele;
-        let Some(&at) = t.first() else {
-            return NotYet;
-        };
-        match at {
-            AT_ACKNAK => Len(1 + 2 + 2),
-            AT_REQUEST => {
-                if t.len() < 3 {
-                    return NotYet;
-                }
-                let Some(cmd) = commands::command(t[2]) else {
-                    return Never;
-                };
-                match cmd.layout.body_len(&t[3..]) {
-                    Some(Ok(n)) => Len(1 + 2 + n + 2),
-                    Some(Err(_)) => NotYet,
-                    None => Never,
-                }
-            }
-            AT_RESPONSE => match self.expect {
-                Expect::Data(n) => Len(1 + n + 2),
-                Expect::LengthPrefixed => match t.get(1) {
-                    Some(&n) => Len(1 + 1 + n as usize + 2),
-                    None => NotYet,
-                },
-                _ => Never,
-            },
-            _ => Never,
-        }
+        standard_len(&self.tele, self.expect)
     }
 
     /// Checks the CRC of the open standard telegram both ways.
@@ -540,6 +575,56 @@ impl DataFramer {
         self.phase = Phase::Outside;
         self.dle = false;
     }
+}
+
+/// The logical length (AT … CRC) a standard telegram must have, as far as its logical bytes
+/// `t` (AT first) tell; `expect`: what the last request asked for.
+fn standard_len(t: &[u8], expect: Expect) -> Known {
+    use Known::{Len, Never, NotYet};
+    let Some(&at) = t.first() else {
+        return NotYet;
+    };
+    match at {
+        AT_ACKNAK => Len(1 + 2 + 2),
+        AT_REQUEST => {
+            if t.len() < 3 {
+                return NotYet;
+            }
+            let Some(cmd) = commands::command(t[2]) else {
+                return Never;
+            };
+            match cmd.layout.body_len(&t[3..]) {
+                Some(Ok(n)) => Len(1 + 2 + n + 2),
+                Some(Err(_)) => NotYet,
+                None => Never,
+            }
+        }
+        AT_RESPONSE => match expect {
+            Expect::Data(n) => Len(1 + n + 2),
+            Expect::LengthPrefixed => match t.get(1) {
+                Some(&n) => Len(1 + 1 + n as usize + 2),
+                None => NotYet,
+            },
+            _ => Never,
+        },
+        _ => Never,
+    }
+}
+
+/// Whether `bytes` holds a B5 or a C5: eight bytes a step (a byte of `x ^ b` is 0 where `x`
+/// has `b`; `(y - 0x01…) & !y & 0x80…` is not 0 exactly when a byte of `y` is 0).
+fn has_fs_or_dle(bytes: &[u8]) -> bool {
+    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
+    const HIGH: u64 = u64::from_ne_bytes([0x80; 8]);
+    let zero = |y: u64| y.wrapping_sub(ONES) & !y & HIGH;
+    let mut steps = bytes.chunks_exact(8);
+    for c in &mut steps {
+        let x = u64::from_ne_bytes(c.try_into().expect("8 bytes"));
+        if zero(x ^ (ONES * u64::from(FS))) | zero(x ^ (ONES * u64::from(DLE))) != 0 {
+            return true;
+        }
+    }
+    steps.remainder().iter().any(|&b| b == FS || b == DLE)
 }
 
 /// The logical byte at `data[j]` (after a standard telegram's FS) and how many wire bytes it

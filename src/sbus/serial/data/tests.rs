@@ -385,3 +385,21 @@ fn every_raw_b5_starts_a_new_telegram() {
     }
     assert_eq!(at, wire.len());
 }
+
+#[test]
+fn the_eight_byte_scan_finds_b5_and_c5_anywhere() {
+    // every length up to 24, each byte value at each place, among bytes next to B5 and C5
+    for len in 0..24usize {
+        for at in 0..len {
+            for b in 0..=255u8 {
+                let mut v = vec![0xB4; len];
+                v[at] = b;
+                if len > 1 {
+                    v[(at + 1) % len] = 0xC6;
+                }
+                let want = v.iter().any(|&x| x == FS || x == DLE);
+                assert_eq!(has_fs_or_dle(&v), want, "{v:02X?}");
+            }
+        }
+    }
+}
