@@ -379,6 +379,13 @@ impl Drop for Screen {
         if let Some(c) = self.capture.take() {
             c.finish();
         }
+        // The drawing library's own clean-up (its `Terminal` drops after this) shows a cursor
+        // a drawing hid and, when that fails, says so with `eprintln!`, which panics when
+        // stderr is a terminal that went away. Shown here first: where it fails, the terminal
+        // is gone, and the standard descriptors that were it go to /dev/null.
+        if self.terminal.show_cursor().is_err() {
+            detach_from_terminal();
+        }
     }
 }
 
