@@ -464,6 +464,15 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.p.line.put(s.as_bytes());
     }
 
+    /// In place: bytes known to be ASCII (a text built from tables of digits and letters), as
+    /// [`Cells::str`] writes them, without the check for UTF-8 a `&str` made of them costs.
+    /// Debug builds check that they are ASCII.
+    #[inline(always)]
+    pub fn put_ascii(&mut self, b: &[u8]) {
+        debug_assert!(b.is_ascii(), "put_ascii takes ASCII only: {b:?}");
+        self.p.line.put(b);
+    }
+
     /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
     #[inline(always)]
     pub fn ascii(&mut self, b: u8) {
