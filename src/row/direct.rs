@@ -20,12 +20,15 @@
 //! Data; [`Cells::value`]; one cell per extra column; optionally [`Cells::part`]s (JSON
 //! `parts`); then the raw bytes and the line's end (written by [`Direct::row`]). A cell is
 //! either a text ([`Cells::text`]) or written in place between [`Cells::begin`] and
-//! [`Cells::end`] with [`Cells::str`], [`Cells::dec`], [`Cells::fixed`] …, which take only
-//! UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8. A cell that turns out to
-//! need quoting or escaping (a comma in CSV, a quote in JSON, a control character, a character
-//! that is not printable ASCII in pretty text) is written again from a copy, exactly as the
-//! table writes a [`Row`]'s cell. Tests compare both ways of every protocol that writes rows
-//! straight, over every fixture and fuzz corpus, byte for byte
+//! [`Cells::end`] with [`Cells::str`], [`Cells::put_ascii`], [`Cells::dec`], [`Cells::fixed`]
+//! …, which take only UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8 (text a
+//! decoder builds from tables of digits and letters goes as ASCII bytes, without making a
+//! `&str` of it first). A member of `parts` named by a literal or a `static` table is best
+//! written with [`Cells::part_static`] (its key found by the name's address). A cell that
+//! turns out to need quoting or escaping (a comma in CSV, a quote in JSON, a control
+//! character, a character that is not printable ASCII in pretty text) is written again from a
+//! copy, exactly as the table writes a [`Row`]'s cell. Tests compare both ways of every
+//! protocol that writes rows straight, over every fixture and fuzz corpus, byte for byte
 //! (`testing::assert_direct_rows_match`).
 //!
 //! [`Row`]: super::Row
@@ -617,6 +620,36 @@ impl<F: Fmt> Cells<'_, '_, F> {
                 self.part_name(name);
                 self.put_marked(m);
             }
+        }
+    }
+
+    /// As [`Cells::part`], for a name that lives as long as the program (a literal, a name
+    /// from a `static` or `const` table): its kept key is found by the name's address alone,
+    /// without reading the name.
+    #[inline(always)]
+    pub fn part_static(&mut self, name: &'static str, m: Mark) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        if let (false, a, b) = self.marked(m)
+            && let Some(key) = self.t.part_keys.get_static(name)
+        {
+            let first = self.parts == 0;
+            self.parts += 1;
+            self.p
+                .line
+                .json_key_within(first, key, name.len() + 4, a, b);
+            return;
+        }
+        self.part(name, m);
+    }
+
+    /// As [`Cells::part_static`] for each of `names` in order, the number of `names[i]`
+    /// marked by `mark(i)`.
+    #[inline(always)]
+    pub fn parts_static(&mut self, names: &'static [&'static str], mark: impl Fn(usize) -> Mark) {
+        for (i, name) in names.iter().enumerate() {
+            self.part_static(name, mark(i));
         }
     }
 
