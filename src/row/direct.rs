@@ -157,6 +157,7 @@ impl Direct<'_> {
                 t: &mut *text,
                 col: 0,
                 cell: (0, 0, 0),
+                plain: false,
                 span: (0, 0, 0),
                 rewritten: None,
                 parts: 0,
@@ -180,6 +181,9 @@ pub struct Cells<'b, 'l, F: Fmt> {
     /// The cell being written in place: where its text starts, and (pretty text) where the
     /// line was before its blanks, and the blanks owed then.
     cell: (usize, usize, usize),
+    /// The cell written in place has only pieces with nothing to quote or escape in any
+    /// format (numbers, hex, [`Cells::put_ascii`]) so far: TSV, CSV and JSON need not look.
+    plain: bool,
     /// The cells ID to Sensor being written: where they start, the blanks owed before them,
     /// and the stamp (0: not kept).
     span: (usize, usize, u32),
@@ -406,6 +410,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
     #[inline(always)]
     pub fn begin(&mut self) {
         let i = self.col;
+        self.plain = true;
         match F::FORMAT {
             Format::Tsv | Format::Csv => {
                 self.p.line.byte(Self::SEP);
@@ -431,15 +436,32 @@ impl<F: Fmt> Cells<'_, '_, F> {
         let i = self.col;
         self.col += 1;
         let at = self.cell.0;
+        let plain = self.plain;
+        if cfg!(debug_assertions) && plain && F::FORMAT != Format::Pretty {
+            let cell = self.p.line.bytes().get(at..).unwrap_or_default();
+            assert!(
+                cell.iter().all(|&b| is_plain(b)),
+                "a plain cell to quote or escape: {:?}",
+                String::from_utf8_lossy(cell)
+            );
+        }
         let rewritten = match F::FORMAT {
             Format::Tsv => {
-                self.p.line.tsv_fix(at);
+                if !plain {
+                    self.p.line.tsv_fix(at);
+                }
                 None
             }
+            Format::Csv if plain => None,
             Format::Csv => self.p.line.csv_fix(at, &mut self.t.scratch),
             Format::Jsonl => {
                 let numeric = json_key(self.t, i).1;
-                self.p.line.json_fix(at, numeric, &mut self.t.scratch)
+                if plain && !numeric && self.p.line.len() > at {
+                    self.p.line.byte(b'"');
+                    None
+                } else {
+                    self.p.line.json_fix(at, numeric, &mut self.t.scratch)
+                }
             }
             Format::Pretty => {
                 let i = if i > 8 { i - 1 } else { i };
@@ -464,21 +486,25 @@ impl<F: Fmt> Cells<'_, '_, F> {
     /// In place: a text.
     #[inline(always)]
     pub fn str(&mut self, s: &str) {
+        self.plain = false;
         self.p.line.put(s.as_bytes());
     }
 
-    /// In place: bytes known to be ASCII (a text built from tables of digits and letters), as
-    /// [`Cells::str`] writes them, without the check for UTF-8 a `&str` made of them costs.
-    /// Debug builds check that they are ASCII.
+    /// In place: bytes known to be plain ASCII, printable (blanks included) and none of
+    /// `,` `"` `\` (a text built from tables of digits, letters, blanks, signs), as
+    /// [`Cells::str`] writes them, without the check for UTF-8 a `&str` made of them costs;
+    /// and a cell of such pieces and numbers is not looked at again for what TSV, CSV or JSON
+    /// quote or escape. Debug builds check that the bytes are plain.
     #[inline(always)]
     pub fn put_ascii(&mut self, b: &[u8]) {
-        debug_assert!(b.is_ascii(), "put_ascii takes ASCII only: {b:?}");
+        debug_assert!(b.iter().all(|&c| is_plain(c)), "put_ascii: {b:?}");
         self.p.line.put(b);
     }
 
     /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
     #[inline(always)]
     pub fn ascii(&mut self, b: u8) {
+        self.plain = false;
         self.p.line.byte(if b < 0x80 { b } else { b'?' });
     }
 
@@ -776,6 +802,12 @@ impl<F: Fmt> Cells<'_, '_, F> {
             }
         }
     }
+}
+
+/// A byte no format quotes or escapes: printable ASCII (or a blank) but `,` `"` `\`.
+#[inline(always)]
+fn is_plain(b: u8) -> bool {
+    (0x20..0x7F).contains(&b) && !matches!(b, b',' | b'"' | b'\\')
 }
 
 /// The sum of the pretty widths of the columns ID to Sensor: spans are kept per widths.
