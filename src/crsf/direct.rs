@@ -179,7 +179,7 @@ impl WriteRow for CrsfRow<'_> {
                 c.begin();
                 // Where buf[0] would be in the line.
                 let a = c.here().saturating_sub(1);
-                c.str(std::str::from_utf8(&buf[1..n]).unwrap_or_default());
+                c.put_ascii(&buf[1..n]);
                 let marks = at.map(|(s, e)| Mark::new(a + s, a + e));
                 c.end();
                 c.value(Some(marks[0]));
@@ -188,7 +188,7 @@ impl WriteRow for CrsfRow<'_> {
                 buf[..3].copy_from_slice(b"raw");
                 let n = numbers.list(&raw, &mut buf, 3, &mut at);
                 c.begin();
-                c.str(std::str::from_utf8(&buf[..n]).unwrap_or_default());
+                c.put_ascii(&buf[..n]);
                 c.end();
                 const NAMES: [&str; 16] = [
                     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11",

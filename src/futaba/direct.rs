@@ -40,7 +40,7 @@ static US: [u64; RAWS] = number_table(true);
 static RAW: [u64; RAWS] = number_table(false);
 
 /// A line of ASCII text built in place: fixed-size copies of 8 bytes (the bytes past the text
-/// are written over later), then checked as text once.
+/// are written over later), written as ASCII ([`Cells::put_ascii`]).
 struct Text<const N: usize> {
     b: [u8; N],
     n: usize,
@@ -69,9 +69,10 @@ impl<const N: usize> Text<N> {
         self.n = at + len;
     }
 
+    /// The text (ASCII: digits and blanks from the tables).
     #[inline(always)]
-    fn as_str(&self) -> &str {
-        std::str::from_utf8(&self.b[..self.n.min(N)]).unwrap_or("")
+    fn as_bytes(&self) -> &[u8] {
+        &self.b[..self.n.min(N)]
     }
 }
 
@@ -157,12 +158,12 @@ impl WriteRow for ChannelRow {
         }
         let (data, raw) = self
             .text
-            .as_str()
+            .as_bytes()
             .split_at_checked(usize::from(self.ends[CHANNELS - 1]))
             .unwrap_or_default();
         c.begin();
         let at = c.here();
-        c.str(data);
+        c.put_ascii(data);
         c.end();
         let mark = |i: usize| {
             // After the blank before it (the first has none).
@@ -183,7 +184,7 @@ impl WriteRow for ChannelRow {
             c.str(")");
         }
         c.str(after_flags(end));
-        c.str(raw);
+        c.put_ascii(raw);
         c.end();
         for (i, name) in CH_NAMES.iter().enumerate() {
             c.part(name, mark(i));

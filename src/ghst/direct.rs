@@ -172,7 +172,7 @@ impl GhstRow<'_> {
         }
         c.begin();
         let a = c.here().saturating_sub(1);
-        c.str(std::str::from_utf8(&buf[1..n]).unwrap_or_default());
+        c.put_ascii(&buf[1..n]);
         let marks = at.map(|(s, e)| Mark::new(a + s, a + e));
         c.end();
         c.value(Some(marks[0]));
@@ -184,7 +184,7 @@ impl GhstRow<'_> {
             n = put(&mut buf, n, &t.raw12[usize::from(r)]);
         }
         c.begin();
-        c.str(std::str::from_utf8(&buf[..n]).unwrap_or_default());
+        c.put_ascii(&buf[..n]);
         if link {
             c.str("; RF protocol ");
             c.str(names::rf_protocol(p[8]));
@@ -194,7 +194,7 @@ impl GhstRow<'_> {
             for &r in &p[6..10] {
                 n = put(&mut buf, n, &t.raw8[usize::from(r)]);
             }
-            c.str(std::str::from_utf8(&buf[..n]).unwrap_or_default());
+            c.put_ascii(&buf[..n]);
         }
         c.str("; 12-bit scale");
         c.end();

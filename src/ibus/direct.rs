@@ -50,7 +50,7 @@ impl WriteRow for RcRow {
         }
         let n = if self.high { RC_CHANNELS_MAX } else { RC_SLOTS };
         // The channels' texts from the table, fixed-size copies of 8 bytes (the bytes past a
-        // text are written over by the next), checked as text once.
+        // text are written over by the next), written as ASCII.
         let mut text = [b' '; RC_CHANNELS_MAX * 5 + 8];
         let mut ends = [0u8; RC_CHANNELS_MAX];
         let mut at = 0usize;
@@ -66,10 +66,10 @@ impl WriteRow for RcRow {
             at = to + len;
             *e = at as u8;
         }
-        let data = std::str::from_utf8(&text[..at.min(text.len())]).unwrap_or("");
+        let data = &text[..at.min(text.len())];
         c.begin();
         let start = c.here();
-        c.str(data);
+        c.put_ascii(data);
         c.end();
         // Channel i's text: after the blank before it (the first has none).
         let mark = |i: usize| {

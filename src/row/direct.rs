@@ -20,12 +20,15 @@
 //! Data; [`Cells::value`]; one cell per extra column; optionally [`Cells::part`]s (JSON
 //! `parts`); then the raw bytes and the line's end (written by [`Direct::row`]). A cell is
 //! either a text ([`Cells::text`]) or written in place between [`Cells::begin`] and
-//! [`Cells::end`] with [`Cells::str`], [`Cells::dec`], [`Cells::fixed`] …, which take only
-//! UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8. A cell that turns out to
-//! need quoting or escaping (a comma in CSV, a quote in JSON, a control character, a character
-//! that is not printable ASCII in pretty text) is written again from a copy, exactly as the
-//! table writes a [`Row`]'s cell. Tests compare both ways of every protocol that writes rows
-//! straight, over every fixture and fuzz corpus, byte for byte
+//! [`Cells::end`] with [`Cells::str`], [`Cells::put_ascii`], [`Cells::dec`], [`Cells::fixed`]
+//! …, which take only UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8 (text a
+//! decoder builds from tables of digits and letters goes as ASCII bytes, without making a
+//! `&str` of it first). A member of `parts` named by a literal or a `static` table is best
+//! written with [`Cells::part_static`] (its key found by the name's address). A cell that
+//! turns out to need quoting or escaping (a comma in CSV, a quote in JSON, a control
+//! character, a character that is not printable ASCII in pretty text) is written again from a
+//! copy, exactly as the table writes a [`Row`]'s cell. Tests compare both ways of every
+//! protocol that writes rows straight, over every fixture and fuzz corpus, byte for byte
 //! (`testing::assert_direct_rows_match`).
 //!
 //! [`Row`]: super::Row
@@ -154,6 +157,7 @@ impl Direct<'_> {
                 t: &mut *text,
                 col: 0,
                 cell: (0, 0, 0),
+                plain: false,
                 span: (0, 0, 0),
                 rewritten: None,
                 parts: 0,
@@ -177,6 +181,9 @@ pub struct Cells<'b, 'l, F: Fmt> {
     /// The cell being written in place: where its text starts, and (pretty text) where the
     /// line was before its blanks, and the blanks owed then.
     cell: (usize, usize, usize),
+    /// The cell written in place has only pieces with nothing to quote or escape in any
+    /// format (numbers, hex, [`Cells::put_ascii`]) so far: TSV, CSV and JSON need not look.
+    plain: bool,
     /// The cells ID to Sensor being written: where they start, the blanks owed before them,
     /// and the stamp (0: not kept).
     span: (usize, usize, u32),
@@ -403,6 +410,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
     #[inline(always)]
     pub fn begin(&mut self) {
         let i = self.col;
+        self.plain = true;
         match F::FORMAT {
             Format::Tsv | Format::Csv => {
                 self.p.line.byte(Self::SEP);
@@ -428,15 +436,32 @@ impl<F: Fmt> Cells<'_, '_, F> {
         let i = self.col;
         self.col += 1;
         let at = self.cell.0;
+        let plain = self.plain;
+        if cfg!(debug_assertions) && plain && F::FORMAT != Format::Pretty {
+            let cell = self.p.line.bytes().get(at..).unwrap_or_default();
+            assert!(
+                cell.iter().all(|&b| is_plain(b)),
+                "a plain cell to quote or escape: {:?}",
+                String::from_utf8_lossy(cell)
+            );
+        }
         let rewritten = match F::FORMAT {
             Format::Tsv => {
-                self.p.line.tsv_fix(at);
+                if !plain {
+                    self.p.line.tsv_fix(at);
+                }
                 None
             }
+            Format::Csv if plain => None,
             Format::Csv => self.p.line.csv_fix(at, &mut self.t.scratch),
             Format::Jsonl => {
                 let numeric = json_key(self.t, i).1;
-                self.p.line.json_fix(at, numeric, &mut self.t.scratch)
+                if plain && !numeric && self.p.line.len() > at {
+                    self.p.line.byte(b'"');
+                    None
+                } else {
+                    self.p.line.json_fix(at, numeric, &mut self.t.scratch)
+                }
             }
             Format::Pretty => {
                 let i = if i > 8 { i - 1 } else { i };
@@ -461,12 +486,25 @@ impl<F: Fmt> Cells<'_, '_, F> {
     /// In place: a text.
     #[inline(always)]
     pub fn str(&mut self, s: &str) {
+        self.plain = false;
         self.p.line.put(s.as_bytes());
+    }
+
+    /// In place: bytes known to be plain ASCII, printable (blanks included) and none of
+    /// `,` `"` `\` (a text built from tables of digits, letters, blanks, signs), as
+    /// [`Cells::str`] writes them, without the check for UTF-8 a `&str` made of them costs;
+    /// and a cell of such pieces and numbers is not looked at again for what TSV, CSV or JSON
+    /// quote or escape. Debug builds check that the bytes are plain.
+    #[inline(always)]
+    pub fn put_ascii(&mut self, b: &[u8]) {
+        debug_assert!(b.iter().all(|&c| is_plain(c)), "put_ascii: {b:?}");
+        self.p.line.put(b);
     }
 
     /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
     #[inline(always)]
     pub fn ascii(&mut self, b: u8) {
+        self.plain = false;
         self.p.line.byte(if b < 0x80 { b } else { b'?' });
     }
 
@@ -611,6 +649,36 @@ impl<F: Fmt> Cells<'_, '_, F> {
         }
     }
 
+    /// As [`Cells::part`], for a name that lives as long as the program (a literal, a name
+    /// from a `static` or `const` table): its kept key is found by the name's address alone,
+    /// without reading the name.
+    #[inline(always)]
+    pub fn part_static(&mut self, name: &'static str, m: Mark) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        if let (false, a, b) = self.marked(m)
+            && let Some(key) = self.t.part_keys.get_static(name)
+        {
+            let first = self.parts == 0;
+            self.parts += 1;
+            self.p
+                .line
+                .json_key_within(first, key, name.len() + 4, a, b);
+            return;
+        }
+        self.part(name, m);
+    }
+
+    /// As [`Cells::part_static`] for each of `names` in order, the number of `names[i]`
+    /// marked by `mark(i)`.
+    #[inline(always)]
+    pub fn parts_static(&mut self, names: &'static [&'static str], mark: impl Fn(usize) -> Mark) {
+        for (i, name) in names.iter().enumerate() {
+            self.part_static(name, mark(i));
+        }
+    }
+
     /// JSON Lines only: a member of `parts` with its number's text.
     #[inline(always)]
     pub fn part_text(&mut self, name: &str, text: &str) {
@@ -734,6 +802,12 @@ impl<F: Fmt> Cells<'_, '_, F> {
             }
         }
     }
+}
+
+/// A byte no format quotes or escapes: printable ASCII (or a blank) but `,` `"` `\`.
+#[inline(always)]
+fn is_plain(b: u8) -> bool {
+    (0x20..0x7F).contains(&b) && !matches!(b, b',' | b'"' | b'\\')
 }
 
 /// The sum of the pretty widths of the columns ID to Sensor: spans are kept per widths.

@@ -721,6 +721,15 @@ fn copy(dst: &mut [u8], src: &[u8]) {
             dst[..16].copy_from_slice(&src[..16]);
             dst[n - 16..].copy_from_slice(&src[n - 16..]);
         }
+        33..=128 => {
+            // Pieces of 32 bytes, the last one overlapping: no call for a cell's text.
+            let mut i = 0;
+            while i + 32 < n {
+                dst[i..i + 32].copy_from_slice(&src[i..i + 32]);
+                i += 32;
+            }
+            dst[n - 32..].copy_from_slice(&src[n - 32..]);
+        }
         _ => dst.copy_from_slice(src),
     }
 }
@@ -1076,6 +1085,17 @@ mod tests {
                     assert_eq!(&fast[..n], &slow[..m], "{s:?} {room}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn copies_every_length_up_to_the_call() {
+        let src: Vec<u8> = (0..=255u8).collect();
+        for n in 0..=140 {
+            let mut dst = vec![0u8; 160];
+            copy(&mut dst, &src[7..7 + n]);
+            assert_eq!(&dst[..n], &src[7..7 + n], "{n} bytes");
+            assert!(dst[n..].iter().all(|&b| b == 0), "{n} bytes: nothing after");
         }
     }
 

@@ -17,6 +17,9 @@ struct KeySlot {
     /// The name's bytes as [`name_words`] gives them, and its length (0: empty).
     words: (u64, u64),
     len: usize,
+    /// The address of the `&'static str` it was kept for by [`PartKeys::get_static`] (0: kept
+    /// by [`PartKeys::get`], whose names may be anywhere).
+    ptr: usize,
     /// `,"name":`, padded with zeros.
     key: [u8; 16],
 }
@@ -57,7 +60,7 @@ impl PartKeys {
         let nb = name.as_bytes();
         let words = name_words(nb)?;
         let p = nb.as_ptr() as usize;
-        let h = (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) % Self::SLOTS;
+        let h = Self::place(p);
         let hit = self
             .slots
             .get(h)
@@ -65,12 +68,36 @@ impl PartKeys {
         if hit {
             return self.slots.get(h).map(|s| &s.key);
         }
-        self.fill(h, nb, words)
+        self.fill(h, nb, words, 0)
+    }
+
+    /// As [`PartKeys::get`] for a name that lives as long as the program: its text cannot
+    /// change, so its place is found by its address and length alone (a slot another name
+    /// took, or one kept by [`PartKeys::get`], is filled again).
+    #[inline(always)]
+    pub(crate) fn get_static(&mut self, name: &'static str) -> Option<&[u8; 16]> {
+        let nb = name.as_bytes();
+        let p = nb.as_ptr() as usize;
+        let h = Self::place(p);
+        let hit = self
+            .slots
+            .get(h)
+            .is_some_and(|s| s.ptr == p && s.len == nb.len());
+        if hit {
+            return self.slots.get(h).map(|s| &s.key);
+        }
+        self.fill(h, nb, name_words(nb)?, p)
+    }
+
+    /// A name's place by its address.
+    #[inline(always)]
+    fn place(p: usize) -> usize {
+        (p.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) % Self::SLOTS
     }
 
     #[cold]
     #[inline(never)]
-    fn fill(&mut self, h: usize, nb: &[u8], words: (u64, u64)) -> Option<&[u8; 16]> {
+    fn fill(&mut self, h: usize, nb: &[u8], words: (u64, u64), ptr: usize) -> Option<&[u8; 16]> {
         if nb.is_empty() || nb.len() > Self::NAME || scan(nb, json_escape) != 0 {
             return None;
         }
@@ -82,8 +109,46 @@ impl PartKeys {
         *slot = KeySlot {
             words,
             len: nb.len(),
+            ptr,
             key,
         };
         Some(&slot.key)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PartKeys;
+
+    /// Names found by address give the keys names found by their text give; names that are
+    /// not kept are not kept either way.
+    #[test]
+    fn static_names_give_the_same_keys() {
+        static NAMES: [&str; 8] = [
+            "CH1",
+            "CH16",
+            "RxBt",
+            "FrameLost",
+            "A",
+            "Alt",
+            "Bat%",
+            "Hdg",
+        ];
+        let (mut by_text, mut by_address) = (PartKeys::new(), PartKeys::new());
+        for _ in 0..3 {
+            for name in NAMES {
+                let owned = name.to_string();
+                let want = by_text.get(&owned).copied();
+                assert!(want.is_some(), "{name}");
+                assert_eq!(by_address.get_static(name).copied(), want, "{name}");
+                // Both ways in one table: each finds its own.
+                assert_eq!(by_text.get_static(name).copied(), want, "{name}");
+                assert_eq!(by_text.get(&owned).copied(), want, "{name}");
+            }
+        }
+        for name in ["", "a \"quoted\"", "thirteen char"] {
+            assert_eq!(by_address.get_static(name), None, "{name}");
+            assert_eq!(by_text.get(name), None, "{name}");
+        }
     }
 }

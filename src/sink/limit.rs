@@ -30,6 +30,8 @@ pub struct Limit<'a> {
     last: Instant,
     last_micros: Option<u64>,
     done: bool,
+    /// No stop condition and not done: the table's output may be lent ([`RowOut::direct`]).
+    lend: bool,
 }
 
 impl<'a> Limit<'a> {
@@ -44,6 +46,7 @@ impl<'a> Limit<'a> {
             last: now,
             last_micros: None,
             done: false,
+            lend: stops == Stops::default(),
         }
     }
 
@@ -62,6 +65,7 @@ impl<'a> Limit<'a> {
                 || self.stops.idle.is_some_and(|d| quiet(d, self.last_micros))
             {
                 self.done = true;
+                self.lend = false;
                 return false;
             }
         }
@@ -84,6 +88,7 @@ impl<'a> Limit<'a> {
         }
         if self.stops.count.is_some_and(|n| self.frames >= n) {
             self.done = true;
+            self.lend = false;
         }
     }
 }
@@ -93,7 +98,7 @@ impl RowOut for Limit<'_> {
     /// condition needs each row, and gets it as a [`Row`]).
     #[inline]
     fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
-        if self.done || self.stops != Stops::default() {
+        if !self.lend {
             return None;
         }
         self.inner.direct(columns)

@@ -63,6 +63,10 @@ pub struct Table {
     /// The decoder's extra columns as last lent to it ([`Table::direct`]): the same slice
     /// as the table's own, checked once.
     direct_columns: Option<(usize, usize)>,
+    /// The key of the extra columns last lent for when every condition of [`Table::direct`]
+    /// but the room held, and holds until one of the setters that change them runs ((0, 0):
+    /// check them all at the next row).
+    lend: (usize, usize),
     /// Pretty output on a terminal: the width rows are fitted to ([`fit`]), asked again at
     /// every flush (the terminal may be resized).
     fit: Option<usize>,
@@ -109,6 +113,7 @@ impl Table {
             hex: Vec::new(),
             error: None,
             direct_columns: None,
+            lend: (0, 0),
             fit: None,
             port_column: extra.iter().position(|c| *c == crate::row::PORT_COLUMN),
         }
@@ -119,6 +124,7 @@ impl Table {
     pub fn fit_terminal(&mut self) {
         if self.opts.format == Format::Pretty {
             self.fit = Some(fit::terminal_width());
+            self.lend = (0, 0);
         }
     }
 
@@ -198,6 +204,7 @@ impl Table {
         let mut w = wide::Wide::new(self.opts.format, step, self.opts.utc, live, max_columns);
         w.port_column(self.port_column);
         self.wide = Some(w);
+        self.lend = (0, 0);
     }
 
     /// Collects the rows' numbers for `busnoop plot` instead of writing the table.
@@ -205,6 +212,7 @@ impl Table {
         let mut plot = crate::plot::Plot::new(spec);
         plot.port_column(self.port_column);
         self.plot = Some(plot);
+        self.lend = (0, 0);
     }
 
     /// The plot's numbers, to draw at the end of the run (`busnoop plot`).
@@ -728,17 +736,23 @@ impl RowOut for Table {
     /// plot or `--time abs`, not before the header, not for a decoder with other extra columns
     /// than the table's; and not when enough is buffered to be written out (the next row goes
     /// as a [`Row`], whose write does that).
+    /// The conditions are checked once for a decoder's columns (the key [`Table::lend`]), then
+    /// only the room.
     #[inline]
     fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
-        if self.wide.is_some()
-            || self.plot.is_some()
-            || self.fit.is_some()
-            || self.opts.time_abs
-            || !self.header_written
-            || self.error.is_some()
-            || !self.direct_columns(columns)
-        {
-            return None;
+        let key = (columns.as_ptr() as usize, columns.len());
+        if key != self.lend || self.error.is_some() {
+            if self.wide.is_some()
+                || self.plot.is_some()
+                || self.fit.is_some()
+                || self.opts.time_abs
+                || !self.header_written
+                || self.error.is_some()
+                || !self.direct_columns(columns)
+            {
+                return None;
+            }
+            self.lend = key;
         }
         let (buf, len) = self.out.room()?;
         Some(Direct {
