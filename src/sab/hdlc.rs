@@ -411,6 +411,7 @@ impl Reassembler {
         time: Option<u64>,
         emit: &mut impl FnMut(&Event<'_>),
     ) -> Option<usize> {
+        debug_assert_eq!(self.start_time, time, "opened by the flag at data[open]");
         let after = &data[open + 1..];
         let j = find2(FLAG, ESCAPE, after)?;
         if j == 0 && after[0] == FLAG {
@@ -438,7 +439,9 @@ impl Reassembler {
             odd_escapes: 0,
             start_pos: self.start_pos,
             end_pos: self.pos + 1,
-            start_time: self.start_time,
+            // The frame opened in `data`, at `time`: `self.start_time`, which `open` has just
+            // stored in two halves, read back whole would stall on the store buffer.
+            start_time: time,
             end_time: time,
         };
         if run.emit(emit) {
@@ -463,6 +466,7 @@ impl Reassembler {
         time: Option<u64>,
         emit: &mut impl FnMut(&Event<'_>),
     ) -> Option<usize> {
+        debug_assert_eq!(self.start_time, time, "opened by the flag at data[open]");
         let after = &data[open + 1..];
         let close = escape + find(FLAG, &after[escape..])?;
         self.unescape_run(&after[..close]);
@@ -481,7 +485,9 @@ impl Reassembler {
             odd_escapes: self.odd_escapes,
             start_pos: self.start_pos,
             end_pos: self.pos + 1,
-            start_time: self.start_time,
+            // The frame opened in `data`, at `time`: `self.start_time`, which `open` has just
+            // stored in two halves, read back whole would stall on the store buffer.
+            start_time: time,
             end_time: time,
         };
         if run.emit(emit) {

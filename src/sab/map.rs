@@ -715,6 +715,10 @@ impl Mapper {
         );
     }
 
+    /// A frame whose check fails. Rare, like [`Self::broken`]'s rows: both stay out of the
+    /// common path's code ([`Self::frame`]).
+    #[cold]
+    #[inline(never)]
     fn bad_crc(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         st.bad_crc += 1;
@@ -769,6 +773,8 @@ impl Mapper {
     }
 
     /// Garbage, truncated frames, runts, aborts, overlong frames.
+    #[cold]
+    #[inline(never)]
     fn broken(&mut self, ev: &Event<'_>, start: u64, out: &mut Latch<'_>) {
         let st = &mut self.stats;
         let sc = &mut self.scratch;
