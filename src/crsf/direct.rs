@@ -195,7 +195,7 @@ impl WriteRow for CrsfRow<'_> {
                     "CH12", "CH13", "CH14", "CH15", "CH16",
                 ];
                 for (name, m) in NAMES.iter().zip(marks) {
-                    c.part(name, m);
+                    c.part_static(name, m);
                 }
             }
             What::Link => {
@@ -223,7 +223,7 @@ impl WriteRow for CrsfRow<'_> {
                 c.text(unit);
                 c.empty();
                 for (m, &(_, name, ..)) in marks.iter().zip(&fields) {
-                    c.part(name, *m);
+                    c.part_static(name, *m);
                 }
             }
             What::Battery => {
@@ -237,10 +237,10 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part("RxBt", m0);
-                c.part("Curr", m1);
-                c.part("Capa", m2);
-                c.part("Bat%", m3);
+                c.part_static("RxBt", m0);
+                c.part_static("Curr", m1);
+                c.part_static("Capa", m2);
+                c.part_static("Bat%", m3);
             }
             What::Gps => {
                 c.begin();
@@ -254,12 +254,12 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part("Lat", m0);
-                c.part("Lon", m1);
-                c.part("GSpd", m2);
-                c.part("Hdg", m3);
-                c.part("Alt", m4);
-                c.part("Sats", m5);
+                c.part_static("Lat", m0);
+                c.part_static("Lon", m1);
+                c.part_static("GSpd", m2);
+                c.part_static("Hdg", m3);
+                c.part_static("Alt", m4);
+                c.part_static("Sats", m5);
             }
             What::Attitude => {
                 c.begin();
@@ -270,9 +270,9 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part("Ptch", m0);
-                c.part("Roll", m1);
-                c.part("Yaw", m2);
+                c.part_static("Ptch", m0);
+                c.part_static("Roll", m1);
+                c.part_static("Yaw", m2);
             }
             What::Mode => {
                 // As `read::push_text`: printable ASCII, every other byte as `\xHH`.

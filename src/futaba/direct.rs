@@ -187,7 +187,7 @@ impl WriteRow for ChannelRow {
         c.put_ascii(raw);
         c.end();
         for (i, name) in CH_NAMES.iter().enumerate() {
-            c.part(name, mark(i));
+            c.part_static(name, mark(i));
         }
         let bit = |b: u8| if flags & b != 0 { "1" } else { "0" };
         c.part_text("CH17", bit(wire::FLAG_CH17));

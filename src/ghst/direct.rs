@@ -209,7 +209,7 @@ impl GhstRow<'_> {
             } else {
                 NAMES[first + k - 4]
             };
-            c.part(name, *m);
+            c.part_static(name, *m);
         }
         if link {
             let mut b = [0u8; 8];
@@ -258,10 +258,10 @@ impl WriteRow for GhstRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part("RxBt", m0);
-                c.part("Curr", m1);
-                c.part("Capa", m2);
-                c.part("RxV", m3);
+                c.part_static("RxBt", m0);
+                c.part_static("Curr", m1);
+                c.part_static("Capa", m2);
+                c.part_static("RxV", m3);
             }
             What::Gps => {
                 c.begin();
@@ -272,9 +272,9 @@ impl WriteRow for GhstRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part("Lat", m0);
-                c.part("Lon", m1);
-                c.part("Alt", m2);
+                c.part_static("Lat", m0);
+                c.part_static("Lon", m1);
+                c.part_static("Alt", m2);
             }
             What::Gps2 => {
                 c.begin();
@@ -292,11 +292,11 @@ impl WriteRow for GhstRow<'_> {
                     2 => "no fix, home set",
                     _ => "fix, home set",
                 });
-                c.part("GSpd", m0);
-                c.part("Hdg", m1);
-                c.part("Sats", m2);
-                c.part("Dist", m3);
-                c.part("HDir", m4);
+                c.part_static("GSpd", m0);
+                c.part_static("Hdg", m1);
+                c.part_static("Sats", m2);
+                c.part_static("Dist", m3);
+                c.part_static("HDir", m4);
             }
             What::MagBaro => {
                 let flags = p[9];
@@ -327,7 +327,7 @@ impl WriteRow for GhstRow<'_> {
                     c.empty();
                 }
                 for &(name, m) in &marks[..k] {
-                    c.part(name, m);
+                    c.part_static(name, m);
                 }
             }
         }
