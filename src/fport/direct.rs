@@ -30,8 +30,47 @@ enum What {
     Data(u8, u16, u32, Common),
 }
 
-struct FportRow {
+struct FportRow<'h> {
     what: What,
+    held: &'h Held,
+}
+
+/// The texts of the channels a control frame carries after the sticks (CH5 on: switches and
+/// knobs, which seldom change), kept from the control row before and made again when one
+/// changes: CH5-CH8 in whole µs after a blank and the ` …` (the Data cell's end), CH5-CH16
+/// raw after a blank (the Note's end).
+#[derive(Default)]
+pub(super) struct Held {
+    aux: Option<[u16; 12]>,
+    whole: String,
+    raw: String,
+}
+
+impl Held {
+    #[inline]
+    fn update(&mut self, ch: &[u16; 16]) {
+        let mut aux = [0u16; 12];
+        aux.copy_from_slice(&ch[4..]);
+        if self.aux != Some(aux) {
+            self.make(aux);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn make(&mut self, aux: [u16; 12]) {
+        let t = texts();
+        self.aux = Some(aux);
+        self.whole.clear();
+        for &r in &aux[..4] {
+            self.whole.push_str(t.whole[usize::from(r)]);
+        }
+        self.whole.push_str(" …");
+        self.raw.clear();
+        for &r in &aux {
+            self.raw.push_str(t.raw[usize::from(r)]);
+        }
+    }
 }
 
 /// The channels' texts, made once: whole µs after a blank (the Data cell), exact µs (Value
@@ -80,7 +119,7 @@ const CH: [&str; 16] = [
     "CH14", "CH15", "CH16",
 ];
 
-impl WriteRow for FportRow {
+impl WriteRow for FportRow<'_> {
     #[inline(always)]
     fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
         match self.what {
@@ -96,10 +135,10 @@ impl WriteRow for FportRow {
                 let t = texts();
                 c.begin();
                 c.str(&t.whole[usize::from(ch[0])][1..]);
-                for &r in &ch[1..8] {
+                for &r in &ch[1..4] {
                     c.str(t.whole[usize::from(r)]);
                 }
-                c.str(" …");
+                c.str(&self.held.whole);
                 c.end();
                 c.value_text(Some(t.exact[usize::from(ch[0])]));
                 c.text("µs");
@@ -126,9 +165,10 @@ impl WriteRow for FportRow {
                     c.str("; ");
                 }
                 c.str("raw");
-                for &r in &ch {
+                for &r in &ch[..4] {
                     c.str(t.raw[usize::from(r)]);
                 }
+                c.str(&self.held.raw);
                 c.end();
                 for (name, &r) in CH.iter().zip(&ch) {
                     c.part_text(name, t.exact[usize::from(r)]);
@@ -210,6 +250,7 @@ impl WriteRow for FportRow {
 #[inline]
 pub(super) fn frame(
     stats: &mut Stats,
+    held: &mut Held,
     baud: u32,
     framing: Framing,
     f: &Frame<'_>,
@@ -255,7 +296,8 @@ pub(super) fn frame(
     st.valid();
     let mut class = Class::Plain;
     match what {
-        What::Control(_, flags, rssi) => {
+        What::Control(ch, flags, rssi) => {
+            held.update(&ch);
             st.control[1] += 1;
             st.rssi(rssi);
             if flags & FLAG_FRAME_LOST != 0 {
@@ -274,7 +316,7 @@ pub(super) fn frame(
             ps.data += 1;
         }
     }
-    direct.row(Some(micros), class, f.raw, &FportRow { what });
+    direct.row(Some(micros), class, f.raw, &FportRow { what, held });
     true
 }
 

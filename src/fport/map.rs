@@ -78,6 +78,8 @@ pub struct Mapper {
     pub stats: Stats,
     /// Line speed and bits per byte, for the time of sources without time.
     baud: u32,
+    /// The control rows' texts of the channels after the sticks, from the row before.
+    held: super::direct::Held,
 }
 
 impl Mapper {
@@ -86,6 +88,7 @@ impl Mapper {
             sc: Scratch::default(),
             stats: Stats::default(),
             baud: baud.max(1),
+            held: Default::default(),
         }
     }
 
@@ -96,7 +99,14 @@ impl Mapper {
         }
         let _ = match ev {
             Event::Frame(f) => {
-                if super::direct::frame(&mut self.stats, self.baud, framing, &f, out) {
+                if super::direct::frame(
+                    &mut self.stats,
+                    &mut self.held,
+                    self.baud,
+                    framing,
+                    &f,
+                    out,
+                ) {
                     return;
                 }
                 self.frame(framing, &f, out)
