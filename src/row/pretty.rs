@@ -73,6 +73,8 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             let at = self.line.len();
             if self.line.put_scan(bytes, line::not_printable) == 0 {
                 bytes.len()
+            } else if let Some(width) = clean_width(cell) {
+                width
             } else {
                 self.line.truncate(at);
                 self.chars(cell)
@@ -114,6 +116,8 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             0
         } else if line::scan(cell, line::not_printable) == 0 {
             cell.len()
+        } else if let Some(width) = std::str::from_utf8(cell).ok().and_then(clean_width) {
+            width
         } else {
             self.rewrite(at, scratch)
         };
@@ -225,6 +229,23 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     }
 }
 
+/// The width of a text that is not printable ASCII (one column per char) when it holds no
+/// control character, so that it stays as written (`…`, `µs`); `None` when one must become a
+/// blank ([`PrettyLine::chars`]). Counted on the bytes: a char is a byte that does not continue
+/// one; the controls are C0, DEL and C1 (`C2 80` to `C2 9F`), what `char::is_control` finds.
+#[inline]
+fn clean_width(text: &str) -> Option<usize> {
+    let b = text.as_bytes();
+    let mut chars = 0;
+    for (i, &x) in b.iter().enumerate() {
+        if x < 0x20 || x == 0x7F || (x == 0xC2 && matches!(b.get(i + 1), Some(0x80..=0x9F))) {
+            return None;
+        }
+        chars += usize::from(x & 0xC0 != 0x80);
+    }
+    Some(chars)
+}
+
 /// Column `i`'s width for a cell `len` columns wide: with `grow` (and not the last column), a
 /// longer cell up to [`PRETTY_GROW_MAX`] widens the column for this row and every later one.
 /// Returns the padding the cell needs.
@@ -236,4 +257,34 @@ pub(crate) fn fit(widths: &mut [usize], i: usize, len: usize, grow: bool, last: 
         *width = len;
     }
     width.saturating_sub(len)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::clean_width;
+    use proptest::prelude::*;
+
+    fn by_chars(text: &str) -> Option<usize> {
+        (!text.chars().any(char::is_control)).then(|| text.chars().count())
+    }
+
+    #[test]
+    fn clean_widths_of_the_tables_texts() {
+        assert_eq!(clean_width("992 992 \u{2026}"), Some(9));
+        assert_eq!(clean_width("\u{b5}s"), Some(2));
+        assert_eq!(clean_width("a\u{85}b"), None);
+        assert_eq!(clean_width("a\u{9f}"), None);
+        assert_eq!(clean_width("\u{a0}\u{7f}"), None);
+        assert_eq!(clean_width("\t"), None);
+        assert_eq!(clean_width("\u{1F680}\u{c0}"), Some(2));
+    }
+
+    proptest! {
+        #[test]
+        fn clean_width_is_the_char_count_of_a_text_without_controls(text in ".*", c in any::<char>()) {
+            prop_assert_eq!(clean_width(&text), by_chars(&text));
+            let t = format!("{text}{c}{text}");
+            prop_assert_eq!(clean_width(&t), by_chars(&t));
+        }
+    }
 }
