@@ -149,13 +149,18 @@ impl WriteRow for FrameRow<'_> {
                 // `XX (` and the number's digits
                 let text = DATA1[b as usize];
                 let a = c.here() + 4;
-                c.str(text);
+                if b < 0x80 {
+                    // `XX (n)`: plain ASCII (`XX (n, -m)` has a comma, which CSV quotes)
+                    c.put_ascii(text.as_bytes());
+                } else {
+                    c.str(text);
+                }
                 let digits = 1 + u32::from(b >= 10) + u32::from(b >= 100);
                 mark = Some(Mark::new(a, a + digits));
             } else {
                 c.hex_bytes(payload);
                 if let Some((unsigned, signed)) = int_reading(payload) {
-                    c.str(" (");
+                    c.put_ascii(b" (");
                     let a = c.here();
                     c.dec(u64::from(unsigned));
                     mark = Some(Mark::new(a, c.here()));
@@ -163,7 +168,7 @@ impl WriteRow for FrameRow<'_> {
                         c.str(", ");
                         c.dec_i(i64::from(signed));
                     }
-                    c.str(")");
+                    c.put_ascii(b")");
                 }
             }
             c.end();
@@ -179,11 +184,11 @@ impl WriteRow for FrameRow<'_> {
                 let (ms, f) = (micros / 1000, (micros % 1000) as usize);
                 c.begin();
                 if ms < 10 {
-                    c.ascii(b'0' + ms as u8);
+                    c.put_ascii(&[b'0' + ms as u8]);
                 } else {
                     c.dec(ms);
                 }
-                c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
+                c.put_ascii(DOT_DECIMALS3[4 * f..4 * f + 4].as_bytes());
                 c.end();
             }
             None => c.empty(),
