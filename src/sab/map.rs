@@ -188,7 +188,7 @@ impl WriteRow for FrameRow<'_> {
                 } else {
                     c.dec(ms);
                 }
-                c.put_ascii(DOT_DECIMALS3[4 * f..4 * f + 4].as_bytes());
+                c.put_ascii(&DOT_DECIMALS3.as_bytes()[4 * f..4 * f + 4]);
                 c.end();
             }
             None => c.empty(),
