@@ -1,5 +1,5 @@
-// busnoop's C reference decoders: the text helpers that crsf_ref.c, ghst_ref.c, fport_ref.c,
-// ether_ref.c and sbus_ref.c share (decimal digits without leading zeros, signed and fixed-point numbers, hex, a short copy).
+// busnoop's C reference decoders: the text helpers they share (sport_ref.c, sab_ref.c, crsf_ref.c,
+// ghst_ref.c, fport_ref.c, ether_ref.c, sbus_ref.c) (decimal digits without leading zeros, signed and fixed-point numbers, hex, a short copy).
 // Same licence as busnoop (MIT OR Apache-2.0). Include after ref_io.h.
 #ifndef REF_TEXT_H
 #define REF_TEXT_H

@@ -32,31 +32,7 @@ static unsigned char ibuf[CARRY_MAX + RD + 64];
 
 // ---- text helpers -------------------------------------------------------------------------
 
-// Writes v's decimal digits at t (room for 24 + 8 bytes; bytes past the number may be written);
-// returns their count.
-static inline int lead_digits(char *t, uint32_t v) {  // v < 10^8, without leading zeros
-    uint64_t d = eight_digits(v);
-    int lead = v ? __builtin_ctzll(d) / 8 : 7;
-    d = (d >> (lead * 8)) | ZEROS; memcpy(t, &d, 8);
-    return 8 - lead;
-}
-static inline int udigits(char *t, uint64_t v) {
-    if (v < 100000000) return lead_digits(t, (uint32_t)v);
-    uint64_t hi = v / 100000000, d;
-    int k;
-    if (hi < 100000000) k = lead_digits(t, (uint32_t)hi);
-    else {  // above 10^16
-        k = lead_digits(t, (uint32_t)(hi / 100000000));
-        d = eight_digits((uint32_t)(hi % 100000000)) | ZEROS; memcpy(t + k, &d, 8); k += 8;
-    }
-    d = eight_digits((uint32_t)(v % 100000000)) | ZEROS; memcpy(t + k, &d, 8);
-    return k + 8;
-}
-static inline char *put_u64(char *w, uint64_t v) { return w + udigits(w, v); }
-static inline char *put_i64(char *w, int64_t v) {
-    if (v < 0) { *w++ = '-'; return put_u64(w, (uint64_t)0 - (uint64_t)v); }
-    return put_u64(w, (uint64_t)v);
-}
+#include "ref_text.h"
 // µs as ms with three decimals (busnoop's push_ms: 0.868, 12.500)
 static inline char *put_ms3(char *w, uint64_t micros) {
     w = put_u64(w, micros / 1000);
@@ -64,12 +40,6 @@ static inline char *put_ms3(char *w, uint64_t micros) {
     w[0] = '.'; w[1] = (char)('0' + f / 100); w[2] = (char)('0' + f / 10 % 10); w[3] = (char)('0' + f % 10);
     return w + 4;
 }
-#define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
-static inline char *put_hex_bytes(char *w, const unsigned char *b, size_t n) {
-    for (size_t i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
-    return w;
-}
-static inline char *put_0x(char *w, unsigned b) { *w++ = '0'; *w++ = 'x'; *w++ = HEXU[(b >> 4) & 15]; *w++ = HEXU[b & 15]; return w; }
 static inline char *put_0x16(char *w, unsigned v) { w = put_0x(w, v >> 8); *w++ = HEXU[(v >> 4) & 15]; *w++ = HEXU[v & 15]; return w; }
 
 // ---- tables -------------------------------------------------------------------------------

@@ -21,51 +21,11 @@ static unsigned char ibuf[RD + 64];
 
 // ---- text helpers -------------------------------------------------------------------------
 
-// Writes v's decimal digits at t (room for 24 + 8 bytes; bytes past the number may be written);
-// returns their count.
-static inline int lead_digits(char *t, uint32_t v) {  // v < 10^8, without leading zeros
-    uint64_t d = eight_digits(v);
-    int lead = v ? __builtin_ctzll(d) / 8 : 7;
-    d = (d >> (lead * 8)) | ZEROS; memcpy(t, &d, 8);
-    return 8 - lead;
-}
-static inline int udigits(char *t, uint64_t v) {
-    if (v < 100000000) return lead_digits(t, (uint32_t)v);
-    uint64_t hi = v / 100000000, d;
-    int k;
-    if (hi < 100000000) k = lead_digits(t, (uint32_t)hi);
-    else {  // above 10^16
-        k = lead_digits(t, (uint32_t)(hi / 100000000));
-        d = eight_digits((uint32_t)(hi % 100000000)) | ZEROS; memcpy(t + k, &d, 8); k += 8;
-    }
-    d = eight_digits((uint32_t)(v % 100000000)) | ZEROS; memcpy(t + k, &d, 8);
-    return k + 8;
-}
-static inline char *put_u64(char *w, uint64_t v) { return w + udigits(w, v); }
-// raw / 10^prec (prec <= 7), exactly as busnoop's push_decimal (65.43, -1.50, 0.005, 15422.0)
-static inline char *put_fixed(char *w, int64_t raw, int prec) {
-    uint64_t m = raw < 0 ? (uint64_t)0 - (uint64_t)raw : (uint64_t)raw;
-    if (raw < 0) *w++ = '-';
-    if (prec == 0) return put_u64(w, m);
-    char t[40];
-    int nd = udigits(t, m);
-    if (nd > prec) {
-        memcpy(w, t, 24); w += nd - prec;
-        *w = '.'; memcpy(w + 1, t + nd - prec, 8); return w + 1 + prec;
-    }
-    memcpy(w, "0.00000000", 10); w += 2 + prec - nd;
-    memcpy(w, t, 8); return w + nd;
-}
-#define PUTS(w, s) (memcpy((w), (s), sizeof(s) - 1), (w) + sizeof(s) - 1)
+#include "ref_text.h"
 // a constant string of up to 32 bytes with its length: one fixed-size copy
 typedef struct { char s[32]; int n; } Str;
 static inline char *put_str(char *w, const Str *s) { memcpy(w, s->s, 32); return w + s->n; }
 static void mkstr(Str *s, const char *t) { memset(s->s, 0, 32); s->n = (int)strlen(t); memcpy(s->s, t, (size_t)s->n); }
-static inline char *put_hex_bytes(char *w, const unsigned char *b, int n) {
-    for (int i = 0; i < n; i++) { if (i) *w++ = ' '; *w++ = HEXU[b[i] >> 4]; *w++ = HEXU[b[i] & 15]; }
-    return w;
-}
-static inline char *put_0x(char *w, unsigned b) { *w++ = '0'; *w++ = 'x'; *w++ = HEXU[(b >> 4) & 15]; *w++ = HEXU[b & 15]; return w; }
 
 // ---- tables -------------------------------------------------------------------------------
 static const char *DEVICES[32] = {
