@@ -14,14 +14,17 @@ use crate::fmt::{hex_0x, push_0x, push_0x16, push_hex, push_ms, push_ms_short, p
 use std::ops::Range;
 
 use super::config::COLUMNS;
-use crate::row::{Cells, Class, Fmt, Mark, Part, Parts, Row, WriteRow};
+use crate::row::{Class, Part, Row};
 use crate::row::{Latch, RowOut};
 
+mod direct;
 mod text;
+
+use direct::{FrameRow, ScratchRow, TimeoutRow};
 pub use text::push_payload;
 #[cfg(test)]
 use text::push_reading;
-use text::{DATA1, DOT_DECIMALS3, int_reading, push_data, push_ms3};
+use text::{push_data, push_ms3};
 
 /// Payload bytes shown at most in the Data column of an overlong frame.
 const OVERLONG_DATA_MAX: usize = 64;
@@ -71,182 +74,6 @@ struct RowParts<'a> {
     /// cells follow from the address, the command and the Type (the names are fixed for a
     /// run).
     stamp: u32,
-}
-
-/// A row of the scratch buffers, written straight into the table ([`crate::row::direct`]):
-/// the cells of the [`Row`] [`Mapper::put`] builds otherwise.
-struct ScratchRow<'a> {
-    p: &'a RowParts<'a>,
-    sc: &'a Scratch,
-    addr: &'a str,
-    device: &'a str,
-    sensor_no: &'a str,
-    sensor: &'a str,
-    unit: &'a str,
-    parts: Parts<'a>,
-}
-
-impl WriteRow for ScratchRow<'_> {
-    #[inline]
-    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
-        let (p, sc) = (self.p, self.sc);
-        if c.stamp(p.stamp) {
-            c.id(p.id.map(u32::from));
-            c.text(self.device);
-            c.text(p.kind);
-            c.text(self.sensor_no);
-            c.text(self.sensor);
-            c.stamp_end();
-        }
-        c.text(&sc.data);
-        c.value_text(self.parts.first().map(|p| p.text));
-        c.text(self.unit);
-        c.text(self.addr);
-        c.text(&sc.resp);
-        c.text(p.framing.name());
-        c.text(&sc.note);
-        c.row_parts(self.parts);
-    }
-}
-
-/// A valid frame's row written straight into the table, its Data cell (the payload and its
-/// integer reading, [`push_data`]), Value and response time formatted in place: the cells
-/// [`Mapper::frame`] puts into a [`Row`] otherwise, for frames without a declared type.
-struct FrameRow<'a> {
-    stamp: u32,
-    addr: u8,
-    command: u8,
-    flags: Flags,
-    /// A request or an ACK: its reading is the row's number.
-    numbered: bool,
-    payload: &'a [u8],
-    /// Response time (µs) of a paired response.
-    resp: Option<u64>,
-    framing: Framing,
-    names: &'a Names,
-    note: &'a str,
-}
-
-impl WriteRow for FrameRow<'_> {
-    #[inline(always)]
-    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
-        let (addr, command) = (self.addr, self.command);
-        if c.stamp(self.stamp) {
-            c.id(Some(u32::from(addr)));
-            c.text(self.names.device(addr));
-            c.text(self.flags.type_name());
-            c.text(hex_0x(command));
-            c.text(self.names.command(command));
-            c.stamp_end();
-        }
-        let payload = self.payload;
-        let mut mark = None;
-        if payload.is_empty() {
-            c.empty();
-        } else {
-            c.begin();
-            if let [b] = *payload {
-                // `XX (` and the number's digits
-                let text = DATA1[b as usize];
-                let a = c.here() + 4;
-                if b < 0x80 {
-                    // `XX (n)`: plain ASCII (`XX (n, -m)` has a comma, which CSV quotes)
-                    c.put_ascii(text.as_bytes());
-                } else {
-                    c.str(text);
-                }
-                let digits = 1 + u32::from(b >= 10) + u32::from(b >= 100);
-                mark = Some(Mark::new(a, a + digits));
-            } else {
-                c.hex_bytes(payload);
-                if let Some((unsigned, signed)) = int_reading(payload) {
-                    c.put_ascii(b" (");
-                    let a = c.here();
-                    c.dec(u64::from(unsigned));
-                    mark = Some(Mark::new(a, c.here()));
-                    if signed < 0 {
-                        c.str(", ");
-                        c.dec_i(i64::from(signed));
-                    }
-                    c.put_ascii(b")");
-                }
-            }
-            c.end();
-        }
-        let number = if self.numbered { mark } else { None };
-        c.value(number);
-        c.empty();
-        c.text(hex_0x(addr));
-        match self.resp {
-            Some(micros) => {
-                // `push_ms3`
-                let micros = micros.min(i64::MAX as u64);
-                let (ms, f) = (micros / 1000, (micros % 1000) as usize);
-                c.begin();
-                if ms < 10 {
-                    c.put_ascii(&[b'0' + ms as u8]);
-                } else {
-                    c.dec(ms);
-                }
-                c.put_ascii(&DOT_DECIMALS3.as_bytes()[4 * f..4 * f + 4]);
-                c.end();
-            }
-            None => c.empty(),
-        }
-        c.text(self.framing.name());
-        c.text(self.note);
-        if let Some(m) = number {
-            c.part(self.names.part(command, self.flags == Flags::Ack), m);
-        }
-    }
-}
-
-/// A `Timeout` row closed by the next request or the end of the capture, written straight
-/// into the table: the cells [`Mapper::timeout_row`] puts into a [`Row`] otherwise.
-struct TimeoutRow<'a> {
-    stamp: u32,
-    addr: u8,
-    command: u8,
-    /// Closed by the end of the capture (else by the next request).
-    end: bool,
-    /// µs waited.
-    waited: u64,
-    framing: Framing,
-    names: &'a Names,
-}
-
-impl WriteRow for TimeoutRow<'_> {
-    #[inline]
-    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
-        let (addr, command) = (self.addr, self.command);
-        if c.stamp(self.stamp) {
-            c.id(Some(u32::from(addr)));
-            c.text(self.names.device(addr));
-            c.text(crate::row::kind::TIMEOUT);
-            c.text(hex_0x(command));
-            c.text(self.names.command(command));
-            c.stamp_end();
-        }
-        c.empty();
-        c.value(None);
-        c.empty();
-        c.text(hex_0x(addr));
-        c.empty();
-        c.text(self.framing.name());
-        // `push_ms` (three decimals)
-        let micros = self.waited.min(i64::MAX as u64);
-        let f = (micros % 1000) as usize;
-        c.begin();
-        c.str(if self.end {
-            "no response before the end of the capture (after "
-        } else {
-            "no response before the next request (after "
-        });
-        c.dec(micros / 1000);
-        c.str(&DOT_DECIMALS3[4 * f..4 * f + 4]);
-        c.str(" ms)");
-        c.end();
-    }
 }
 
 /// Maps events onto rows, pairs requests with responses, keeps the statistics.

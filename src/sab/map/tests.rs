@@ -1,3 +1,4 @@
+use super::text::int_reading;
 use super::*;
 
 #[test]
