@@ -151,54 +151,44 @@ pub fn command() -> clap::Command {
 }
 
 /// The subcommand of `p`.
+///
+/// Built in one pass over its options: clap's `Command::mut_arg` moves the option it edits to
+/// the end of the list (a `Vec::remove` of large `Arg`s), and editing each of some sixty options
+/// that way for every protocol cost two thirds of busnoop's start-up. The protocol's own options
+/// are added first and the shared ones after them, the order the help's sections and the
+/// completion scripts follow; only the options hidden last are moved (to the end, as before).
 fn protocol_command(p: &'static Protocol) -> clap::Command {
-    let mut cmd = CaptureArgs::augment_args(clap::Command::new(p.command));
-    let own_before: Vec<String> = cmd
-        .get_arguments()
-        .map(|a| a.get_id().to_string())
-        .collect();
-    cmd = (p.front.args)(cmd.next_help_heading("Protocol options"));
     // The protocol's own options: the first words of their help in `-h`.
-    let own: Vec<String> = cmd
-        .get_arguments()
-        .map(|a| a.get_id().to_string())
-        .filter(|id| !own_before.contains(id))
-        .collect();
-    for id in own {
-        cmd = cmd.mut_arg(id, |a| {
-            let long = a.get_long_help().or(a.get_help()).cloned();
-            match long {
-                Some(long) => {
-                    let text = long.to_string();
-                    a.help(first_words(&text)).long_help(long)
-                }
-                None => a,
-            }
-        });
-    }
-    let line = p.line;
-    // After the protocol's options: a derived `Args` struct sets the help from its doc comment.
-    cmd = cmd
+    let cmd = (p.front.args)(clap::Command::new(p.command).next_help_heading("Protocol options"));
+    let own: Vec<clap::Id> = cmd.get_arguments().map(|a| a.get_id().clone()).collect();
+    let cmd = CaptureArgs::augment_args(cmd.next_help_heading(None::<&str>));
+    // clap numbered the options as they came (the display order, which sorts the help's
+    // sections): the shared ones first, as a subcommand built the other way round has them.
+    let named = |c: &clap::Command, own_ones: bool| {
+        c.get_arguments()
+            .filter(|a| !a.is_positional() && own.contains(a.get_id()) == own_ones)
+            .count()
+    };
+    let (own_named, shared_named) = (named(&cmd, true), named(&cmd, false));
+    let edits = SharedEdits::new(p);
+    let mut cmd = cmd
         .about(p.summary)
         .long_about(p.about)
         .visible_aliases(p.aliases.iter().copied())
-        .mut_arg("source", |a| a.help(p.source_help))
-        .mut_arg("record", |a| a.help(record_help(p)))
-        .mut_arg("baud", |a| {
-            a.help(format!(
-                "Serial line speed when SOURCE is a device; also sets the byte times of raw \
-                 files [default: {}]",
-                line.baud
-            ))
+        .mut_args(|a| {
+            let order = a.get_display_order();
+            match (own.contains(a.get_id()), a.is_positional()) {
+                (true, true) => own_help(a),
+                (true, false) => own_help(a).display_order(order + shared_named),
+                (false, true) => edits.apply(a),
+                (false, false) => edits.apply(a).display_order(order - own_named),
+            }
         })
-        .mut_arg("line", |a| {
-            a.help(format!(
-                "Character format of a serial device: 8N1, 8E1, 8N2 …, optionally after the \
-                 speed (9600-8E1) [default: {}]",
-                line.format()
-            ))
-        });
-    cmd = protocol_help(cmd, p);
+        .after_help(format!(
+            "{}\nEvery option, the defaults and the filters' values: busnoop {} --help",
+            p.examples, p.command
+        ))
+        .after_long_help(p.examples);
     // Filters that cannot apply to this protocol stay out of its help (and are refused with the
     // reason when given).
     let v = p.vocab;
@@ -220,6 +210,17 @@ fn protocol_command(p: &'static Protocol) -> clap::Command {
         cmd = cmd.mut_arg("device", |a| a.hide(true));
     }
     cmd
+}
+
+/// A protocol's own option: the first words of its help in `-h`, the whole in `--help`.
+fn own_help(a: clap::Arg) -> clap::Arg {
+    match a.get_long_help().or(a.get_help()).cloned() {
+        Some(long) => {
+            let text = long.to_string();
+            a.help(first_words(&text)).long_help(long)
+        }
+        None => a,
+    }
 }
 
 /// The start of a help text, up to its first colon, parenthesis or sentence end (the text of
@@ -293,92 +294,119 @@ fn short_help(p: &Protocol) -> Vec<(&'static str, String)> {
 
 /// The protocol's own words in the shared options' help (its defaults, its ID, its types and
 /// sensors, its export), and the split between `-h` (a summary) and `--help` (everything).
-fn protocol_help(mut cmd: clap::Command, p: &'static Protocol) -> clap::Command {
-    let v = p.vocab;
-    let cycle = match (&v.ids, v.polls) {
-        (_, true) => format!("one line per poll cycle (each {}'s next poll)", v.id_name),
-        (Some(_), false) => format!("one line per cycle (each {}'s next frame)", v.id_name),
-        (None, false) => "one line per frame".to_string(),
-    };
-    let wide = format!(
-        "Wide table (CSV or TSV): {cycle}, one column per number seen, named `Name(unit)`, the \
-         last value held; Date and Time when the source has wall-clock time, else Millis. See \
-         docs/wide.md"
-    );
-    cmd = cmd.mut_arg("wide", |a| a.long_help(wide));
-    let types: Vec<&str> = v.types.iter().copied().take(6).collect();
-    cmd = cmd.mut_arg("types", |a| {
-        a.long_help(format!(
-            "Show only rows of these types, comma-separated and case-insensitive: {}{}",
-            types.join(", "),
-            if v.types.len() > types.len() {
-                " …"
-            } else {
-                ""
-            }
-        ))
-    });
-    if let Some(ids) = &v.ids {
-        let id = v.id_name;
-        cmd = cmd
-            .mut_arg("id", |a| {
-                a.long_help(format!(
-                    "Show only rows of these IDs ({id}, {} to {}): `2,8`, `0x1B`, ranges `0-9` \
-                     (repeatable)",
-                    ids.start(),
-                    ids.end()
-                ))
-            })
-            .mut_arg("name", |a| {
-                a.long_help(format!(
-                    "Name an ID ({id}) in the Device column (repeatable): `--name Pack=1`, \
-                     `--name Boiler=0x0A`; the name first, then the ID"
-                ))
-            });
+struct SharedEdits {
+    p: &'static Protocol,
+    /// `-h`'s text of the shared options it shows; the others only in `--help`.
+    short: Vec<(&'static str, String)>,
+}
+
+impl SharedEdits {
+    fn new(p: &'static Protocol) -> Self {
+        SharedEdits {
+            p,
+            short: short_help(p),
+        }
     }
-    // (Not from `vocab.sensors`, which S.Port builds from every app ID: too slow for a
-    // help text built at every start.)
-    cmd = cmd.mut_arg("sensor", |a| {
-        a.long_help(format!(
-            "Show only rows whose Sensor or Sensor # column is one of these, or that carry a \
-             number of that name, comma-separated and case-insensitive; Sensor # {}",
-            v.sensor_no_text
-        ))
-    });
-    if let Some(e) = &p.export {
-        cmd = cmd.mut_arg("export", |a| {
-            a.long_help(format!(
-                "Write every reassembled frame (valid or not) as one packet of FILE.pcapng, with \
-                 its capture time, for Wireshark: link type {} ({}), decoded by {} (docs/\
-                 wireshark.md). Filters apply, as to the table",
-                e.linktype, e.linktype_name, e.dissector
-            ))
-        });
-    }
-    // `-h`: the short list; every other shared option only in `--help`.
-    let short = short_help(p);
-    let shared: Vec<String> = CaptureArgs::augment_args(clap::Command::new("x"))
-        .get_arguments()
-        .map(|a| a.get_id().to_string())
-        .collect();
-    for id in shared {
-        cmd = match short.iter().find(|(s, _)| *s == id) {
-            Some((_, text)) => cmd.mut_arg(id, |a| {
+
+    /// One shared option, edited in place: first the protocol's words, then the `-h` split.
+    fn apply(&self, a: clap::Arg) -> clap::Arg {
+        let a = self.protocol_words(a);
+        match self.short.iter().find(|(s, _)| a.get_id() == *s) {
+            Some((_, text)) => {
                 let long = a
                     .get_long_help()
                     .or(a.get_help())
                     .cloned()
                     .unwrap_or_default();
                 a.help(text.clone()).long_help(long)
-            }),
-            None => cmd.mut_arg(id, |a| a.hide_short_help(true)),
-        };
+            }
+            None => a.hide_short_help(true),
+        }
     }
-    cmd.after_help(format!(
-        "{}\nEvery option, the defaults and the filters' values: busnoop {} --help",
-        p.examples, p.command
-    ))
-    .after_long_help(p.examples)
+
+    /// The shared option's help in the protocol's words (its defaults, its ID, its types …).
+    fn protocol_words(&self, a: clap::Arg) -> clap::Arg {
+        let p = self.p;
+        let v = p.vocab;
+        let line = p.line;
+        match a.get_id().as_str() {
+            "source" => a.help(p.source_help),
+            "record" => a.help(record_help(p)),
+            "baud" => a.help(format!(
+                "Serial line speed when SOURCE is a device; also sets the byte times of raw \
+                 files [default: {}]",
+                line.baud
+            )),
+            "line" => a.help(format!(
+                "Character format of a serial device: 8N1, 8E1, 8N2 …, optionally after the \
+                 speed (9600-8E1) [default: {}]",
+                line.format()
+            )),
+            "wide" => {
+                let cycle = match (&v.ids, v.polls) {
+                    (_, true) => {
+                        format!("one line per poll cycle (each {}'s next poll)", v.id_name)
+                    }
+                    (Some(_), false) => {
+                        format!("one line per cycle (each {}'s next frame)", v.id_name)
+                    }
+                    (None, false) => "one line per frame".to_string(),
+                };
+                a.long_help(format!(
+                    "Wide table (CSV or TSV): {cycle}, one column per number seen, named \
+                     `Name(unit)`, the last value held; Date and Time when the source has \
+                     wall-clock time, else Millis. See docs/wide.md"
+                ))
+            }
+            "types" => {
+                let types: Vec<&str> = v.types.iter().copied().take(6).collect();
+                a.long_help(format!(
+                    "Show only rows of these types, comma-separated and case-insensitive: {}{}",
+                    types.join(", "),
+                    if v.types.len() > types.len() {
+                        " …"
+                    } else {
+                        ""
+                    }
+                ))
+            }
+            "id" => match &v.ids {
+                Some(ids) => a.long_help(format!(
+                    "Show only rows of these IDs ({}, {} to {}): `2,8`, `0x1B`, ranges `0-9` \
+                     (repeatable)",
+                    v.id_name,
+                    ids.start(),
+                    ids.end()
+                )),
+                None => a,
+            },
+            "name" => match &v.ids {
+                Some(_) => a.long_help(format!(
+                    "Name an ID ({}) in the Device column (repeatable): `--name Pack=1`, \
+                     `--name Boiler=0x0A`; the name first, then the ID",
+                    v.id_name
+                )),
+                None => a,
+            },
+            // (Not from `vocab.sensors`, which S.Port builds from every app ID: too slow for a
+            // help text built at every start.)
+            "sensor" => a.long_help(format!(
+                "Show only rows whose Sensor or Sensor # column is one of these, or that carry \
+                 a number of that name, comma-separated and case-insensitive; Sensor # {}",
+                v.sensor_no_text
+            )),
+            "export" => match &p.export {
+                Some(e) => a.long_help(format!(
+                    "Write every reassembled frame (valid or not) as one packet of \
+                     FILE.pcapng, with its capture time, for Wireshark: link type {} ({}), \
+                     decoded by {} (docs/wireshark.md). Filters apply, as to the table",
+                    e.linktype, e.linktype_name, e.dissector
+                )),
+                None => a,
+            },
+            _ => a,
+        }
+    }
 }
 
 /// A parsed command line.
