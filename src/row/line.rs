@@ -233,9 +233,16 @@ impl W<'_> {
         {
             return;
         }
-        // Written again, quoted.
+        // Written again, quoted: without inner quotes (a list of numbers, a note with commas)
+        // the field between two quotes.
         self.pos = at;
-        self.aside(|w| w.csv_quoted(field));
+        if has_quote(field) {
+            self.aside(|w| w.csv_quoted(field));
+        } else {
+            self.byte(b'"');
+            self.put(field);
+            self.byte(b'"');
+        }
     }
 
     /// `field` in double quotes, inner quotes doubled.
@@ -278,7 +285,31 @@ impl W<'_> {
         {
             return None;
         }
-        self.rewrite(at, scratch, |w, text| w.csv_quoted(text))
+        if has_quote(cell) {
+            self.rewrite(at, scratch, |w, text| w.csv_quoted(text))
+        } else {
+            self.quote_within(at, scratch)
+        }
+    }
+
+    /// The cell written since `at`, which holds no quote, between two quotes: moved one byte on
+    /// in the line; its text is kept in `scratch` as [`W::rewrite`] keeps it (a number marked
+    /// in it is read from there).
+    #[inline(never)]
+    fn quote_within(&mut self, at: usize, scratch: &mut Vec<u8>) -> Option<(u32, u32)> {
+        let end = self.pos;
+        let cell = self.buf.get(at..end).unwrap_or_default();
+        scratch.clear();
+        scratch.extend_from_slice(cell);
+        if end + 2 > self.buf.len() || at > end {
+            self.over = true;
+        } else {
+            self.buf.copy_within(at..end, at + 1);
+            self.buf[at] = b'"';
+            self.buf[end + 1] = b'"';
+            self.pos = end + 2;
+        }
+        Some((at as u32, scratch.len() as u32))
     }
 
     /// Writes the text written since `at` again with `write`, from a copy in `scratch`;
@@ -663,6 +694,12 @@ impl W<'_> {
             None => self.put(itoa::Buffer::new().format(n).as_bytes()),
         }
     }
+}
+
+/// Whether `s` holds a double quote (CSV then doubles it).
+#[inline(always)]
+fn has_quote(s: &[u8]) -> bool {
+    s.contains(&b'"')
 }
 
 /// Copies `src` (at most 16 bytes) to the start of `dst` (at least as long) and returns
@@ -1126,6 +1163,59 @@ mod tests {
         // After 5565 bytes kept, a line in the rest of the room.
         let n = write_line(&mut buf, len, |w| w.put(b"x"));
         assert_eq!(&buf[len..len + n], b"x");
+    }
+
+    /// A CSV field as the csv crate writes it (`QuoteStyle::Necessary`), whether written by
+    /// [`W::csv`] or in place and quoted afterwards by [`W::csv_fix`] (in the line, or moved one
+    /// byte on when it holds no quote), in every room the line starts with; `csv_fix` keeps the
+    /// field's text for the marks.
+    #[test]
+    fn csv_fields_as_the_csv_crate_writes_them() {
+        let fields: [&[u8]; 9] = [
+            b"plain",
+            b"",
+            b"84 (132, -124)",
+            b"a,\"b\"",
+            b"\"",
+            b"line\nbreak",
+            b"cr\r",
+            b"framing hdlc: SAB2 framing (0x7E flags, byte stuffing, CRC-16/MODBUS), forced",
+            b",",
+        ];
+        for field in fields {
+            let mut want = Vec::new();
+            {
+                let mut wr = csv::WriterBuilder::new().from_writer(&mut want);
+                wr.write_record([field, b"x"]).unwrap();
+            }
+            let want = &want[..want.len() - 3];
+            for room in 0..100 {
+                let mut buf = vec![0; room];
+                let len = write_line(&mut buf, 0, |w| {
+                    w.byte(b'|');
+                    w.csv(field);
+                    w.byte(b'|');
+                });
+                assert_eq!(&buf[1..len - 1], want, "{field:?} in {room}");
+                let mut buf = vec![0; room];
+                let mut scratch = Vec::new();
+                let mut kept = None;
+                let len = write_line(&mut buf, 0, |w| {
+                    w.byte(b'|');
+                    let at = w.len();
+                    w.put(field);
+                    kept = w.csv_fix(at, &mut scratch);
+                    w.byte(b'|');
+                });
+                assert_eq!(&buf[1..len - 1], want, "{field:?} in {room}");
+                match kept {
+                    Some((at, n)) => {
+                        assert_eq!((at, &scratch[..n as usize]), (1, field), "{room}")
+                    }
+                    None => assert_eq!(want, field),
+                }
+            }
+        }
     }
 
     #[test]
