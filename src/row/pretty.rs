@@ -73,7 +73,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             let at = self.line.len();
             if self.line.put_scan(bytes, line::not_printable) == 0 {
                 bytes.len()
-            } else if let Some(width) = clean_width(cell) {
+            } else if let Some(width) = clean_width(bytes) {
                 width
             } else {
                 self.line.truncate(at);
@@ -116,7 +116,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             0
         } else if line::scan(cell, line::not_printable) == 0 {
             cell.len()
-        } else if let Some(width) = std::str::from_utf8(cell).ok().and_then(clean_width) {
+        } else if let Some(width) = clean_width(cell) {
             width
         } else {
             self.rewrite(at, scratch)
@@ -229,21 +229,52 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     }
 }
 
-/// The width of a text that is not printable ASCII (one column per char) when it holds no
-/// control character, so that it stays as written (`…`, `µs`); `None` when one must become a
-/// blank ([`PrettyLine::chars`]). Counted on the bytes: a char is a byte that does not continue
-/// one; the controls are C0, DEL and C1 (`C2 80` to `C2 9F`), what `char::is_control` finds.
+/// The width of a text that is not printable ASCII (one column per char) when it is UTF-8 and
+/// holds no control character, so that it stays as written (`…`, `µs`); `None` when one must
+/// become a blank, or a byte a replacement character ([`PrettyLine::chars`]). Counted on the
+/// bytes, eight at a time: a char is a byte that does not continue one; the controls are C0,
+/// DEL and C1 (`C2 80` to `C2 9F`), what `char::is_control` finds. Only the text from its first
+/// byte that is not ASCII on is checked for UTF-8 (an ASCII start cannot make it invalid).
 #[inline]
-fn clean_width(text: &str) -> Option<usize> {
-    let b = text.as_bytes();
-    let mut chars = 0;
-    for (i, &x) in b.iter().enumerate() {
-        if x < 0x20 || x == 0x7F || (x == 0xC2 && matches!(b.get(i + 1), Some(0x80..=0x9F))) {
+fn clean_width(b: &[u8]) -> Option<usize> {
+    let (mut continuing, mut first_high) = (0, None);
+    let mut words = b.chunks_exact(8);
+    for (k, word) in words.by_ref().enumerate() {
+        let x = u64::from_le_bytes(word.try_into().unwrap_or_default());
+        if line::below_0x20(x) | line::zero_byte(x ^ line::rep(0x7F)) != 0 {
             return None;
         }
-        chars += usize::from(x & 0xC0 != 0x80);
+        let high = x & line::rep(0x80);
+        if high == 0 {
+            continue;
+        }
+        first_high.get_or_insert(k * 8 + high.trailing_zeros() as usize / 8);
+        if line::zero_byte(x ^ line::rep(0xC2)) != 0 && c1_control(b, k * 8, k * 8 + 8) {
+            return None;
+        }
+        // A continuing byte: 10xxxxxx (bit 7 set, bit 6 clear).
+        continuing += (x & !(x << 1) & line::rep(0x80)).count_ones() as usize;
     }
-    Some(chars)
+    let tail = b.len() - words.remainder().len();
+    for (i, &x) in b.iter().enumerate().skip(tail) {
+        if x < 0x20 || x == 0x7F || c1_control(b, i, i + 1) {
+            return None;
+        }
+        if x >= 0x80 {
+            first_high.get_or_insert(i);
+        }
+        continuing += usize::from(x & 0xC0 == 0x80);
+    }
+    if let Some(from) = first_high {
+        std::str::from_utf8(b.get(from..).unwrap_or_default()).ok()?;
+    }
+    Some(b.len() - continuing)
+}
+
+/// Whether a C1 control (`C2 80` to `C2 9F`) starts in `b[from..to]`.
+#[inline]
+fn c1_control(b: &[u8], from: usize, to: usize) -> bool {
+    (from..to).any(|i| b.get(i) == Some(&0xC2) && matches!(b.get(i + 1), Some(0x80..=0x9F)))
 }
 
 /// Column `i`'s width for a cell `len` columns wide: with `grow` (and not the last column), a
@@ -270,21 +301,34 @@ mod tests {
 
     #[test]
     fn clean_widths_of_the_tables_texts() {
-        assert_eq!(clean_width("992 992 \u{2026}"), Some(9));
-        assert_eq!(clean_width("\u{b5}s"), Some(2));
-        assert_eq!(clean_width("a\u{85}b"), None);
-        assert_eq!(clean_width("a\u{9f}"), None);
-        assert_eq!(clean_width("\u{a0}\u{7f}"), None);
-        assert_eq!(clean_width("\t"), None);
-        assert_eq!(clean_width("\u{1F680}\u{c0}"), Some(2));
+        assert_eq!(clean_width("992 992 \u{2026}".as_bytes()), Some(9));
+        assert_eq!(clean_width("\u{b5}s".as_bytes()), Some(2));
+        assert_eq!(clean_width("a\u{85}b".as_bytes()), None);
+        assert_eq!(clean_width("a\u{9f}".as_bytes()), None);
+        assert_eq!(clean_width("\u{a0}\u{7f}".as_bytes()), None);
+        assert_eq!(clean_width("\t".as_bytes()), None);
+        assert_eq!(clean_width("\u{1F680}\u{c0}".as_bytes()), Some(2));
     }
 
     proptest! {
         #[test]
         fn clean_width_is_the_char_count_of_a_text_without_controls(text in ".*", c in any::<char>()) {
-            prop_assert_eq!(clean_width(&text), by_chars(&text));
+            prop_assert_eq!(clean_width(text.as_bytes()), by_chars(&text));
             let t = format!("{text}{c}{text}");
-            prop_assert_eq!(clean_width(&t), by_chars(&t));
+            prop_assert_eq!(clean_width(t.as_bytes()), by_chars(&t));
+        }
+
+        /// Any bytes: `None` for what is not UTF-8, as the cell is then written again with
+        /// replacement characters.
+        #[test]
+        fn clean_width_of_any_bytes(
+            b in proptest::collection::vec(
+                prop_oneof![any::<u8>(), Just(0xC2u8), Just(0x85u8), Just(b'a'), Just(0xE2u8)],
+                0..40,
+            ),
+        ) {
+            let want = std::str::from_utf8(&b).ok().and_then(by_chars);
+            prop_assert_eq!(clean_width(&b), want);
         }
     }
 }
