@@ -8,6 +8,7 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
+use super::direct::Mark;
 use super::{Part, PartSpan, Parts};
 
 const SPACES: [u8; 32] = [b' '; 32];
@@ -515,6 +516,97 @@ impl W<'_> {
         self.json_key_slow(first, key, k, a, b);
     }
 
+    /// Members of `parts` from kept keys (`keys[i]`, `lens[i]` bytes of it: `,"name":`) and
+    /// the line's own bytes `marks[i]` (numbers written before in the line), after
+    /// `,"parts":{` instead of the first key's comma when `first`: what [`W::json_key_within`]
+    /// writes for each, with one room check for them all. `false`, and nothing written, when
+    /// the room or a mark does not allow its fixed-size copies.
+    #[inline(always)]
+    pub fn json_keys_within(
+        &mut self,
+        first: bool,
+        keys: &[[u8; 16]],
+        lens: &[u8],
+        marks: &[Mark],
+    ) -> bool {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        let pos = self.pos;
+        let n = marks.len();
+        if n == 0 {
+            return true;
+        }
+        if n > keys.len() || n > lens.len() || pos + 9 + 48 * n > self.buf.len() {
+            return false;
+        }
+        let mut at = pos;
+        if first {
+            self.buf[at..at + 16].copy_from_slice(PARTS);
+            at += 9;
+        }
+        for ((key, &k), m) in keys.iter().zip(lens).zip(marks) {
+            let (a, b) = (m.start as usize, m.end as usize);
+            if a > b || b - a > 32 || b > pos {
+                return false;
+            }
+            // The number and what follows it, copied whole (`a + 32 <= pos + 32`, in the
+            // buffer; the bytes after it are written over by the next key, or lie beyond
+            // the line). Read before the key is written: it may cover the number's tail.
+            let mut num = [0u8; 32];
+            num.copy_from_slice(&self.buf[a..a + 32]);
+            self.buf[at..at + 16].copy_from_slice(key);
+            let k = usize::from(k).min(16);
+            self.buf[at + k..at + k + 32].copy_from_slice(&num);
+            at += k + (b - a);
+        }
+        if first {
+            self.buf[pos + 9] = b'{';
+        }
+        self.pos = at;
+        true
+    }
+
+    /// Members of `parts` from kept keys (as [`W::json_keys_within`]) and their numbers'
+    /// texts: with one room check for them all. `false`, and nothing written, when the room
+    /// or a text's length (more than 32 bytes) does not allow it.
+    #[inline(always)]
+    pub fn json_keys_text(
+        &mut self,
+        first: bool,
+        keys: &[[u8; 16]],
+        lens: &[u8],
+        texts: &[&str],
+    ) -> bool {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        let pos = self.pos;
+        let n = texts.len();
+        if n == 0 {
+            return true;
+        }
+        if n > keys.len()
+            || n > lens.len()
+            || pos + 9 + 48 * n > self.buf.len()
+            || texts.iter().any(|t| t.len() > 32)
+        {
+            return false;
+        }
+        let mut at = pos;
+        if first {
+            self.buf[at..at + 16].copy_from_slice(PARTS);
+            at += 9;
+        }
+        for ((key, &k), t) in keys.iter().zip(lens).zip(texts) {
+            self.buf[at..at + 16].copy_from_slice(key);
+            let k = usize::from(k).min(16);
+            copy(&mut self.buf[at + k..at + k + 32], t.as_bytes());
+            at += k + t.len();
+        }
+        if first {
+            self.buf[pos + 9] = b'{';
+        }
+        self.pos = at;
+        true
+    }
+
     #[cold]
     fn json_key_slow(&mut self, first: bool, key: &[u8; 16], k: usize, a: usize, b: usize) {
         let key = key.get(..k).unwrap_or(key);
@@ -976,6 +1068,88 @@ mod tests {
                         let mut slow = vec![0; room];
                         let m = write_line(&mut slow, 0, |w| write(w, false));
                         assert_eq!(&fast[..n], &slow[..m], "{name:?} {number:?} {room}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A row's members from a list's keys made by the compiler, with one room check: what
+    /// [`W::json_key_within`] and [`W::json_key_text`] write member by member, first or not,
+    /// for every count of members, numbers short and long (then nothing is written and the
+    /// caller writes member by member), near the end of the room or not.
+    #[test]
+    fn listed_part_keys_write_what_each_member_writes() {
+        use super::super::part_keys::PartNames;
+        static NAMES: PartNames<4> = PartNames::new(["CH1", "FrameLost", "Bat%", "ABCDEFGHIJKL"]);
+        let numbers = [
+            ["1", "-0.5", "22", "3"],
+            ["1500", "1", "-1234567.1234567", "0"],
+            ["1", "1234567890123456789012345678901234567890", "2", "3"],
+        ];
+        for first in [true, false] {
+            for number in numbers {
+                for n in 0..=4 {
+                    for room in [8, 40, 70, 150, 200, 260, 400] {
+                        let write = |w: &mut W<'_>, fast: u8| {
+                            w.put(b"{\"data\":\"");
+                            let mut marks = [Mark::default(); 4];
+                            for (i, num) in number.iter().enumerate() {
+                                if i > 0 {
+                                    w.byte(b' ');
+                                }
+                                let a = w.len() as u32;
+                                w.put(num.as_bytes());
+                                marks[i] = Mark::new(a, w.len() as u32);
+                            }
+                            w.byte(b'"');
+                            let pieces = |w: &mut W<'_>| {
+                                for (i, m) in marks[..n].iter().enumerate() {
+                                    let (key, k) = (&NAMES.keys[i], usize::from(NAMES.lens[i]));
+                                    if fast == 2 {
+                                        let t = number[i].as_bytes();
+                                        w.json_key_text(first && i == 0, key, k, t);
+                                    } else {
+                                        let (a, b) = (m.start as usize, m.end as usize);
+                                        w.json_key_within(first && i == 0, key, k, a, b);
+                                    }
+                                }
+                            };
+                            match fast {
+                                0 | 2 => pieces(w),
+                                1 => {
+                                    if !w.json_keys_within(
+                                        first,
+                                        &NAMES.keys,
+                                        &NAMES.lens,
+                                        &marks[..n],
+                                    ) {
+                                        pieces(w)
+                                    }
+                                }
+                                _ => {
+                                    if !w.json_keys_text(
+                                        first,
+                                        &NAMES.keys,
+                                        &NAMES.lens,
+                                        &number[..n],
+                                    ) {
+                                        pieces(w)
+                                    }
+                                }
+                            }
+                            w.put(b"}\n");
+                        };
+                        let line = |fast: u8| {
+                            let mut buf = vec![0; room];
+                            let len = write_line(&mut buf, 0, |w| write(w, fast));
+                            buf.truncate(len);
+                            String::from_utf8(buf).unwrap()
+                        };
+                        let want = line(0);
+                        assert_eq!(line(1), want, "{first} {number:?} {n} {room}");
+                        assert_eq!(line(2), want, "{first} {number:?} {n} {room}");
+                        assert_eq!(line(3), want, "{first} {number:?} {n} {room}");
                     }
                 }
             }
