@@ -691,6 +691,29 @@ impl W<'_> {
     /// One member of `parts` (the `i`-th): its name as a JSON string, its number as it is.
     #[inline(always)]
     fn json_member(&mut self, i: usize, p: &Part<'_>) {
+        let (nb, tb) = (p.name.as_bytes(), p.text.as_bytes());
+        let (n, t) = (nb.len(), tb.len());
+        if n > 0 && n <= 16 && t <= 32 && self.pos + 64 <= self.buf.len() {
+            // Usually: one room check and short copies; a name to escape goes the way of
+            // its pieces (over what was written here).
+            let c = usize::from(i > 0);
+            let room = &mut self.buf[self.pos..self.pos + 64];
+            room[0] = b',';
+            room[c] = b'"';
+            if copy_test(&mut room[c + 1..], nb, json_escape) == 0 {
+                room[c + 1 + n] = b'"';
+                room[c + 2 + n] = b':';
+                copy(&mut room[c + 3 + n..], tb);
+                self.pos += c + 3 + n + t;
+                return;
+            }
+        }
+        self.json_member_pieces(i, p);
+    }
+
+    /// [`W::json_member`] piece by piece.
+    #[inline(never)]
+    fn json_member_pieces(&mut self, i: usize, p: &Part<'_>) {
         if i > 0 {
             self.byte(b',');
         }
@@ -708,10 +731,25 @@ impl W<'_> {
         let t = text.as_bytes();
         let cut = |a: u32, b: u32| t.get(a as usize..b as usize).unwrap_or_default();
         for (i, s) in spans.iter().enumerate() {
+            let name = cut(s.start, s.eq);
+            let num = cut(s.eq.saturating_add(1), s.end);
+            let (n, m) = (name.len(), num.len());
+            if n > 0 && n <= 16 && m <= 32 && self.pos + 64 <= self.buf.len() {
+                // Usually: one room check and short copies.
+                let c = usize::from(i > 0);
+                let room = &mut self.buf[self.pos..self.pos + 64];
+                room[0] = b',';
+                room[c] = b'"';
+                copy(&mut room[c + 1..], name);
+                room[c + 1 + n] = b'"';
+                room[c + 2 + n] = b':';
+                copy(&mut room[c + 3 + n..], num);
+                self.pos += c + 3 + n + m;
+                continue;
+            }
             if i > 0 {
                 self.byte(b',');
             }
-            let name = cut(s.start, s.eq);
             if name.is_empty() {
                 self.put(b"null");
             } else {
@@ -1017,17 +1055,31 @@ mod tests {
             }
             for spans in &lists {
                 let parts = Parts::Spans { text, spans };
-                let mut fast = vec![0; 8];
-                let len = write_line(&mut fast, 0, |w| w.json_parts(parts));
-                let mut slow = vec![0; 8];
-                let slow_len = write_line(&mut slow, 0, |w| {
-                    w.put(b",\"parts\":{");
-                    for (i, p) in parts.iter().enumerate() {
-                        w.json_member(i, &p);
-                    }
-                    w.byte(b'}');
-                });
-                assert_eq!(&fast[..len], &slow[..slow_len], "{text:?} {spans:?}");
+                // The same members as a list: written as `Parts::List`.
+                let list: Vec<Part<'_>> = parts.iter().collect();
+                for room in [8, 30, 70] {
+                    let line = |parts: Parts<'_>| {
+                        let mut buf = vec![0; room];
+                        let len = write_line(&mut buf, 0, |w| {
+                            w.put(b"{\"data\":null");
+                            w.json_parts(parts)
+                        });
+                        buf.truncate(len);
+                        buf
+                    };
+                    let mut slow = vec![0; room];
+                    let slow_len = write_line(&mut slow, 0, |w| {
+                        w.put(b"{\"data\":null");
+                        w.put(b",\"parts\":{");
+                        for (i, p) in parts.iter().enumerate() {
+                            w.json_member_pieces(i, &p);
+                        }
+                        w.byte(b'}');
+                    });
+                    let slow = &slow[..slow_len];
+                    assert_eq!(line(parts), slow, "{text:?} {spans:?} {room}");
+                    assert_eq!(line(Parts::List(&list)), slow, "{text:?} {spans:?} {room}");
+                }
             }
         }
     }
