@@ -280,9 +280,7 @@ impl WriteRow for CrsfRow<'_> {
                     }
                 }
                 c.end();
-                c.value(None);
-                c.empty();
-                c.empty();
+                c.empty_to_end();
             }
         }
     }

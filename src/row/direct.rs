@@ -406,6 +406,45 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.text("");
     }
 
+    /// Every cell left empty, from the next (Data, Value or an extra column) to the last
+    /// extra column: as [`Cells::empty`] for each (and [`Cells::value`] with `None` for
+    /// Value), in one piece.
+    #[inline(always)]
+    pub fn empty_to_end(&mut self) {
+        debug_assert!(self.col >= 7, "after the cells ID to Sensor");
+        let last = 9 + self.t.extra.len();
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                const SEPS: [[u8; 16]; 2] = [[b'\t'; 16], [b','; 16]];
+                let seps = &SEPS[usize::from(F::FORMAT == Format::Csv)];
+                let n = last.saturating_sub(self.col);
+                if n <= seps.len() {
+                    self.p.line.put_prefix(seps, n);
+                } else {
+                    for _ in 0..n {
+                        self.p.line.byte(Self::SEP);
+                    }
+                }
+                self.col = self.col.max(last);
+            }
+            Format::Jsonl => {
+                let (text, at) = &self.t.json_nulls;
+                let from = at.get(self.col - 7).copied().unwrap_or(text.len());
+                self.p.line.put(text.get(from..).unwrap_or_default());
+                self.col = self.col.max(last);
+            }
+            Format::Pretty => {
+                while self.col < last {
+                    if self.col == 8 {
+                        self.value(None);
+                    } else {
+                        self.empty();
+                    }
+                }
+            }
+        }
+    }
+
     /// The next cell is written in place (Data from column 7, or an extra column) until
     /// [`Cells::end`].
     #[inline(always)]

@@ -480,6 +480,10 @@ impl RowOut for Latch<'_> {
 mod direct_tests;
 
 #[cfg(test)]
+#[path = "tests/cells.rs"]
+mod cells_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
