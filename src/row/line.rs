@@ -522,11 +522,11 @@ impl W<'_> {
     /// writes for each, with one room check for them all. `false`, and nothing written, when
     /// the room or a mark does not allow its fixed-size copies.
     #[inline(always)]
-    pub fn json_keys_within(
+    pub fn json_keys_within<const N: usize>(
         &mut self,
         first: bool,
-        keys: &[[u8; 16]],
-        lens: &[u8],
+        keys: &[[u8; 16]; N],
+        lens: &[u8; N],
         marks: &[Mark],
     ) -> bool {
         const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
@@ -535,7 +535,7 @@ impl W<'_> {
         if n == 0 {
             return true;
         }
-        if n > keys.len() || n > lens.len() || pos + 9 + 48 * n > self.buf.len() {
+        if n > N || pos + 9 + 48 * n > self.buf.len() {
             return false;
         }
         let mut at = pos;
@@ -543,11 +543,13 @@ impl W<'_> {
             self.buf[at..at + 16].copy_from_slice(PARTS);
             at += 9;
         }
-        for ((key, &k), m) in keys.iter().zip(lens).zip(marks) {
+        for (i, m) in marks.iter().enumerate().take(N) {
             let (a, b) = (m.start as usize, m.end as usize);
-            if a > b || b - a > 32 || b > pos {
+            // (`a > b` wraps to more than 32.)
+            if (b.wrapping_sub(a) > 32) | (b > pos) {
                 return false;
             }
+            let (key, k) = (&keys[i], lens[i]);
             // The number and what follows it, copied whole (`a + 32 <= pos + 32`, in the
             // buffer; the bytes after it are written over by the next key, or lie beyond
             // the line). Read before the key is written: it may cover the number's tail.
@@ -569,11 +571,11 @@ impl W<'_> {
     /// texts: with one room check for them all. `false`, and nothing written, when the room
     /// or a text's length (more than 32 bytes) does not allow it.
     #[inline(always)]
-    pub fn json_keys_text(
+    pub fn json_keys_text<const N: usize>(
         &mut self,
         first: bool,
-        keys: &[[u8; 16]],
-        lens: &[u8],
+        keys: &[[u8; 16]; N],
+        lens: &[u8; N],
         texts: &[&str],
     ) -> bool {
         const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
@@ -582,11 +584,7 @@ impl W<'_> {
         if n == 0 {
             return true;
         }
-        if n > keys.len()
-            || n > lens.len()
-            || pos + 9 + 48 * n > self.buf.len()
-            || texts.iter().any(|t| t.len() > 32)
-        {
+        if n > N || pos + 9 + 48 * n > self.buf.len() || texts.iter().any(|t| t.len() > 32) {
             return false;
         }
         let mut at = pos;
