@@ -10,7 +10,7 @@
 use super::link::COLUMNS;
 use super::names;
 use super::values::rssi_dbm;
-use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
+use crate::row::{Cells, Class, Fmt, Latch, Mark, PartNames, RowOut, WriteRow};
 
 /// The frame types written here.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -190,13 +190,11 @@ impl WriteRow for CrsfRow<'_> {
                 c.begin();
                 c.put_ascii(&buf[..n]);
                 c.end();
-                const NAMES: [&str; 16] = [
+                static NAMES: PartNames<16> = PartNames::new([
                     "CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8", "CH9", "CH10", "CH11",
                     "CH12", "CH13", "CH14", "CH15", "CH16",
-                ];
-                for (name, m) in NAMES.iter().zip(marks) {
-                    c.part_static(name, m);
-                }
+                ]);
+                c.parts_marked(&NAMES, &marks);
             }
             What::Link => {
                 let mw = i64::from(names::RF_POWER_MW[usize::from(p[6])]);
@@ -222,9 +220,11 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(marks[0]));
                 c.text(unit);
                 c.empty();
-                for (m, &(_, name, ..)) in marks.iter().zip(&fields) {
-                    c.part_static(name, *m);
-                }
+                static NAMES: PartNames<10> = PartNames::new([
+                    "1RSS", "2RSS", "RQly", "RSNR", "ANT", "RFMD", "TPWR", "TRSS", "TQly", "TSNR",
+                ]);
+                debug_assert!(NAMES.names().iter().zip(&fields).all(|(n, f)| *n == f.1));
+                c.parts_marked(&NAMES, &marks);
             }
             What::Battery => {
                 c.begin();
@@ -237,10 +237,8 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part_static("RxBt", m0);
-                c.part_static("Curr", m1);
-                c.part_static("Capa", m2);
-                c.part_static("Bat%", m3);
+                static NAMES: PartNames<4> = PartNames::new(["RxBt", "Curr", "Capa", "Bat%"]);
+                c.parts_marked(&NAMES, &[m0, m1, m2, m3]);
             }
             What::Gps => {
                 c.begin();
@@ -254,12 +252,9 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part_static("Lat", m0);
-                c.part_static("Lon", m1);
-                c.part_static("GSpd", m2);
-                c.part_static("Hdg", m3);
-                c.part_static("Alt", m4);
-                c.part_static("Sats", m5);
+                static NAMES: PartNames<6> =
+                    PartNames::new(["Lat", "Lon", "GSpd", "Hdg", "Alt", "Sats"]);
+                c.parts_marked(&NAMES, &[m0, m1, m2, m3, m4, m5]);
             }
             What::Attitude => {
                 c.begin();
@@ -270,9 +265,8 @@ impl WriteRow for CrsfRow<'_> {
                 c.value(Some(m0));
                 c.text(unit);
                 c.empty();
-                c.part_static("Ptch", m0);
-                c.part_static("Roll", m1);
-                c.part_static("Yaw", m2);
+                static NAMES: PartNames<3> = PartNames::new(["Ptch", "Roll", "Yaw"]);
+                c.parts_marked(&NAMES, &[m0, m1, m2]);
             }
             What::Mode => {
                 // As `read::push_text`: printable ASCII, every other byte as `\xHH`.
@@ -286,9 +280,7 @@ impl WriteRow for CrsfRow<'_> {
                     }
                 }
                 c.end();
-                c.value(None);
-                c.empty();
-                c.empty();
+                c.empty_to_end();
             }
         }
     }

@@ -14,7 +14,7 @@ use super::wire::{
     self, FLAG_CH17, FLAG_CH18, FLAG_FAILSAFE, FLAG_FRAME_LOST, V1_CONTROL_LEN, V1_TELEMETRY_LEN,
     V2_CHANNELS, V2_CONTROL_16, V2_TELEMETRY_LEN,
 };
-use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
+use crate::row::{Cells, Class, Fmt, Latch, Mark, PartNames, RowOut, WriteRow};
 use crate::sport::names;
 use crate::sport::values::{self, Common};
 use crate::sport::wire::header_ok;
@@ -170,15 +170,41 @@ impl WriteRow for FportRow<'_> {
                 }
                 c.str(&self.held.raw);
                 c.end();
-                for (name, &r) in CH.iter().zip(&ch) {
-                    c.part_text(name, t.exact[usize::from(r)]);
-                }
+                static PARTS: PartNames<21> = PartNames::new([
+                    "CH1",
+                    "CH2",
+                    "CH3",
+                    "CH4",
+                    "CH5",
+                    "CH6",
+                    "CH7",
+                    "CH8",
+                    "CH9",
+                    "CH10",
+                    "CH11",
+                    "CH12",
+                    "CH13",
+                    "CH14",
+                    "CH15",
+                    "CH16",
+                    "CH17",
+                    "CH18",
+                    "FrameLost",
+                    "Failsafe",
+                    "RSSI",
+                ]);
+                debug_assert!(PARTS.names()[..16] == CH);
                 let bit = |mask: u8| if flags & mask != 0 { "1" } else { "0" };
-                c.part_text("CH17", bit(FLAG_CH17));
-                c.part_text("CH18", bit(FLAG_CH18));
-                c.part_text("FrameLost", bit(FLAG_FRAME_LOST));
-                c.part_text("Failsafe", bit(FLAG_FAILSAFE));
-                c.part_text("RSSI", &t.raw[usize::from(rssi)][1..]);
+                let mut texts = [""; 21];
+                for (text, &r) in texts.iter_mut().zip(&ch) {
+                    *text = t.exact[usize::from(r)];
+                }
+                texts[16] = bit(FLAG_CH17);
+                texts[17] = bit(FLAG_CH18);
+                texts[18] = bit(FLAG_FRAME_LOST);
+                texts[19] = bit(FLAG_FAILSAFE);
+                texts[20] = &t.raw[usize::from(rssi)][1..];
+                c.parts_text(&PARTS, &texts);
             }
             What::Poll(phys) => {
                 if c.stamp(1 << 31 | 2 | u32::from(phys) << 8) {

@@ -8,7 +8,7 @@ use super::names::{
 };
 use super::wire::{self, CHANNELS, FRAME_LEN, SLOT_LEN};
 use crate::fmt::hex_0x;
-use crate::row::{Cells, Class, Direct, Fmt, Mark, WriteRow};
+use crate::row::{Cells, Class, Direct, Fmt, Mark, PartNames, WriteRow};
 
 /// Stamps of the cells ID to Sensor: a frame's follow from its end byte, a slot's from its id
 /// byte.
@@ -186,14 +186,19 @@ impl WriteRow for ChannelRow {
         c.str(after_flags(end));
         c.put_ascii(raw);
         c.end();
-        for (i, name) in CH_NAMES.iter().enumerate() {
-            c.part_static(name, mark(i));
-        }
+        static CH: PartNames<CHANNELS> = PartNames::new(CH_NAMES);
+        c.parts_marked(&CH, &std::array::from_fn::<_, CHANNELS, _>(mark));
+        static FLAG_NAMES: PartNames<4> = PartNames::new(["CH17", "CH18", "FrameLost", "Failsafe"]);
         let bit = |b: u8| if flags & b != 0 { "1" } else { "0" };
-        c.part_text("CH17", bit(wire::FLAG_CH17));
-        c.part_text("CH18", bit(wire::FLAG_CH18));
-        c.part_text("FrameLost", bit(wire::FLAG_FRAME_LOST));
-        c.part_text("Failsafe", bit(wire::FLAG_FAILSAFE));
+        c.parts_text(
+            &FLAG_NAMES,
+            &[
+                bit(wire::FLAG_CH17),
+                bit(wire::FLAG_CH18),
+                bit(wire::FLAG_FRAME_LOST),
+                bit(wire::FLAG_FAILSAFE),
+            ],
+        );
     }
 }
 

@@ -9,7 +9,7 @@
 
 use super::names;
 use crate::crsf::link::COLUMNS;
-use crate::row::{Cells, Class, Fmt, Latch, Mark, RowOut, WriteRow};
+use crate::row::{Cells, Class, Fmt, Latch, Mark, PartNames, RowOut, WriteRow};
 
 /// The frame types written here.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -203,20 +203,30 @@ impl GhstRow<'_> {
             1 => 8,
             _ => 12,
         };
-        for (k, m) in marks.iter().enumerate().take(count) {
-            let name = if k < 4 {
-                NAMES[k]
-            } else {
-                NAMES[first + k - 4]
-            };
-            c.part_static(name, *m);
-        }
+        // CH1 to CH4, then the aux channels from `first`.
+        static LISTS: [PartNames<8>; 3] = [
+            PartNames::new(["CH1", "CH2", "CH3", "CH4", "CH5", "CH6", "CH7", "CH8"]),
+            PartNames::new(["CH1", "CH2", "CH3", "CH4", "CH9", "CH10", "CH11", "CH12"]),
+            PartNames::new(["CH1", "CH2", "CH3", "CH4", "CH13", "CH14", "CH15", "CH16"]),
+        ];
+        let list = &LISTS[first / 4 - 1];
+        debug_assert!(
+            (0..8).all(|k| list.names()[k] == NAMES[if k < 4 { k } else { first + k - 4 }])
+        );
+        c.parts_marked(list, &marks[..count]);
         if link {
-            let mut b = [0u8; 8];
-            c.part_text("RQly", small(p[6].into(), &mut b));
-            c.part_text("RSSI", small(-i64::from(p[7]), &mut b));
-            c.part_text("RFMD", small(p[8].into(), &mut b));
-            c.part_text("TPWR", small((p[9] as i8).into(), &mut b));
+            static LINK: PartNames<4> = PartNames::new(["RQly", "RSSI", "RFMD", "TPWR"]);
+            let mut b = [[0u8; 8]; 4];
+            let [b0, b1, b2, b3] = &mut b;
+            c.parts_text(
+                &LINK,
+                &[
+                    small(p[6].into(), b0),
+                    small(-i64::from(p[7]), b1),
+                    small(p[8].into(), b2),
+                    small((p[9] as i8).into(), b3),
+                ],
+            );
         }
     }
 }

@@ -7,7 +7,7 @@ use super::names::{CH_NAMES, CHANNELS, MEASURE};
 use super::sensors::{Enc, SensorType};
 use super::wire::{self, RC_CHANNELS_MAX, RC_SLOTS};
 use crate::fmt::hex_0x;
-use crate::row::{Cells, Class, Direct, Fmt, Mark, WriteRow};
+use crate::row::{Cells, Class, Direct, Fmt, Mark, PartNames, WriteRow};
 
 /// Stamps of the cells ID to Sensor: an RC frame's are always the same, a measurement's follow
 /// from its address and type code.
@@ -87,9 +87,9 @@ impl WriteRow for RcRow {
         } else {
             "14 channels"
         });
-        for (i, name) in CH_NAMES[..n].iter().enumerate() {
-            c.part(name, mark(i));
-        }
+        static CH: PartNames<RC_CHANNELS_MAX> = PartNames::new(CH_NAMES);
+        let marks: [Mark; RC_CHANNELS_MAX] = std::array::from_fn(mark);
+        c.parts_marked(&CH, &marks[..n]);
     }
 }
 

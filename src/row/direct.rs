@@ -37,6 +37,7 @@ use std::marker::PhantomData;
 
 use super::Class;
 use super::line;
+use super::part_keys::PartNames;
 use super::pretty::{CYAN, DIMMED, PrettyLine, RED, YELLOW};
 use super::text::{Format, Text};
 
@@ -103,8 +104,8 @@ const JSON_KEYS: [&[u8]; 9] = [
 /// [`Cells::here`] after it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Mark {
-    start: u32,
-    end: u32,
+    pub(crate) start: u32,
+    pub(crate) end: u32,
 }
 
 impl Mark {
@@ -405,6 +406,45 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.text("");
     }
 
+    /// Every cell left empty, from the next (Data, Value or an extra column) to the last
+    /// extra column: as [`Cells::empty`] for each (and [`Cells::value`] with `None` for
+    /// Value), in one piece.
+    #[inline(always)]
+    pub fn empty_to_end(&mut self) {
+        debug_assert!(self.col >= 7, "after the cells ID to Sensor");
+        let last = 9 + self.t.extra.len();
+        match F::FORMAT {
+            Format::Tsv | Format::Csv => {
+                const SEPS: [[u8; 16]; 2] = [[b'\t'; 16], [b','; 16]];
+                let seps = &SEPS[usize::from(F::FORMAT == Format::Csv)];
+                let n = last.saturating_sub(self.col);
+                if n <= seps.len() {
+                    self.p.line.put_prefix(seps, n);
+                } else {
+                    for _ in 0..n {
+                        self.p.line.byte(Self::SEP);
+                    }
+                }
+                self.col = self.col.max(last);
+            }
+            Format::Jsonl => {
+                let (text, at) = &self.t.json_nulls;
+                let from = at.get(self.col - 7).copied().unwrap_or(text.len());
+                self.p.line.put(text.get(from..).unwrap_or_default());
+                self.col = self.col.max(last);
+            }
+            Format::Pretty => {
+                while self.col < last {
+                    if self.col == 8 {
+                        self.value(None);
+                    } else {
+                        self.empty();
+                    }
+                }
+            }
+        }
+    }
+
     /// The next cell is written in place (Data from column 7, or an extra column) until
     /// [`Cells::end`].
     #[inline(always)]
@@ -676,6 +716,54 @@ impl<F: Fmt> Cells<'_, '_, F> {
     pub fn parts_static(&mut self, names: &'static [&'static str], mark: impl Fn(usize) -> Mark) {
         for (i, name) in names.iter().enumerate() {
             self.part_static(name, mark(i));
+        }
+    }
+
+    /// JSON Lines only: the members of `parts` for the first `marks.len()` names of `names`
+    /// (at most all), each the number marked by its mark in the Data cell: as
+    /// [`Cells::part`] for each in order, with the keys made by the compiler and one room
+    /// check for all. After the extra columns.
+    #[inline(always)]
+    pub fn parts_marked<const N: usize>(&mut self, names: &PartNames<N>, marks: &[Mark]) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        let marks = marks.get(..N).unwrap_or(marks);
+        if names.kept
+            && self.rewritten.is_none()
+            && self
+                .p
+                .line
+                .json_keys_within(self.parts == 0, &names.keys, &names.lens, marks)
+        {
+            self.parts += marks.len();
+            return;
+        }
+        for (name, &m) in names.names.iter().zip(marks) {
+            self.part(name, m);
+        }
+    }
+
+    /// JSON Lines only: the members of `parts` for the first `texts.len()` names of `names`
+    /// (at most all), each with its number's text: as [`Cells::part_text`] for each in order,
+    /// with the keys made by the compiler and one room check for all.
+    #[inline(always)]
+    pub fn parts_text<const N: usize>(&mut self, names: &PartNames<N>, texts: &[&str]) {
+        if F::FORMAT != Format::Jsonl {
+            return;
+        }
+        let texts = texts.get(..N).unwrap_or(texts);
+        if names.kept
+            && self
+                .p
+                .line
+                .json_keys_text(self.parts == 0, &names.keys, &names.lens, texts)
+        {
+            self.parts += texts.len();
+            return;
+        }
+        for (name, t) in names.names.iter().zip(texts) {
+            self.part_text(name, t);
         }
     }
 

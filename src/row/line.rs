@@ -8,6 +8,7 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
+use super::direct::Mark;
 use super::{Part, PartSpan, Parts};
 
 const SPACES: [u8; 32] = [b' '; 32];
@@ -546,6 +547,95 @@ impl W<'_> {
         self.json_key_slow(first, key, k, a, b);
     }
 
+    /// Members of `parts` from kept keys (`keys[i]`, `lens[i]` bytes of it: `,"name":`) and
+    /// the line's own bytes `marks[i]` (numbers written before in the line), after
+    /// `,"parts":{` instead of the first key's comma when `first`: what [`W::json_key_within`]
+    /// writes for each, with one room check for them all. `false`, and nothing written, when
+    /// the room or a mark does not allow its fixed-size copies.
+    #[inline(always)]
+    pub fn json_keys_within<const N: usize>(
+        &mut self,
+        first: bool,
+        keys: &[[u8; 16]; N],
+        lens: &[u8; N],
+        marks: &[Mark],
+    ) -> bool {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        let pos = self.pos;
+        let n = marks.len();
+        if n == 0 {
+            return true;
+        }
+        if n > N || pos + 9 + 48 * n > self.buf.len() {
+            return false;
+        }
+        let mut at = pos;
+        if first {
+            self.buf[at..at + 16].copy_from_slice(PARTS);
+            at += 9;
+        }
+        for (i, m) in marks.iter().enumerate().take(N) {
+            let (a, b) = (m.start as usize, m.end as usize);
+            // (`a > b` wraps to more than 32.)
+            if (b.wrapping_sub(a) > 32) | (b > pos) {
+                return false;
+            }
+            let (key, k) = (&keys[i], lens[i]);
+            // The number and what follows it, copied whole (`a + 32 <= pos + 32`, in the
+            // buffer; the bytes after it are written over by the next key, or lie beyond
+            // the line). Read before the key is written: it may cover the number's tail.
+            let mut num = [0u8; 32];
+            num.copy_from_slice(&self.buf[a..a + 32]);
+            self.buf[at..at + 16].copy_from_slice(key);
+            let k = usize::from(k).min(16);
+            self.buf[at + k..at + k + 32].copy_from_slice(&num);
+            at += k + (b - a);
+        }
+        if first {
+            self.buf[pos + 9] = b'{';
+        }
+        self.pos = at;
+        true
+    }
+
+    /// Members of `parts` from kept keys (as [`W::json_keys_within`]) and their numbers'
+    /// texts: with one room check for them all. `false`, and nothing written, when the room
+    /// or a text's length (more than 32 bytes) does not allow it.
+    #[inline(always)]
+    pub fn json_keys_text<const N: usize>(
+        &mut self,
+        first: bool,
+        keys: &[[u8; 16]; N],
+        lens: &[u8; N],
+        texts: &[&str],
+    ) -> bool {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        let pos = self.pos;
+        let n = texts.len();
+        if n == 0 {
+            return true;
+        }
+        if n > N || pos + 9 + 48 * n > self.buf.len() || texts.iter().any(|t| t.len() > 32) {
+            return false;
+        }
+        let mut at = pos;
+        if first {
+            self.buf[at..at + 16].copy_from_slice(PARTS);
+            at += 9;
+        }
+        for ((key, &k), t) in keys.iter().zip(lens).zip(texts) {
+            self.buf[at..at + 16].copy_from_slice(key);
+            let k = usize::from(k).min(16);
+            copy(&mut self.buf[at + k..at + k + 32], t.as_bytes());
+            at += k + t.len();
+        }
+        if first {
+            self.buf[pos + 9] = b'{';
+        }
+        self.pos = at;
+        true
+    }
+
     #[cold]
     fn json_key_slow(&mut self, first: bool, key: &[u8; 16], k: usize, a: usize, b: usize) {
         let key = key.get(..k).unwrap_or(key);
@@ -630,6 +720,29 @@ impl W<'_> {
     /// One member of `parts` (the `i`-th): its name as a JSON string, its number as it is.
     #[inline(always)]
     fn json_member(&mut self, i: usize, p: &Part<'_>) {
+        let (nb, tb) = (p.name.as_bytes(), p.text.as_bytes());
+        let (n, t) = (nb.len(), tb.len());
+        if n > 0 && n <= 16 && t <= 32 && self.pos + 64 <= self.buf.len() {
+            // Usually: one room check and short copies; a name to escape goes the way of
+            // its pieces (over what was written here).
+            let c = usize::from(i > 0);
+            let room = &mut self.buf[self.pos..self.pos + 64];
+            room[0] = b',';
+            room[c] = b'"';
+            if copy_test(&mut room[c + 1..], nb, json_escape) == 0 {
+                room[c + 1 + n] = b'"';
+                room[c + 2 + n] = b':';
+                copy(&mut room[c + 3 + n..], tb);
+                self.pos += c + 3 + n + t;
+                return;
+            }
+        }
+        self.json_member_pieces(i, p);
+    }
+
+    /// [`W::json_member`] piece by piece.
+    #[inline(never)]
+    fn json_member_pieces(&mut self, i: usize, p: &Part<'_>) {
         if i > 0 {
             self.byte(b',');
         }
@@ -647,10 +760,25 @@ impl W<'_> {
         let t = text.as_bytes();
         let cut = |a: u32, b: u32| t.get(a as usize..b as usize).unwrap_or_default();
         for (i, s) in spans.iter().enumerate() {
+            let name = cut(s.start, s.eq);
+            let num = cut(s.eq.saturating_add(1), s.end);
+            let (n, m) = (name.len(), num.len());
+            if n > 0 && n <= 16 && m <= 32 && self.pos + 64 <= self.buf.len() {
+                // Usually: one room check and short copies.
+                let c = usize::from(i > 0);
+                let room = &mut self.buf[self.pos..self.pos + 64];
+                room[0] = b',';
+                room[c] = b'"';
+                copy(&mut room[c + 1..], name);
+                room[c + 1 + n] = b'"';
+                room[c + 2 + n] = b':';
+                copy(&mut room[c + 3 + n..], num);
+                self.pos += c + 3 + n + m;
+                continue;
+            }
             if i > 0 {
                 self.byte(b',');
             }
-            let name = cut(s.start, s.eq);
             if name.is_empty() {
                 self.put(b"null");
             } else {
@@ -962,17 +1090,31 @@ mod tests {
             }
             for spans in &lists {
                 let parts = Parts::Spans { text, spans };
-                let mut fast = vec![0; 8];
-                let len = write_line(&mut fast, 0, |w| w.json_parts(parts));
-                let mut slow = vec![0; 8];
-                let slow_len = write_line(&mut slow, 0, |w| {
-                    w.put(b",\"parts\":{");
-                    for (i, p) in parts.iter().enumerate() {
-                        w.json_member(i, &p);
-                    }
-                    w.byte(b'}');
-                });
-                assert_eq!(&fast[..len], &slow[..slow_len], "{text:?} {spans:?}");
+                // The same members as a list: written as `Parts::List`.
+                let list: Vec<Part<'_>> = parts.iter().collect();
+                for room in [8, 30, 70] {
+                    let line = |parts: Parts<'_>| {
+                        let mut buf = vec![0; room];
+                        let len = write_line(&mut buf, 0, |w| {
+                            w.put(b"{\"data\":null");
+                            w.json_parts(parts)
+                        });
+                        buf.truncate(len);
+                        buf
+                    };
+                    let mut slow = vec![0; room];
+                    let slow_len = write_line(&mut slow, 0, |w| {
+                        w.put(b"{\"data\":null");
+                        w.put(b",\"parts\":{");
+                        for (i, p) in parts.iter().enumerate() {
+                            w.json_member_pieces(i, &p);
+                        }
+                        w.byte(b'}');
+                    });
+                    let slow = &slow[..slow_len];
+                    assert_eq!(line(parts), slow, "{text:?} {spans:?} {room}");
+                    assert_eq!(line(Parts::List(&list)), slow, "{text:?} {spans:?} {room}");
+                }
             }
         }
     }
@@ -1013,6 +1155,88 @@ mod tests {
                         let mut slow = vec![0; room];
                         let m = write_line(&mut slow, 0, |w| write(w, false));
                         assert_eq!(&fast[..n], &slow[..m], "{name:?} {number:?} {room}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A row's members from a list's keys made by the compiler, with one room check: what
+    /// [`W::json_key_within`] and [`W::json_key_text`] write member by member, first or not,
+    /// for every count of members, numbers short and long (then nothing is written and the
+    /// caller writes member by member), near the end of the room or not.
+    #[test]
+    fn listed_part_keys_write_what_each_member_writes() {
+        use super::super::part_keys::PartNames;
+        static NAMES: PartNames<4> = PartNames::new(["CH1", "FrameLost", "Bat%", "ABCDEFGHIJKL"]);
+        let numbers = [
+            ["1", "-0.5", "22", "3"],
+            ["1500", "1", "-1234567.1234567", "0"],
+            ["1", "1234567890123456789012345678901234567890", "2", "3"],
+        ];
+        for first in [true, false] {
+            for number in numbers {
+                for n in 0..=4 {
+                    for room in [8, 40, 70, 150, 200, 260, 400] {
+                        let write = |w: &mut W<'_>, fast: u8| {
+                            w.put(b"{\"data\":\"");
+                            let mut marks = [Mark::default(); 4];
+                            for (i, num) in number.iter().enumerate() {
+                                if i > 0 {
+                                    w.byte(b' ');
+                                }
+                                let a = w.len() as u32;
+                                w.put(num.as_bytes());
+                                marks[i] = Mark::new(a, w.len() as u32);
+                            }
+                            w.byte(b'"');
+                            let pieces = |w: &mut W<'_>| {
+                                for (i, m) in marks[..n].iter().enumerate() {
+                                    let (key, k) = (&NAMES.keys[i], usize::from(NAMES.lens[i]));
+                                    if fast == 2 {
+                                        let t = number[i].as_bytes();
+                                        w.json_key_text(first && i == 0, key, k, t);
+                                    } else {
+                                        let (a, b) = (m.start as usize, m.end as usize);
+                                        w.json_key_within(first && i == 0, key, k, a, b);
+                                    }
+                                }
+                            };
+                            match fast {
+                                0 | 2 => pieces(w),
+                                1 => {
+                                    if !w.json_keys_within(
+                                        first,
+                                        &NAMES.keys,
+                                        &NAMES.lens,
+                                        &marks[..n],
+                                    ) {
+                                        pieces(w)
+                                    }
+                                }
+                                _ => {
+                                    if !w.json_keys_text(
+                                        first,
+                                        &NAMES.keys,
+                                        &NAMES.lens,
+                                        &number[..n],
+                                    ) {
+                                        pieces(w)
+                                    }
+                                }
+                            }
+                            w.put(b"}\n");
+                        };
+                        let line = |fast: u8| {
+                            let mut buf = vec![0; room];
+                            let len = write_line(&mut buf, 0, |w| write(w, fast));
+                            buf.truncate(len);
+                            String::from_utf8(buf).unwrap()
+                        };
+                        let want = line(0);
+                        assert_eq!(line(1), want, "{first} {number:?} {n} {room}");
+                        assert_eq!(line(2), want, "{first} {number:?} {n} {room}");
+                        assert_eq!(line(3), want, "{first} {number:?} {n} {room}");
                     }
                 }
             }

@@ -13,6 +13,7 @@ pub(crate) mod spans;
 pub mod text;
 
 pub use direct::{Cells, Direct, Fmt, Mark, WriteRow};
+pub use part_keys::PartNames;
 
 /// The eight fixed columns, in order.
 pub const BASE_COLUMNS: [&str; 8] = [
@@ -477,6 +478,10 @@ impl RowOut for Latch<'_> {
 #[cfg(test)]
 #[path = "tests/direct.rs"]
 mod direct_tests;
+
+#[cfg(test)]
+#[path = "tests/cells.rs"]
+mod cells_tests;
 
 #[cfg(test)]
 mod tests {

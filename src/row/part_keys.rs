@@ -116,9 +116,87 @@ impl PartKeys {
     }
 }
 
+/// The names of a fixed list of `parts` members (a row's channels, a frame's fields), with
+/// their keys (`,"name":`) made by the compiler: what [`super::Cells::parts_marked`] and
+/// [`super::Cells::parts_text`] write a row's members from, without a look-up per member.
+/// Names of 1 to [`PartKeys::NAME`] bytes with nothing JSON escapes have keys; a list with
+/// another name is written member by member, as [`super::Cells::part`] writes it.
+pub struct PartNames<const N: usize> {
+    pub(crate) names: [&'static str; N],
+    /// `,"name":`, padded with zeros.
+    pub(crate) keys: [[u8; 16]; N],
+    /// Each key's length (the name's and 4).
+    pub(crate) lens: [u8; N],
+    /// Every name has its key.
+    pub(crate) kept: bool,
+}
+
+impl<const N: usize> PartNames<N> {
+    /// The list of `names`, in the order their members are written.
+    pub const fn new(names: [&'static str; N]) -> Self {
+        let mut keys = [[0u8; 16]; N];
+        let mut lens = [0u8; N];
+        let mut kept = true;
+        let mut i = 0;
+        while i < N {
+            let nb = names[i].as_bytes();
+            if nb.is_empty() || nb.len() > PartKeys::NAME {
+                kept = false;
+            } else {
+                keys[i][0] = b',';
+                keys[i][1] = b'"';
+                let mut j = 0;
+                while j < nb.len() {
+                    let b = nb[j];
+                    if b < 0x20 || b == b'"' || b == b'\\' {
+                        kept = false;
+                    }
+                    keys[i][2 + j] = b;
+                    j += 1;
+                }
+                keys[i][2 + nb.len()] = b'"';
+                keys[i][3 + nb.len()] = b':';
+                lens[i] = nb.len() as u8 + 4;
+            }
+            i += 1;
+        }
+        PartNames {
+            names,
+            keys,
+            lens,
+            kept,
+        }
+    }
+
+    /// The names.
+    pub fn names(&self) -> &[&'static str; N] {
+        &self.names
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::PartKeys;
+    use super::{PartKeys, PartNames};
+
+    /// A list's keys made by the compiler are the keys [`PartKeys::get`] keeps; a list with a
+    /// name that is not kept (empty, too long, to escape) has no keys.
+    #[test]
+    fn listed_names_have_the_kept_keys() {
+        static LIST: PartNames<6> =
+            PartNames::new(["CH1", "CH16", "RxBt", "FrameLost", "A", "ABCDEFGHIJKL"]);
+        assert!(LIST.kept);
+        let mut keys = PartKeys::new();
+        for (i, name) in LIST.names().iter().enumerate() {
+            let want = keys.get(name).copied();
+            assert_eq!(Some(LIST.keys[i]), want, "{name}");
+            assert_eq!(usize::from(LIST.lens[i]), name.len() + 4, "{name}");
+        }
+        for name in ["", "a \"quoted\"", "back\\slash", "tab\t", "thirteen char"] {
+            let list = PartNames::new(["CH1", name]);
+            assert!(!list.kept, "{name:?}");
+            assert_eq!(keys.get(name), None, "{name:?}");
+        }
+    }
 
     /// Names found by address give the keys names found by their text give; names that are
     /// not kept are not kept either way.

@@ -109,6 +109,10 @@ pub struct Text {
     /// JSON Lines: the key of each extra column (`,"resp_ms":`), built once, and whether its
     /// cells are numbers.
     pub(crate) json_keys: Vec<(Vec<u8>, bool)>,
+    /// JSON Lines: the cells Data, Value and every extra column empty
+    /// (`,"data":null,"value":null,"unit":null…`), and where each column's piece starts in it
+    /// (from Data on).
+    pub(crate) json_nulls: (Vec<u8>, Vec<usize>),
     /// JSON Lines: the keys of `parts`' members, written once per name.
     pub(crate) part_keys: super::part_keys::PartKeys,
     /// The cells ID to Sensor as written, per [`super::Row::stamp`].
@@ -140,6 +144,7 @@ impl Text {
                 .iter()
                 .map(|name| (json_key(name), NUMERIC_EXTRA.contains(name)))
                 .collect(),
+            json_nulls: json_nulls(extra),
             part_keys: super::part_keys::PartKeys::new(),
             spans: Spans::new(),
             scratch: Vec::new(),
@@ -153,6 +158,22 @@ impl Text {
         self.counter += 1;
         self.digits.increment();
     }
+}
+
+/// [`Text::json_nulls`] for the extra columns `extra`.
+fn json_nulls(extra: &[&'static str]) -> (Vec<u8>, Vec<usize>) {
+    let (mut text, mut at) = (Vec::new(), Vec::new());
+    let keys = [json_key("Data"), json_key("Value")];
+    for key in keys
+        .into_iter()
+        .chain(extra.iter().map(|name| json_key(name)))
+    {
+        at.push(text.len());
+        text.extend_from_slice(&key);
+        text.extend_from_slice(b"null");
+    }
+    at.push(text.len());
+    (text, at)
 }
 
 /// The JSON key of a column, with its comma and colon: `,"sensor_no":` for `Sensor #`.

@@ -62,10 +62,7 @@ impl WriteRow for SportRow {
             c.stamp_end();
         }
         let What::Data(_, value, common) = self.what else {
-            c.empty();
-            c.value(None);
-            c.empty();
-            c.empty();
+            c.empty_to_end();
             return;
         };
         c.begin();

@@ -1,0 +1,184 @@
+//! The batched writers of [`crate::row::Cells`] write what the pieces they replace write, in
+//! every format, with room to spare or not (a line longer than the room is written again).
+
+use crate::row::text::{Format, Text};
+use crate::row::{Cells, Class, Direct, Fmt, Mark, PartNames, WriteRow};
+
+const FORMATS: [Format; 4] = [Format::Tsv, Format::Csv, Format::Jsonl, Format::Pretty];
+const EXTRA: [&str; 3] = ["Unit", "Resp ms", "Note"];
+
+/// One row written straight into a table of `format` whose output has `room` bytes.
+fn line(format: Format, raw: bool, room: usize, row: &impl WriteRow) -> String {
+    let mut text = Text::new(format, false, raw, &EXTRA, Vec::new());
+    let (mut buf, mut len) = (vec![0u8; room], 0);
+    for _ in 0..2 {
+        let d = Direct {
+            text: &mut text,
+            buf: &mut buf,
+            len: &mut len,
+        };
+        d.row(Some(12_345), Class::Plain, &[0x7E, 0x01], row);
+    }
+    buf.truncate(len);
+    String::from_utf8(buf).unwrap()
+}
+
+static NAMES: PartNames<4> = PartNames::new(["CH1", "FrameLost", "Bat%", "ABCDEFGHIJKL"]);
+static ODD: PartNames<3> = PartNames::new(["CH1", "a \"b\"", "thirteen char"]);
+
+/// A row with numbers in Data (and a quote there, to be escaped, when `quote`), then the
+/// members of `parts` for the first `n` numbers and `n` texts: batched or one by one.
+struct Numbers {
+    numbers: [&'static str; 4],
+    quote: bool,
+    n: usize,
+    batched: bool,
+    odd: bool,
+}
+
+impl WriteRow for Numbers {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        if c.stamp(0) {
+            c.id(Some(7));
+            c.text("Dev");
+            c.text("Data");
+            c.text("0x01");
+            c.text("CH1");
+            c.stamp_end();
+        }
+        c.begin();
+        if self.quote {
+            c.str("\"");
+        }
+        let mut marks = [Mark::default(); 4];
+        for (i, num) in self.numbers.iter().enumerate() {
+            if i > 0 {
+                c.put_ascii(b" ");
+            }
+            let a = c.here();
+            c.put_ascii(num.as_bytes());
+            marks[i] = Mark::new(a, c.here());
+        }
+        c.end();
+        c.value(Some(marks[0]));
+        c.text("us");
+        c.empty();
+        c.text("note");
+        let texts = &self.numbers[..self.n];
+        let marks = &marks[..self.n];
+        if self.odd {
+            if self.batched {
+                c.parts_marked(&ODD, &marks[..self.n.min(3)]);
+                c.parts_text(&ODD, &texts[..self.n.min(3)]);
+            } else {
+                for (name, &m) in ODD.names().iter().zip(marks) {
+                    c.part(name, m);
+                }
+                for (name, t) in ODD.names().iter().zip(texts) {
+                    c.part_text(name, t);
+                }
+            }
+        } else if self.batched {
+            c.parts_marked(&NAMES, marks);
+            c.parts_text(&NAMES, texts);
+        } else {
+            for (name, &m) in NAMES.names().iter().zip(marks) {
+                c.part_static(name, m);
+            }
+            for (name, t) in NAMES.names().iter().zip(texts) {
+                c.part_text(name, t);
+            }
+        }
+    }
+}
+
+#[test]
+fn listed_parts_write_what_each_part_writes() {
+    let numbers = [
+        ["1", "-0.5", "22", "3"],
+        ["1500", "1", "-1234567.1234567", "0"],
+        ["1", "1234567890123456789012345678901234567890", "2", "3"],
+    ];
+    for format in FORMATS {
+        for numbers in numbers {
+            for quote in [false, true] {
+                for odd in [false, true] {
+                    for n in 0..=4 {
+                        for room in [16, 200, 400, 4096] {
+                            let row = |batched| Numbers {
+                                numbers,
+                                quote,
+                                n,
+                                batched,
+                                odd,
+                            };
+                            assert_eq!(
+                                line(format, false, room, &row(true)),
+                                line(format, false, room, &row(false)),
+                                "{format:?} {numbers:?} {quote} {odd} {n} {room}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A row whose cells from column `from` on are empty: in one piece or one by one.
+struct Empty {
+    from: usize,
+    batched: bool,
+}
+
+impl WriteRow for Empty {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        if c.stamp(0) {
+            c.id(None);
+            c.text("Dev");
+            c.text("Null");
+            c.empty();
+            c.empty();
+            c.stamp_end();
+        }
+        let mut col = 7;
+        while col < self.from {
+            match col {
+                7 => c.text("data"),
+                8 => c.value_text(Some("1")),
+                _ => c.text("x"),
+            }
+            col += 1;
+        }
+        if self.batched {
+            c.empty_to_end();
+            return;
+        }
+        while col < 9 + EXTRA.len() {
+            if col == 8 {
+                c.value(None);
+            } else {
+                c.empty();
+            }
+            col += 1;
+        }
+    }
+}
+
+#[test]
+fn empty_to_end_writes_what_each_empty_cell_writes() {
+    for format in FORMATS {
+        for raw in [false, true] {
+            for from in 7..=9 + EXTRA.len() {
+                for room in [16, 4096] {
+                    let row = |batched| Empty { from, batched };
+                    assert_eq!(
+                        line(format, raw, room, &row(true)),
+                        line(format, raw, room, &row(false)),
+                        "{format:?} {raw} {from} {room}"
+                    );
+                }
+            }
+        }
+    }
+}
