@@ -160,7 +160,7 @@ pub(super) fn put_row(
             d.row(Some(micros), class, raw, &row);
             return Ok(());
         }
-        sc.media.settle(&mut sc.data);
+        sc.media.settle(&mut sc.sensor_no, &mut sc.data);
     }
     let sc = &*sc;
     with_parts(sc, class, |parts| {
@@ -255,7 +255,7 @@ impl WriteRow for LazyRow<'_> {
             c.id(self.id);
             c.text(self.device);
             c.text(self.kind);
-            c.text(&sc.sensor_no);
+            self.list.sensor_cell(&sc.sensor_no, c);
             c.text(self.sensor);
             c.stamp_end();
         }
@@ -263,7 +263,8 @@ impl WriteRow for LazyRow<'_> {
         let (first, list) = sc.media.write_lazy(&self.list, c);
         c.end();
         // No parts for an error, nor for more numbers than a row carries (see `with_parts`).
-        let parts = self.class != Class::Error && self.list.count as usize <= MAX_PARTS;
+        let parts =
+            !self.list.range && self.class != Class::Error && self.list.count as usize <= MAX_PARTS;
         c.value(first.filter(|_| parts));
         sc.resp_seq_cells(c);
         c.text(&sc.note);

@@ -43,6 +43,25 @@ pub(crate) struct LazyWords {
     addr: u32,
     sign_bit: u32,
     pub count: u32,
+    /// The Sensor # cell is the list's first name (`R57`), kept here too.
+    pub name: bool,
+    /// Not a list but the range of a read (`R57..R63`, `count` elements; it names no number).
+    pub range: bool,
+}
+
+impl LazyWords {
+    /// The range of a read of `count` elements of the medium `letter` from `addr`, and its
+    /// first name as the Sensor # cell (what `push_name_and_range` writes).
+    pub(super) fn range(letter: u8, addr: u32, count: u32) -> Self {
+        LazyWords {
+            letter,
+            addr,
+            sign_bit: 0,
+            count,
+            name: true,
+            range: true,
+        }
+    }
 }
 
 /// One `name=number` of a media list: byte offsets in the Data cell.
@@ -57,11 +76,24 @@ impl MediaSpans {
 
     /// The list kept in `lazy` written into `out` (which is empty), recorded, as
     /// [`push_words`] writes it when nothing is deferred.
-    pub(super) fn settle(&mut self, out: &mut String) {
+    pub(super) fn settle(&mut self, sensor_no: &mut String, out: &mut String) {
         let Some(l) = self.lazy.take() else {
             return;
         };
         debug_assert!(out.is_empty(), "a deferred list is the whole cell");
+        if l.range {
+            let mut buf = RangeText([0; 32]);
+            let (text, first) = media_range(&mut buf, l.letter, l.addr, l.count);
+            out.push_str(text);
+            sensor_no.push_str(text.get(..first).unwrap_or_default());
+            self.clear();
+            self.len = Some(out.len());
+            return;
+        }
+        if l.name {
+            let mut buf = RangeText([0; 32]);
+            sensor_no.push_str(media_range(&mut buf, l.letter, l.addr, 1).0);
+        }
         let bytes = std::mem::take(&mut self.lazy_bytes);
         let words = bytes
             .chunks_exact(4)
@@ -146,6 +178,8 @@ pub(super) fn push_words(
                 addr,
                 sign_bit,
                 count: (whole / 4) as u32,
+                name: false,
+                range: false,
             });
             return 0;
         }
@@ -448,6 +482,12 @@ impl MediaSpans {
         c: &mut Cells<'_, '_, F>,
     ) -> (Option<Mark>, Mark) {
         let start = c.here();
+        if l.range {
+            let mut buf = RangeText([0; 32]);
+            let n = range_bytes(&mut buf, l.letter, l.addr, l.count).0;
+            c.put_ascii(&buf.0[..n]);
+            return (None, Mark::new(start, c.here()));
+        }
         let words = self
             .lazy_bytes
             .chunks_exact(4)
@@ -467,6 +507,52 @@ impl MediaSpans {
         }
         (first.0, Mark::new(start, c.here()))
     }
+}
+
+impl LazyWords {
+    /// The Sensor # cell when it is the list's first name ([`LazyWords::name`]), written
+    /// straight into the table; else `sensor_no`.
+    #[inline(always)]
+    pub(super) fn sensor_cell<F: Fmt>(&self, sensor_no: &str, c: &mut Cells<'_, '_, F>) {
+        if self.name {
+            let mut buf = RangeText([0; 32]);
+            let first = range_bytes(&mut buf, self.letter, self.addr, 1).1;
+            c.begin();
+            c.put_ascii(&buf.0[..first]);
+            c.end();
+        } else {
+            c.text(sensor_no);
+        }
+    }
+}
+
+/// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
+/// boundary (byte by byte up to one, otherwise).
+#[repr(align(8))]
+pub(super) struct RangeText(pub [u8; 32]);
+
+/// A medium's range `R57..R63` (`R57` alone for one element), as [`push_elem`] and
+/// `push_range_end` write it: the letter and digits gathered in `buf` and checked as UTF-8
+/// once (a push and a formatted number per name cost more). Returns the text and the length
+/// of its first name.
+pub(super) fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str, usize) {
+    let (n, first) = range_bytes(buf, letter, addr, count);
+    (ascii_text(&buf.0, n), first)
+}
+
+/// [`media_range`]'s bytes in `buf`: their length and the length of the first name.
+#[inline(always)]
+fn range_bytes(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (usize, usize) {
+    let w = &mut buf.0;
+    w[0] = letter;
+    let first = 1 + put_u32(&mut w[1..], addr);
+    let mut n = first;
+    if count > 1 {
+        w[n..n + 3].copy_from_slice(&[b'.', b'.', letter]);
+        n += 3;
+        n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
+    }
+    (n, first)
 }
 
 /// The first `len` bytes of `block` (at most all of it) as text, for a block that holds ASCII
