@@ -135,7 +135,7 @@ impl EtherDecoder {
         c.map.sc.note(&e.to_string());
         put_row(
             out,
-            &c.map.sc,
+            &mut c.map.sc,
             c.last_micros,
             None,
             "",
@@ -180,15 +180,6 @@ impl EtherCore {
             let _ = write!(other, "other PLCs ({})", self.map.totals.plcs_merged);
         }
         MAX_PLCS
-    }
-
-    /// The Device column for PLC `plc` (`server`: the name of a PLC beyond [`MAX_PLCS`]).
-    fn device<'a>(&'a self, plc: usize, server: &'a str) -> &'a str {
-        if plc < MAX_PLCS {
-            &self.plcs[plc].name
-        } else {
-            server
-        }
     }
 
     /// The conversation of `client` and `server` at `t` and its PLC (`request`: the sequence of
@@ -281,7 +272,7 @@ impl EtherCore {
                         });
                         put_row(
                             out,
-                            &self.map.sc,
+                            &mut self.map.sc,
                             t,
                             None,
                             "",
@@ -312,7 +303,7 @@ impl EtherCore {
                     });
                     return put_row(
                         out,
-                        &self.map.sc,
+                        &mut self.map.sc,
                         t,
                         None,
                         "",
@@ -367,7 +358,7 @@ impl EtherCore {
                 });
                 return put_row(
                     out,
-                    &self.map.sc,
+                    &mut self.map.sc,
                     t,
                     None,
                     "",
@@ -417,10 +408,14 @@ impl EtherCore {
                 self.answer(&tele, conv.id, plc, t)
             }
         };
-        let device = self.device(plc, &self.device);
+        let device = if plc < MAX_PLCS {
+            &self.plcs[plc].name
+        } else {
+            &self.device
+        };
         put_row(
             out,
-            &self.map.sc,
+            &mut self.map.sc,
             t,
             id,
             device,

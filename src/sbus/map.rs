@@ -7,12 +7,13 @@
 use std::fmt::Write as _;
 
 use super::commands::{self, Expect};
-use super::media::{FEW_PARTS, MAX_PARTS, MediaSpans, media_parts};
+use super::media::{FEW_PARTS, LazyWords, MAX_PARTS, MediaSpans, media_parts};
 use super::pairing::{
     Answer, MAX_CONVERSATIONS, MAX_OUTSTANDING, Outstanding, RequestKind, TimeoutWhy,
 };
 use super::stats::{StationStats, Totals, nak_slot};
 use super::telegram::{self, BROADCAST, ReqInfo};
+use crate::digits::put_u32;
 use crate::fmt::{push_fixed, push_hex, push_u64};
 use crate::row::{Cells, Class, Fmt, Part, Parts, Row, RowOut, RowResult, Unframed, WriteRow};
 
@@ -21,8 +22,13 @@ use crate::row::{Cells, Class, Fmt, Part, Parts, Row, RowOut, RowResult, Unframe
 pub(super) struct Scratch {
     pub sensor_no: String,
     pub data: String,
+    /// The Resp ms text when it is not `resp_ms`.
     resp: String,
-    seq: String,
+    /// The response time as whole milliseconds and tenths (the usual one, written as
+    /// `ms.t`), or `None` (then `resp`).
+    resp_ms: Option<(u32, u8)>,
+    /// The Seq cell, or `None` (empty).
+    seq: Option<u16>,
     note: String,
     /// The telegram re-read for a sink that re-wraps it (the serial front end): the attribute
     /// and the telegram without framing, escaping and CRC; empty for rows that are no
@@ -39,7 +45,8 @@ impl Scratch {
         self.sensor_no.clear();
         self.data.clear();
         self.resp.clear();
-        self.seq.clear();
+        self.resp_ms = None;
+        self.seq = None;
         self.note.clear();
         self.unframed.clear();
         self.bad_check = None;
@@ -68,27 +75,69 @@ impl Scratch {
         // (wrapping as the release build always did; no capture has such times)
         let tenths = (us as i64).wrapping_add(50) / 100;
         match u32::try_from(tenths / 10) {
-            // what push_fixed(…, 1) writes, without its general path
-            Ok(ms) if tenths >= 0 => {
-                push_u64(&mut self.resp, ms as u64);
-                self.resp.push('.');
-                self.resp.push((b'0' + (tenths % 10) as u8) as char);
-            }
+            // what push_fixed(…, 1) writes, without its general path (see `resp_text`)
+            Ok(ms) if tenths >= 0 => self.resp_ms = Some((ms, (tenths % 10) as u8)),
             _ => push_fixed(&mut self.resp, tenths, 1),
         }
     }
 
     pub(super) fn seq(&mut self, seq: u16) {
-        push_u64(&mut self.seq, seq as u64);
+        self.seq = Some(seq);
+    }
+
+    /// The Resp ms text (written into `buf` when it is `resp_ms`).
+    fn resp_text<'b>(&'b self, buf: &'b mut [u8; 16]) -> &'b str {
+        match self.resp_ms {
+            Some((ms, tenths)) => {
+                let n = put_u32(buf, ms);
+                buf[n] = b'.';
+                buf[n + 1] = b'0' + tenths;
+                std::str::from_utf8(&buf[..n + 2]).unwrap_or_default()
+            }
+            None => &self.resp,
+        }
+    }
+
+    /// The Seq text (written into `buf`).
+    fn seq_text<'b>(&self, buf: &'b mut [u8; 16]) -> &'b str {
+        match self.seq {
+            Some(seq) => {
+                let n = put_u32(buf, seq.into());
+                std::str::from_utf8(&buf[..n]).unwrap_or_default()
+            }
+            None => "",
+        }
+    }
+
+    /// The cells Resp ms and Seq, written straight into the table.
+    #[inline(always)]
+    fn resp_seq_cells<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        match self.resp_ms {
+            Some((ms, tenths)) => {
+                c.begin();
+                c.dec(ms.into());
+                c.put_ascii(&[b'.', b'0' + tenths]);
+                c.end();
+            }
+            None => c.text(&self.resp),
+        }
+        match self.seq {
+            Some(seq) => {
+                c.begin();
+                c.dec(seq.into());
+                c.end();
+            }
+            None => c.empty(),
+        }
     }
 }
 
 /// One row, from the scratch buffers: straight into the table when it lends its output
-/// ([`crate::row::Direct`]), else as a [`Row`].
+/// ([`crate::row::Direct`]), else as a [`Row`] (a deferred media list written as text first).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn put_row(
     out: &mut dyn RowOut,
-    sc: &Scratch,
+    sc: &mut Scratch,
     micros: u64,
     id: Option<u32>,
     device: &str,
@@ -97,6 +146,23 @@ pub(super) fn put_row(
     sensor: &str,
     raw: &[u8],
 ) -> RowResult {
+    if let Some(list) = sc.media.lazy {
+        if let Some(d) = out.direct(super::COLUMNS) {
+            let row = LazyRow {
+                sc,
+                list,
+                id,
+                device,
+                kind,
+                sensor,
+                class,
+            };
+            d.row(Some(micros), class, raw, &row);
+            return Ok(());
+        }
+        sc.media.settle(&mut sc.sensor_no, &mut sc.data);
+    }
+    let sc = &*sc;
     with_parts(sc, class, |parts| {
         let row = ScratchRow {
             sc,
@@ -110,7 +176,12 @@ pub(super) fn put_row(
             d.row(Some(micros), class, raw, &row);
             return Ok(());
         }
-        let extra = [sc.resp.as_str(), sc.seq.as_str(), sc.note.as_str()];
+        let (mut rb, mut sb) = ([0; 16], [0; 16]);
+        let extra = [
+            sc.resp_text(&mut rb),
+            sc.seq_text(&mut sb),
+            sc.note.as_str(),
+        ];
         put(
             out,
             sc,
@@ -157,10 +228,49 @@ impl WriteRow for ScratchRow<'_> {
         }
         c.text(&sc.data);
         c.value_text(first_text(self.parts));
-        c.text(&sc.resp);
-        c.text(&sc.seq);
+        sc.resp_seq_cells(c);
         c.text(&sc.note);
         c.row_parts(self.parts);
+    }
+}
+
+/// A row whose Data cell is a deferred media list ([`MediaSpans::lazy`]), written straight
+/// into the table: the cells [`ScratchRow`] writes once the list is settled as text, the list
+/// written in place (its numbers the row's parts, as [`with_parts`] finds them).
+struct LazyRow<'a> {
+    sc: &'a Scratch,
+    list: LazyWords,
+    id: Option<u32>,
+    device: &'a str,
+    kind: &'a str,
+    sensor: &'a str,
+    class: Class,
+}
+
+impl WriteRow for LazyRow<'_> {
+    #[inline]
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        let sc = self.sc;
+        if c.stamp(0) {
+            c.id(self.id);
+            c.text(self.device);
+            c.text(self.kind);
+            self.list.sensor_cell(&sc.sensor_no, c);
+            c.text(self.sensor);
+            c.stamp_end();
+        }
+        c.begin();
+        let (first, list) = sc.media.write_lazy(&self.list, c);
+        c.end();
+        // No parts for an error, nor for more numbers than a row carries (see `with_parts`).
+        let parts =
+            !self.list.range && self.class != Class::Error && self.list.count as usize <= MAX_PARTS;
+        c.value(first.filter(|_| parts));
+        sc.resp_seq_cells(c);
+        c.text(&sc.note);
+        if parts {
+            c.pairs(list);
+        }
     }
 }
 
@@ -345,8 +455,10 @@ pub(super) struct Mapper {
 
 impl Mapper {
     pub fn new(ack_expect_note: bool) -> Self {
+        let mut sc = Scratch::default();
+        sc.media.defer = true;
         Mapper {
-            sc: Scratch::default(),
+            sc,
             tsc: Scratch::default(),
             totals: Totals::default(),
             ack_expect_note,
@@ -602,12 +714,12 @@ mod tests {
             sc.resp_time(u);
             let mut want = String::new();
             push_fixed(&mut want, (u as i64).wrapping_add(50) / 100, 1);
-            assert_eq!(sc.resp, want, "{u}");
+            assert_eq!(sc.resp_text(&mut [0; 16]), want, "{u}");
         }
         for seq in [0u16, 1, 9, 10, 99, 100, 999, 1000, 9999, 10000, 65535] {
             let mut sc = Scratch::default();
             sc.seq(seq);
-            assert_eq!(sc.seq, seq.to_string());
+            assert_eq!(sc.seq_text(&mut [0; 16]), seq.to_string());
         }
     }
 
@@ -643,7 +755,7 @@ mod tests {
         .unwrap();
         put_row(
             &mut out,
-            &m.sc,
+            &mut m.sc,
             2_000,
             Some(3),
             "PCD",
@@ -683,7 +795,7 @@ mod tests {
         let info = m.answer(&answer, true, 250_000, |_| &mut st, &mut class);
         assert_eq!(class, Class::Warning);
         assert_eq!(m.sc.note, "late: after the 250 ms timeout");
-        assert_eq!(m.sc.resp, "300.0");
+        assert_eq!(m.sc.resp_text(&mut [0; 16]), "300.0");
         let kind = m.ack_nak(0, None, info.as_ref().map(|i| (i, &mut st)), &mut class);
         assert_eq!(kind, "ACK");
         assert!(m.sc.note.ends_with("; ACK to a request that expects data"));

@@ -5,7 +5,7 @@
 
 use super::commands::{Elem, be, push_elem, push_value};
 use crate::digits::put_u32;
-use crate::row::Part;
+use crate::row::{Cells, Fmt, Mark, Part};
 
 /// Where the numbers of a Data cell that lists media values stand (`R0=1 R1=2`), recorded while
 /// the cell is written so that the row's numbers (`Row::parts`) need not be read back from
@@ -21,6 +21,47 @@ pub(crate) struct MediaSpans {
     /// The block the recorded lists are gathered in, kept from list to list (a list on the
     /// stack would clear its 512 bytes first).
     block: Box<Block>,
+    /// Keep a list of words that is the whole cell as [`LazyWords`] instead of writing it
+    /// (the row's scratch does: its row then writes the list straight into the table, or as
+    /// text with [`MediaSpans::settle`] for any other reader).
+    pub defer: bool,
+    /// The list kept (see `defer`).
+    pub lazy: Option<LazyWords>,
+    /// The words of `lazy`, as received (4 bytes each).
+    pub lazy_bytes: Vec<u8>,
+    /// The block `lazy` is gathered in when written straight into the table (by a row that
+    /// only reads the scratch).
+    lazy_block: std::cell::RefCell<Box<Block>>,
+}
+
+/// A media list of words not written yet (`R57=-8 R58=12`): the medium's letter, the first
+/// address, the sign bit of its values (see [`Words`]) and the number of words (in
+/// [`MediaSpans::lazy_bytes`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LazyWords {
+    letter: u8,
+    addr: u32,
+    sign_bit: u32,
+    pub count: u32,
+    /// The Sensor # cell is the list's first name (`R57`), kept here too.
+    pub name: bool,
+    /// Not a list but the range of a read (`R57..R63`, `count` elements; it names no number).
+    pub range: bool,
+}
+
+impl LazyWords {
+    /// The range of a read of `count` elements of the medium `letter` from `addr`, and its
+    /// first name as the Sensor # cell (what `push_name_and_range` writes).
+    pub(super) fn range(letter: u8, addr: u32, count: u32) -> Self {
+        LazyWords {
+            letter,
+            addr,
+            sign_bit: 0,
+            count,
+            name: true,
+            range: true,
+        }
+    }
 }
 
 /// One `name=number` of a media list: byte offsets in the Data cell.
@@ -30,6 +71,39 @@ impl MediaSpans {
     pub fn clear(&mut self) {
         self.len = None;
         self.spans.clear();
+        self.lazy = None;
+    }
+
+    /// The list kept in `lazy` written into `out` (which is empty), recorded, as
+    /// [`push_words`] writes it when nothing is deferred.
+    pub(super) fn settle(&mut self, sensor_no: &mut String, out: &mut String) {
+        let Some(l) = self.lazy.take() else {
+            return;
+        };
+        debug_assert!(out.is_empty(), "a deferred list is the whole cell");
+        if l.range {
+            let mut buf = RangeText([0; 32]);
+            let (text, first) = media_range(&mut buf, l.letter, l.addr, l.count);
+            out.push_str(text);
+            sensor_no.push_str(text.get(..first).unwrap_or_default());
+            self.clear();
+            self.len = Some(out.len());
+            return;
+        }
+        if l.name {
+            let mut buf = RangeText([0; 32]);
+            sensor_no.push_str(media_range(&mut buf, l.letter, l.addr, 1).0);
+        }
+        let bytes = std::mem::take(&mut self.lazy_bytes);
+        let words = bytes
+            .chunks_exact(4)
+            .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
+        let text = Words {
+            sign_bit: l.sign_bit,
+        };
+        let media = MediaSpans::begin(Some(self), out);
+        write_recorded(out, media, l.letter, l.addr, words, text);
+        self.lazy_bytes = bytes;
     }
 
     /// Recording for a list written into `out`: only when the list is the whole cell.
@@ -94,6 +168,23 @@ pub(super) fn push_words(
     };
     // the bit that makes a value negative: the sign bit of an `i32`, none for unsigned media
     let sign_bit = if elem.is_unsigned() { 0 } else { 1 << 31 };
+    let media = match media {
+        Some(m) if m.defer && data.len() >= 4 => {
+            let whole = data.len() / 4 * 4;
+            m.lazy_bytes.clear();
+            m.lazy_bytes.extend_from_slice(&data[..whole]);
+            m.lazy = Some(LazyWords {
+                letter,
+                addr,
+                sign_bit,
+                count: (whole / 4) as u32,
+                name: false,
+                range: false,
+            });
+            return 0;
+        }
+        media => media,
+    };
     let words = data
         .chunks_exact(4)
         .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
@@ -231,8 +322,8 @@ impl Record for Unrecorded {
 /// Every element is written with the blank before it (`" R58=…"`, a copy of [`Names`]'s text);
 /// the first element's blank is then left out of the cell ([`ListText`] starts past it).
 #[inline(always)]
-fn write_list<R: Record>(
-    out: &mut String,
+fn write_list<R: Record, O: ListOut>(
+    out: &mut O,
     block: &mut Block,
     letter: u8,
     addr: u32,
@@ -276,8 +367,8 @@ const LIST_BLOCK: usize = 512;
 /// A media list's text (`R0=1 R1=-2`), gathered in a block and appended to the cell one
 /// block at a time: one copy and one ASCII check per block instead of a push per name, number
 /// and separator. Everything written into it is ASCII.
-struct ListText<'o> {
-    out: &'o mut String,
+struct ListText<'o, O: ListOut> {
+    out: &'o mut O,
     buf: &'o mut Block,
     /// Where the block's text starts: [`FIRST`] in the first block (past the first element's
     /// blank, which is not part of the cell), then 0.
@@ -302,8 +393,8 @@ impl Default for Block {
 /// Where the first block's text starts: the first element's blank stands just before it.
 const FIRST: usize = 8;
 
-impl<'o> ListText<'o> {
-    fn new(out: &'o mut String, buf: &'o mut Block) -> Self {
+impl<'o, O: ListOut> ListText<'o, O> {
+    fn new(out: &'o mut O, buf: &'o mut Block) -> Self {
         ListText {
             out,
             buf,
@@ -330,11 +421,138 @@ impl<'o> ListText<'o> {
 
     fn flush(&mut self) {
         let from = self.buf.0.get(self.from..).unwrap_or_default();
-        self.out
-            .push_str(ascii_text(from, self.n.saturating_sub(self.from)));
+        self.out.put_block(from, self.n.saturating_sub(self.from));
         self.from = 0;
         self.n = 0;
     }
+}
+
+/// Where a list's text goes: a cell's text, or a cell written in place in the table.
+trait ListOut {
+    /// The length written so far (where the next byte goes).
+    fn len(&self) -> usize;
+    /// Appends the first `len` bytes of `block` (ASCII).
+    fn put_block(&mut self, block: &[u8], len: usize);
+}
+
+impl ListOut for String {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        String::len(self)
+    }
+
+    #[inline(always)]
+    fn put_block(&mut self, block: &[u8], len: usize) {
+        self.push_str(ascii_text(block, len));
+    }
+}
+
+impl<F: Fmt> ListOut for Cells<'_, '_, F> {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.here() as usize
+    }
+
+    #[inline(always)]
+    fn put_block(&mut self, block: &[u8], len: usize) {
+        self.put_ascii(block.get(..len).unwrap_or(block));
+    }
+}
+
+/// Only the first number of a list, as a mark of its text in the line.
+struct FirstMark(Option<Mark>);
+
+impl Record for &mut FirstMark {
+    #[inline(always)]
+    fn record(&mut self, base: usize, span: std::ops::Range<usize>, eq: usize, _: f64) {
+        if self.0.is_none() {
+            self.0 = Some(Mark::new((base + eq + 1) as u32, (base + span.end) as u32));
+        }
+    }
+}
+
+impl MediaSpans {
+    /// Writes the list kept as `l` (see `lazy`) into the cell `c` is writing in place
+    /// (between [`Cells::begin`] and [`Cells::end`]): the same text as
+    /// [`MediaSpans::settle`]. Returns the marks of its first number and of the whole list.
+    #[inline]
+    pub(super) fn write_lazy<F: Fmt>(
+        &self,
+        l: &LazyWords,
+        c: &mut Cells<'_, '_, F>,
+    ) -> (Option<Mark>, Mark) {
+        let start = c.here();
+        if l.range {
+            let mut buf = RangeText([0; 32]);
+            let n = range_bytes(&mut buf, l.letter, l.addr, l.count).0;
+            c.put_ascii(&buf.0[..n]);
+            return (None, Mark::new(start, c.here()));
+        }
+        let words = self
+            .lazy_bytes
+            .chunks_exact(4)
+            .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
+        let mut first = FirstMark(None);
+        let text = Words {
+            sign_bit: l.sign_bit,
+        };
+        match self.lazy_block.try_borrow_mut() {
+            Ok(mut block) => {
+                write_list(c, &mut block, l.letter, l.addr, words, &mut first, text);
+            }
+            Err(_) => {
+                let mut block = Block::default();
+                write_list(c, &mut block, l.letter, l.addr, words, &mut first, text);
+            }
+        }
+        (first.0, Mark::new(start, c.here()))
+    }
+}
+
+impl LazyWords {
+    /// The Sensor # cell when it is the list's first name ([`LazyWords::name`]), written
+    /// straight into the table; else `sensor_no`.
+    #[inline(always)]
+    pub(super) fn sensor_cell<F: Fmt>(&self, sensor_no: &str, c: &mut Cells<'_, '_, F>) {
+        if self.name {
+            let mut buf = RangeText([0; 32]);
+            let first = range_bytes(&mut buf, self.letter, self.addr, 1).1;
+            c.begin();
+            c.put_ascii(&buf.0[..first]);
+            c.end();
+        } else {
+            c.text(sensor_no);
+        }
+    }
+}
+
+/// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
+/// boundary (byte by byte up to one, otherwise).
+#[repr(align(8))]
+pub(super) struct RangeText(pub [u8; 32]);
+
+/// A medium's range `R57..R63` (`R57` alone for one element), as [`push_elem`] and
+/// `push_range_end` write it: the letter and digits gathered in `buf` and checked as UTF-8
+/// once (a push and a formatted number per name cost more). Returns the text and the length
+/// of its first name.
+pub(super) fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str, usize) {
+    let (n, first) = range_bytes(buf, letter, addr, count);
+    (ascii_text(&buf.0, n), first)
+}
+
+/// [`media_range`]'s bytes in `buf`: their length and the length of the first name.
+#[inline(always)]
+fn range_bytes(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (usize, usize) {
+    let w = &mut buf.0;
+    w[0] = letter;
+    let first = 1 + put_u32(&mut w[1..], addr);
+    let mut n = first;
+    if count > 1 {
+        w[n..n + 3].copy_from_slice(&[b'.', b'.', letter]);
+        n += 3;
+        n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
+    }
+    (n, first)
 }
 
 /// The first `len` bytes of `block` (at most all of it) as text, for a block that holds ASCII

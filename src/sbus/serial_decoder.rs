@@ -316,7 +316,7 @@ impl SerialCore {
                 });
                 put_row(
                     out,
-                    &m.sc,
+                    &mut m.sc,
                     t,
                     None,
                     "",
@@ -502,10 +502,10 @@ impl SerialCore {
                 (None, "")
             }
         };
-        let device = self.device(id);
+        let device = device(&self.names, id);
         put_row(
             out,
-            &self.map.sc,
+            &mut self.map.sc,
             t,
             id.map(u32::from),
             device,
@@ -561,7 +561,7 @@ impl SerialCore {
                 });
                 return put_row(
                     out,
-                    &self.map.sc,
+                    &mut self.map.sc,
                     t,
                     None,
                     "",
@@ -573,11 +573,11 @@ impl SerialCore {
             }
             Tele::Broken => return self.truncated_row(f.wire, t, out),
         };
-        let device = self.device(id);
+        let device = device(&self.names, id);
         let id = id.map(u32::from);
         put_row(
             out,
-            &self.map.sc,
+            &mut self.map.sc,
             t,
             id,
             device,
@@ -594,7 +594,7 @@ impl SerialCore {
         push_hex(&mut self.map.sc.data, wire);
         put_row(
             out,
-            &self.map.sc,
+            &mut self.map.sc,
             t,
             None,
             "",

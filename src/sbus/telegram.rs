@@ -2,8 +2,9 @@
 //! request and response contents into the table's `Sensor #` and `Data` text.
 
 use super::commands::{self, Command, Elem, Expect, Layout, be, push_elem, push_hex_width};
-use super::media::{MediaSpans, ascii_text, medium_letter, push_bits, push_words};
-use crate::digits::put_u32;
+use super::media::{
+    LazyWords, MediaSpans, RangeText, media_range, medium_letter, push_bits, push_words,
+};
 use crate::fmt::{push_hex, push_i64, push_u64};
 
 /// Frame-sync byte of the serial data mode.
@@ -240,6 +241,15 @@ fn push_name_and_range(
 ) {
     let media = MediaSpans::begin(media, data);
     if let Some(letter) = medium_letter(elem) {
+        if let Some(m) = media.as_deref()
+            && m.defer
+        {
+            // written with the row (see `MediaSpans::lazy`)
+            if let Some(m) = media {
+                m.lazy = Some(LazyWords::range(letter, addr, count));
+            }
+            return;
+        }
         let mut buf = RangeText([0; 32]);
         let (text, first) = media_range(&mut buf, letter, addr, count);
         data.push_str(text);
@@ -255,26 +265,16 @@ fn push_name_and_range(
     }
 }
 
-/// The room [`media_range`] writes in, aligned so that `str::from_utf8` reads it from a word
-/// boundary (byte by byte up to one, otherwise).
-#[repr(align(8))]
-struct RangeText([u8; 32]);
-
-/// A medium's range `R57..R63` (`R57` alone for one element), as [`push_elem`] and
-/// [`push_range_end`] write it: the letter and digits gathered in `buf` and checked as UTF-8
-/// once (a push and a formatted number per name cost more). Returns the text and the length
-/// of its first name.
-fn media_range(buf: &mut RangeText, letter: u8, addr: u32, count: u32) -> (&str, usize) {
-    let w = &mut buf.0;
-    w[0] = letter;
-    let first = 1 + put_u32(&mut w[1..], addr);
-    let mut n = first;
-    if count > 1 {
-        w[n..n + 3].copy_from_slice(&[b'.', b'.', letter]);
-        n += 3;
-        n += put_u32(&mut w[n..], addr.wrapping_add(count - 1));
+/// Whether the list just deferred in `media` ([`MediaSpans::lazy`]) starts with the Sensor #
+/// name: then it is kept there too (see [`LazyWords::name`]) instead of written.
+fn defer_name(media: Option<&mut MediaSpans>) -> bool {
+    match media.and_then(|m| m.lazy.as_mut()) {
+        Some(l) => {
+            l.name = true;
+            true
+        }
+        None => false,
     }
-    (ascii_text(w, n), first)
 }
 
 /// What follows the first name in a range: `..R63`, ` n=8`, or nothing for one element.
@@ -436,12 +436,15 @@ pub(crate) fn describe_request_media(
         }
         WriteWords(e) if body.len() >= 3 => {
             info.addr = be(&body[1..3]);
-            push_elem(sensor_no, e, 0, info.addr);
             let values = &body[3..];
             if !values.len().is_multiple_of(4) || body[0] as usize + 1 != body.len() - 1 {
                 problem = problem.or(Some("w-count does not fit the values"));
             }
-            push_words(data, e, 0, info.addr, values, media);
+            let mut media = media;
+            push_words(data, e, 0, info.addr, values, media.as_deref_mut());
+            if !defer_name(media) {
+                push_elem(sensor_no, e, 0, info.addr);
+            }
         }
         WriteBits(e) if body.len() >= 4 => {
             info.addr = be(&body[1..3]);
@@ -522,7 +525,7 @@ pub(crate) fn describe_response_media(
     payload: &[u8],
     sensor_no: &mut String,
     out: &mut String,
-    media: Option<&mut MediaSpans>,
+    mut media: Option<&mut MediaSpans>,
 ) {
     let fits = req.expect.fits(payload);
     let list_at = out.len();
@@ -530,10 +533,10 @@ pub(crate) fn describe_response_media(
     let mut first = 0;
     match (req.cmd, req.elem) {
         (0x00 | 0x06 | 0x07 | 0x96 | 0xA1, Some(e)) if fits => {
-            first = push_words(out, e, req.block, req.addr, payload, media);
+            first = push_words(out, e, req.block, req.addr, payload, media.as_deref_mut());
         }
         (0x02 | 0x03 | 0x05, Some(e)) if fits => {
-            first = push_bits(out, e, req.addr, req.count, payload, media);
+            first = push_bits(out, e, req.addr, req.count, payload, media.as_deref_mut());
         }
         (0x01, _) if fits => {
             out.push_str("display=");
@@ -564,7 +567,9 @@ pub(crate) fn describe_response_media(
         }
         _ => push_hex(out, payload),
     }
-    if let Some(e) = req.elem {
+    if let Some(e) = req.elem
+        && !defer_name(media)
+    {
         match out.get(list_at..list_at + first) {
             Some(name) if first > 0 => sensor_no.push_str(name),
             _ => push_elem(sensor_no, e, req.block, req.addr),
