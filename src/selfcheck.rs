@@ -745,7 +745,7 @@ pub fn modbus(data: &[u8]) {
 pub(crate) mod tests {
     use super::*;
 
-    /// From the proptest seed of `sbus::tests::garbage_never_panics` (its biased input): in
+    /// From the proptest seed of `sbus::tests::props::garbage_never_panics` (its biased input): in
     /// break and parity mode one request of station 0xB5 (181), command 0xAC, 79 data bytes
     /// and the CRC `B5 C5`, which is CRC-16/XMODEM over the 83 bytes before it. B5 and C5
     /// travel raw in those modes; read as data mode the same bytes are a dozen broken frames.
