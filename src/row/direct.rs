@@ -37,6 +37,7 @@ use std::marker::PhantomData;
 
 use super::Class;
 use super::line;
+pub use super::line::Mark;
 use super::part_keys::PartNames;
 use super::pretty::{CYAN, DIMMED, PrettyLine, RED, YELLOW};
 use super::text::{Format, Text};
@@ -101,20 +102,6 @@ const JSON_KEYS: [&[u8]; 9] = [
     b",\"data\":",
     b",\"value\":",
 ];
-
-/// Where a number's text is in the Data cell: from [`Cells::here`] before it to
-/// [`Cells::here`] after it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Mark {
-    pub(crate) start: u32,
-    pub(crate) end: u32,
-}
-
-impl Mark {
-    pub fn new(start: u32, end: u32) -> Self {
-        Mark { start, end }
-    }
-}
 
 impl Direct<'_> {
     /// Writes one row: Counter, Millis (from `micros`), the cells `row` writes, the raw bytes

@@ -8,7 +8,6 @@
 //! ([`scan`]); only a cell that has such a byte takes the byte-by-byte path, which produces
 //! exactly what the byte-by-byte rules always produced.
 
-use super::direct::Mark;
 use super::{Part, PartSpan, Parts};
 
 mod json;
@@ -75,6 +74,20 @@ fn grow(buf: &mut Vec<u8>, len: usize) {
 
 /// Room a line gets at least when it did not fit.
 pub(crate) const ROOM: usize = 1024;
+
+/// Where a number's text is in the Data cell: from [`super::Cells::here`] before it to
+/// [`super::Cells::here`] after it (in the line, where the row's cells are written).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Mark {
+    pub(crate) start: u32,
+    pub(crate) end: u32,
+}
+
+impl Mark {
+    pub fn new(start: u32, end: u32) -> Self {
+        Mark { start, end }
+    }
+}
 
 /// A line being written into the room [`write_line`] gives: `buf[..pos]` is the text so far.
 /// A write that does not fit sets `over` (and is dropped); [`write_line`] then starts again.
