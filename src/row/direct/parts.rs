@@ -131,15 +131,18 @@ impl<F: Fmt> Cells<'_, '_, F> {
 
     #[inline(always)]
     pub(super) fn part_name(&mut self, name: &str) {
+        self.open_member();
         let w = &mut *self.p.line;
-        w.put(if self.parts == 0 {
-            b",\"parts\":{"
-        } else {
-            b","
-        });
-        self.parts += 1;
         w.json_str(name);
         w.byte(b':');
+    }
+
+    /// A member of `parts` begins: `,"parts":{` before the first, `,` before the others.
+    #[inline(always)]
+    fn open_member(&mut self) {
+        let first = self.parts == 0;
+        self.parts += 1;
+        self.p.line.put(if first { b",\"parts\":{" } else { b"," });
     }
 
     /// JSON Lines only: the `name=number` pairs, separated by blanks, of the marked text in
@@ -166,13 +169,8 @@ impl<F: Fmt> Cells<'_, '_, F> {
                 .position(|&c| c == b'=')
                 .unwrap_or(end - i);
             let num = (eq + 1).min(end);
+            self.open_member();
             let w = &mut *self.p.line;
-            w.put(if self.parts == 0 {
-                b",\"parts\":{"
-            } else {
-                b","
-            });
-            self.parts += 1;
             if eq == i {
                 w.put(b"null");
             } else {

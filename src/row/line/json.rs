@@ -150,20 +150,17 @@ impl W<'_> {
         lens: &[u8; N],
         marks: &[Mark],
     ) -> bool {
-        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
         let pos = self.pos;
         let n = marks.len();
         if n == 0 {
             return true;
         }
-        if n > N || pos + 9 + 48 * n > self.buf.len() {
+        if n > N {
             return false;
         }
-        let mut at = pos;
-        if first {
-            self.buf[at..at + 16].copy_from_slice(PARTS);
-            at += 9;
-        }
+        let Some(mut at) = self.keys_begin(first, n) else {
+            return false;
+        };
         for (i, m) in marks.iter().enumerate().take(N) {
             let (a, b) = (m.start as usize, m.end as usize);
             // (`a > b` wraps to more than 32.)
@@ -181,10 +178,7 @@ impl W<'_> {
             self.buf[at + k..at + k + 32].copy_from_slice(&num);
             at += k + (b - a);
         }
-        if first {
-            self.buf[pos + 9] = b'{';
-        }
-        self.pos = at;
+        self.keys_end(first, at);
         true
     }
 
@@ -199,31 +193,51 @@ impl W<'_> {
         lens: &[u8; N],
         texts: &[&str],
     ) -> bool {
-        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
-        let pos = self.pos;
         let n = texts.len();
         if n == 0 {
             return true;
         }
-        if n > N || pos + 9 + 48 * n > self.buf.len() || texts.iter().any(|t| t.len() > 32) {
+        if n > N || texts.iter().any(|t| t.len() > 32) {
             return false;
         }
-        let mut at = pos;
-        if first {
-            self.buf[at..at + 16].copy_from_slice(PARTS);
-            at += 9;
-        }
+        let Some(mut at) = self.keys_begin(first, n) else {
+            return false;
+        };
         for ((key, &k), t) in keys.iter().zip(lens).zip(texts) {
             self.buf[at..at + 16].copy_from_slice(key);
             let k = usize::from(k).min(16);
             copy(&mut self.buf[at + k..at + k + 32], t.as_bytes());
             at += k + t.len();
         }
+        self.keys_end(first, at);
+        true
+    }
+
+    /// Room for `n` members of kept keys (16 bytes) and numbers (32) at most, written by
+    /// fixed-size copies: where the first key goes (after `,"parts":{` when `first`, the key's
+    /// comma over its `{`), or `None` when the room is short.
+    #[inline(always)]
+    fn keys_begin(&mut self, first: bool, n: usize) -> Option<usize> {
+        const PARTS: &[u8; 16] = b",\"parts\":{\0\0\0\0\0\0";
+        let pos = self.pos;
+        if pos + 9 + 48 * n > self.buf.len() {
+            return None;
+        }
         if first {
-            self.buf[pos + 9] = b'{';
+            self.buf[pos..pos + 16].copy_from_slice(PARTS);
+            return Some(pos + 9);
+        }
+        Some(pos)
+    }
+
+    /// The members from [`W::keys_begin`] end at `at`: `parts`' `{` written again over the
+    /// first key's comma when `first`.
+    #[inline(always)]
+    fn keys_end(&mut self, first: bool, at: usize) {
+        if first {
+            self.buf[self.pos + 9] = b'{';
         }
         self.pos = at;
-        true
     }
 
     #[cold]
