@@ -61,28 +61,7 @@ pub fn checksum(bytes: &[u8]) -> u8 {
 /// True when `bytes` (the covered bytes followed by the checksum byte) pass the check: their
 /// sum with end-around carry is 0xFF.
 pub fn check_ok(bytes: &[u8]) -> bool {
-    let mut s = byte_sum(bytes);
-    // The carries folded back (end-around carry), as [`carry_sum`].
-    while s > 0xFF {
-        s = (s & 0xFF) + (s >> 8);
-    }
-    s == 0xFF
-}
-
-/// The plain sum of `bytes`, eight at a time (every frame is checked, some twice while
-/// resynchronising): neighbouring bytes into four 16-bit lanes (each at most 510), the lanes
-/// added by one multiplication into the top one (at most 2040: no lane carries into the next).
-#[inline]
-fn byte_sum(bytes: &[u8]) -> u64 {
-    const LOW_BYTES: u64 = 0x00FF_00FF_00FF_00FF;
-    let mut words = bytes.chunks_exact(8);
-    let mut s = 0u64;
-    for word in &mut words {
-        let w = u64::from_le_bytes(word.try_into().unwrap_or_default());
-        let lanes = (w & LOW_BYTES) + ((w >> 8) & LOW_BYTES);
-        s += lanes.wrapping_mul(0x0001_0001_0001_0001) >> 48;
-    }
-    s + words.remainder().iter().map(|&b| u64::from(b)).sum::<u64>()
+    carry_sum(bytes) == 0xFF
 }
 
 /// Number of bytes `n` 11-bit channels take.
