@@ -19,7 +19,6 @@
 //! started; nothing here reads a clock, so the result does not depend on how often or when
 //! [`Table::expire`] is called, only on the times it is given.
 
-use std::collections::hash_map::Entry;
 use std::collections::{HashMap, VecDeque};
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 use std::ops::{Deref, DerefMut};
@@ -285,22 +284,32 @@ impl Hasher for FastHasher {
 /// `HashMap` with `FastHasher`.
 pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
-/// A deadline in the queue: the slot of the request it was made for and that request's
-/// generation (the slot may have been freed or taken by a later request since).
-#[derive(Clone, Copy, Debug)]
-struct Deadline {
+/// A request's place: its slot and that request's generation (the slot may have been freed or
+/// taken by a later request since). The deadline queue and [`Hint`]s hold places.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Place {
     slot: u32,
     generation: u32,
 }
 
-/// A place in [`Table`]'s slots: the request, its key (to remove it from the map when its
-/// deadline comes) and the generation of its deadline; `live`: it holds an open request.
+/// A caller's note of the latest request it opened in a group of keys (an Ether-S-Bus
+/// conversation): that request is found through the note, not through [`Table`]'s map, so a
+/// request answered before the group's next one is never hashed. The caller keeps one hint
+/// per group and gives the same hint for every key of that group (a key is in one group
+/// only); `None` keeps no note (every request in the map).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Hint(Option<Place>);
+
+/// A place in [`Table`]'s slots: the request, its key and the generation of its deadline;
+/// `live`: it holds an open request; `mapped`: its key is in the map (else only a hint finds
+/// it).
 #[derive(Clone, Copy, Debug)]
 struct Slot<K, R> {
     open: Open<R>,
     key: K,
     generation: u32,
     live: bool,
+    mapped: bool,
 }
 
 /// Sizes of a [`Table`]'s parts (for tests of the bounds).
@@ -321,16 +330,22 @@ pub struct Sizes {
 /// that order; answered and repeated requests leave stale entries that are dropped lazily
 /// (at the front) or all at once when there are too many (so a capture with constant times,
 /// where nothing ever comes due, keeps the queue small too). A deadline names its request's
-/// slot and generation, so the queue is checked (every packet looks at its front) without a
-/// lookup in the map: the map is asked only to open, answer or remove a request.
+/// place, so the queue is checked (every packet looks at its front) without a lookup.
+///
+/// The latest request of a group of keys is found through the group's [`Hint`]; the map
+/// holds the others (an earlier request of the group still open when the next one came,
+/// and every request opened without a hint). Usual traffic, where each request is answered
+/// before its group's next one, never touches the map.
 #[derive(Debug)]
 pub struct Table<K, R> {
-    /// Open requests by key: an index into `slots` (a compact map).
+    /// Open requests not found through a hint, by key: an index into `slots`.
     map: FastMap<K, u32>,
     /// The requests; `free` lists the slots not `live`.
     slots: Vec<Slot<K, R>>,
     free: Vec<u32>,
-    deadlines: VecDeque<Deadline>,
+    /// Open requests (live slots).
+    open: usize,
+    deadlines: VecDeque<Place>,
     generation: u32,
     cap: usize,
     late: LateWindow<K, R>,
@@ -345,6 +360,7 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
             map: FastMap::default(),
             slots: Vec::new(),
             free: Vec::new(),
+            open: 0,
             deadlines: VecDeque::new(),
             generation: 0,
             cap: cap.max(1),
@@ -355,41 +371,60 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     pub fn sizes(&self) -> Sizes {
         Sizes {
-            open: self.map.len(),
+            open: self.open,
             deadlines: self.deadlines.len(),
             late: self.late.len(),
         }
     }
 
+    /// The slot of the request at `p` when it is still the one open there.
+    fn at(&self, p: Place) -> Option<&Slot<K, R>> {
+        self.slots
+            .get(p.slot as usize)
+            .filter(|s| s.live && s.generation == p.generation)
+    }
+
+    /// The slot of the request open under `key`: the hint's, or else the map's.
+    #[inline]
+    fn find(&self, key: K, hint: Option<&Hint>) -> Option<u32> {
+        if let Some(p) = hint.and_then(|h| h.0)
+            && self.at(p).is_some_and(|s| s.key == key)
+        {
+            return Some(p.slot);
+        }
+        if self.map.is_empty() {
+            return None;
+        }
+        self.map.get(&key).copied()
+    }
+
     /// The request open under `key`.
-    pub fn get(&self, key: K) -> Option<&Open<R>> {
-        let i = *self.map.get(&key)?;
+    pub fn get(&self, key: K, hint: Option<&Hint>) -> Option<&Open<R>> {
+        let i = self.find(key, hint)?;
         self.slots.get(i as usize).map(|s| &s.open)
     }
 
-    pub fn get_mut(&mut self, key: K) -> Option<&mut Open<R>> {
-        let i = *self.map.get(&key)?;
+    pub fn get_mut(&mut self, key: K, hint: Option<&Hint>) -> Option<&mut Open<R>> {
+        let i = self.find(key, hint)?;
         self.slots.get_mut(i as usize).map(|s| &mut s.open)
     }
 
     /// The latest request under `key`, open or expired (to recognise a retry).
-    pub fn previous(&self, key: K) -> Option<&Open<R>> {
-        self.get(key).or_else(|| self.late.find(key))
+    pub fn previous(&self, key: K, hint: Option<&Hint>) -> Option<&Open<R>> {
+        self.get(key, hint).or_else(|| self.late.find(key))
     }
 
-    fn remove(&mut self, key: K) -> Option<Open<R>> {
-        let i = self.map.remove(&key)?;
+    /// Frees slot `i` (live): out of the map when it is there; a hint to it goes stale.
+    fn take(&mut self, i: u32) -> Option<(K, Open<R>)> {
         let s = self.slots.get_mut(i as usize)?;
         s.live = false;
+        let (key, open, mapped) = (s.key, s.open, s.mapped);
+        if mapped {
+            self.map.remove(&key);
+        }
         self.free.push(i);
-        Some(s.open)
-    }
-
-    /// The slot of deadline `d` when it belongs to the request open there now.
-    fn live(&self, d: &Deadline) -> Option<&Slot<K, R>> {
-        self.slots
-            .get(d.slot as usize)
-            .filter(|s| s.live && s.generation == d.generation)
+        self.open -= 1;
+        Some((key, open))
     }
 
     /// Expires `open` for `why` at `at`: reported unless spoiled, then kept for late answers.
@@ -408,72 +443,108 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
         self.late.push(key, open, why);
     }
 
-    /// Opens `open` under `key` (a request sent again replaces the one open). When `cap`
-    /// requests are open, the oldest are given up into `out`.
-    pub fn open(&mut self, key: K, open: Open<R>, out: &mut Vec<Expired<R>>) {
-        if self.map.len() >= self.cap && !self.map.contains_key(&key) {
-            while self.map.len() >= self.cap {
+    /// Opens `open` under `key` (a request sent again replaces the one open); it becomes the
+    /// one `hint` notes, and the request noted before, if still open, goes to the map. When
+    /// `cap` requests are open, the oldest are given up into `out`.
+    pub fn open(
+        &mut self,
+        key: K,
+        open: Open<R>,
+        mut hint: Option<&mut Hint>,
+        out: &mut Vec<Expired<R>>,
+    ) {
+        self.generation = self.generation.wrapping_add(1);
+        let generation = self.generation;
+        let slot = if let Some(i) = self.find(key, hint.as_deref()) {
+            // Sent again: in its slot, found as before (a hint to it follows it).
+            if let Some(s) = self.slots.get_mut(i as usize) {
+                s.open = open;
+                s.generation = generation;
+            }
+            if let Some(h) = hint.as_deref_mut()
+                && h.0.is_some_and(|p| p.slot == i)
+            {
+                h.0 = Some(Place {
+                    slot: i,
+                    generation,
+                });
+            }
+            i
+        } else {
+            while self.open >= self.cap {
                 let Some(d) = self.deadlines.pop_front() else {
                     break;
                 };
-                let Some(k) = self.live(&d).map(|s| s.key) else {
+                if self.at(d).is_none() {
                     continue;
-                };
-                if let Some(r) = self.remove(k) {
+                }
+                if let Some((k, r)) = self.take(d.slot) {
                     self.given_up += 1;
                     let at = open.time.max(r.time);
                     self.expired(k, r, Reason::Overflow, at, out);
                 }
             }
-        }
-        self.generation = self.generation.wrapping_add(1);
-        let entry = Slot {
-            open,
-            key,
-            generation: self.generation,
-            live: true,
-        };
-        let slot = match self.map.entry(key) {
-            Entry::Occupied(e) => {
-                let i = *e.get();
-                if let Some(s) = self.slots.get_mut(i as usize) {
-                    *s = entry;
+            let entry = Slot {
+                open,
+                key,
+                generation,
+                live: true,
+                mapped: hint.is_none(),
+            };
+            let i = match self.free.pop() {
+                Some(i) => i,
+                None => {
+                    self.slots.push(entry);
+                    (self.slots.len() - 1) as u32
                 }
-                i
-            }
-            Entry::Vacant(e) => {
-                let i = match self.free.pop() {
-                    Some(i) => {
-                        if let Some(s) = self.slots.get_mut(i as usize) {
-                            *s = entry;
-                        }
-                        i
+            };
+            match hint {
+                Some(h) => {
+                    // The group's request before, still open, is found through the map now.
+                    if let Some(p) = h.0
+                        && let Some(s) = self.slots.get_mut(p.slot as usize)
+                        && s.live
+                        && s.generation == p.generation
+                        && !s.mapped
+                    {
+                        s.mapped = true;
+                        self.map.insert(s.key, p.slot);
                     }
-                    None => {
-                        self.slots.push(entry);
-                        (self.slots.len() - 1) as u32
-                    }
-                };
-                e.insert(i);
-                i
+                    h.0 = Some(Place {
+                        slot: i,
+                        generation,
+                    });
+                }
+                None => {
+                    self.map.insert(key, i);
+                }
             }
+            if let Some(s) = self.slots.get_mut(i as usize) {
+                *s = entry;
+            }
+            self.open += 1;
+            i
         };
-        self.deadlines.push_back(Deadline {
-            slot,
-            generation: self.generation,
-        });
-        if self.deadlines.len() > self.map.len() + self.map.len() / 4 + 1_024 {
+        self.deadlines.push_back(Place { slot, generation });
+        if self.deadlines.len() > self.open + self.open / 4 + 1_024 {
             let mut deadlines = std::mem::take(&mut self.deadlines);
-            deadlines.retain(|d| self.live(d).is_some());
+            deadlines.retain(|&d| self.at(d).is_some());
             self.deadlines = deadlines;
         }
     }
 
     /// An answer under `key` at `at`: the open request, or else one in the late window.
     /// `late`: after the deadline, or after the request's expiry was reported.
-    pub fn answer(&mut self, key: K, at: u64, timeout: u64) -> Option<(Open<R>, Reply, bool)> {
-        let mut open = match self.remove(key) {
-            Some(r) => r,
+    pub fn answer(
+        &mut self,
+        key: K,
+        hint: Option<&Hint>,
+        at: u64,
+        timeout: u64,
+    ) -> Option<(Open<R>, Reply, bool)> {
+        let found = self.find(key, hint).and_then(|i| self.take(i));
+        let mut open = match found {
+            Some((_, r)) => r,
             None => self.late.take(|k| *k == key)?.0,
         };
         let reply = open.answer(at, timeout);
@@ -483,17 +554,17 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     /// Requests whose deadline passed at `now` go to `out`, oldest first, at their deadline.
     pub fn expire(&mut self, now: u64, timeout: u64, out: &mut Vec<Expired<R>>) {
-        while let Some(d) = self.deadlines.front() {
-            let Some(s) = self.live(d) else {
+        while let Some(&d) = self.deadlines.front() {
+            let Some(s) = self.at(d) else {
                 self.deadlines.pop_front();
                 continue;
             };
-            let (key, at) = (s.key, s.open.time.saturating_add(timeout));
-            if at >= now {
+            if s.open.time.saturating_add(timeout) >= now {
                 break;
             }
             self.deadlines.pop_front();
-            if let Some(r) = self.remove(key) {
+            if let Some((key, r)) = self.take(d.slot) {
+                let at = r.time.saturating_add(timeout);
                 self.expired(key, r, Reason::Deadline, at, out);
             }
         }
@@ -501,8 +572,15 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     /// Forgets the request open under `key` for good (no late answer will pair with it); it
     /// goes to `out` for `why` at `at` unless spoiled.
-    pub fn forget(&mut self, key: K, why: Reason, at: u64, out: &mut Vec<Expired<R>>) {
-        if let Some(mut r) = self.remove(key) {
+    pub fn forget(
+        &mut self,
+        key: K,
+        hint: Option<&Hint>,
+        why: Reason,
+        at: u64,
+        out: &mut Vec<Expired<R>>,
+    ) {
+        if let Some((_, mut r)) = self.find(key, hint).and_then(|i| self.take(i)) {
             r.reported = true;
             if !r.spoiled {
                 out.push(Expired { req: r, why, at });
@@ -514,8 +592,8 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
     pub fn finish(&mut self) -> u64 {
         let mut n = 0;
         while let Some(d) = self.deadlines.pop_front() {
-            if let Some(key) = self.live(&d).map(|s| s.key)
-                && let Some(r) = self.remove(key)
+            if self.at(d).is_some()
+                && let Some((_, r)) = self.take(d.slot)
             {
                 n += u64::from(!r.spoiled);
             }

@@ -104,10 +104,10 @@ fn late_window_keeps_the_last_expiries_or_the_unanswered() {
 fn table_expires_in_order_with_reasons_and_late_answers() {
     let mut t: Table<u8, u32> = Table::new(16, 8);
     let mut out = Vec::new();
-    t.open(1, open(0), &mut out);
-    t.open(2, open(100), &mut out);
-    t.open(3, open(200), &mut out);
-    t.get_mut(3).unwrap().spoiled = true;
+    t.open(1, open(0), None, &mut out);
+    t.open(2, open(100), None, &mut out);
+    t.open(3, open(200), None, &mut out);
+    t.get_mut(3, None).unwrap().spoiled = true;
     t.expire(T, T, &mut out);
     assert!(out.is_empty(), "exactly at the deadline is in time");
     t.expire(1_150, T, &mut out);
@@ -121,23 +121,23 @@ fn table_expires_in_order_with_reasons_and_late_answers() {
     // 3 is spoiled: it expires silently, yet a late answer still pairs with it.
     t.expire(5_000, T, &mut out);
     assert!(out.is_empty());
-    let (o, reply, late) = t.answer(3, 5_000, T).unwrap();
+    let (o, reply, late) = t.answer(3, None, 5_000, T).unwrap();
     assert_eq!((o.time, reply.elapsed, late), (200, 4_800, true));
     // A late answer to 1 pairs once.
-    assert!(t.answer(1, 5_100, T).is_some_and(|a| a.2));
-    assert!(t.answer(1, 5_200, T).is_none());
+    assert!(t.answer(1, None, 5_100, T).is_some_and(|a| a.2));
+    assert!(t.answer(1, None, 5_200, T).is_none());
     // An answer in time.
-    t.open(4, open(6_000), &mut out);
-    let (_, reply, late) = t.answer(4, 6_500, T).unwrap();
+    t.open(4, open(6_000), None, &mut out);
+    let (_, reply, late) = t.answer(4, None, 6_500, T).unwrap();
     assert_eq!((reply.elapsed, late), (500, false));
     // Retries find the previous transmission, open or expired.
-    assert_eq!(t.previous(2).map(|o| o.time), Some(100));
-    t.open(5, open(7_000), &mut out);
-    assert_eq!(t.previous(5).map(|o| o.time), Some(7_000));
+    assert_eq!(t.previous(2, None).map(|o| o.time), Some(100));
+    t.open(5, open(7_000), None, &mut out);
+    assert_eq!(t.previous(5, None).map(|o| o.time), Some(7_000));
     // Forgotten requests are reported but never pair again.
-    t.forget(5, Reason::Dropped, 7_100, &mut out);
+    t.forget(5, None, Reason::Dropped, 7_100, &mut out);
     assert_eq!((out[0].why, out[0].at), (Reason::Dropped, 7_100));
-    assert!(t.answer(5, 7_200, T).is_none());
+    assert!(t.answer(5, None, 7_200, T).is_none());
     assert_eq!(t.finish(), 0);
 }
 
@@ -146,25 +146,25 @@ fn table_cap_gives_up_the_oldest() {
     let mut t: Table<u32, u32> = Table::new(3, 2);
     let mut out = Vec::new();
     for k in 0..3 {
-        t.open(k, open(k as u64 * 10), &mut out);
+        t.open(k, open(k as u64 * 10), None, &mut out);
     }
-    t.get_mut(1).unwrap().spoiled = true;
+    t.get_mut(1, None).unwrap().spoiled = true;
     // The same key again replaces its request: nothing given up.
-    t.open(2, open(25), &mut out);
+    t.open(2, open(25), None, &mut out);
     assert!(out.is_empty());
-    t.open(3, open(30), &mut out);
+    t.open(3, open(30), None, &mut out);
     assert_eq!(out.len(), 1);
     assert_eq!(
         (out[0].req.time, out[0].why, out[0].at),
         (0, Reason::Overflow, 30)
     );
     // The spoiled one is given up silently, but counted.
-    t.open(4, open(40), &mut out);
+    t.open(4, open(40), None, &mut out);
     assert_eq!(out.len(), 1);
     assert_eq!(t.given_up, 2);
     assert_eq!(t.sizes().open, 3);
     // Given-up requests still take late answers.
-    assert!(t.answer(0, 50, T).is_some_and(|a| a.2));
+    assert!(t.answer(0, None, 50, T).is_some_and(|a| a.2));
     assert_eq!(t.finish(), 3);
     assert_eq!(
         t.sizes(),
@@ -180,18 +180,23 @@ fn table_cap_gives_up_the_oldest() {
 fn deadline_queue_stays_small_with_constant_times() {
     // Nothing ever comes due: answered and repeated requests leave stale deadlines, which
     // are compacted away.
-    let mut t: Table<u32, u32> = Table::new(1 << 16, 16);
-    let mut out = Vec::new();
-    for i in 0..100_000u32 {
-        t.open(i % 50, open(0), &mut out);
-        if i % 3 == 0 {
-            t.answer(i % 50, 0, T);
+    for hinted in [false, true] {
+        let mut t: Table<u32, u32> = Table::new(1 << 16, 16);
+        let mut hints = [Hint::default(); 7];
+        let mut out = Vec::new();
+        for i in 0..100_000u32 {
+            // With hints: seven groups of keys (a key in one group only).
+            let mut h = hinted.then(|| &mut hints[(i % 50 % 7) as usize]);
+            t.open(i % 50, open(0), h.as_deref_mut(), &mut out);
+            if i % 3 == 0 {
+                t.answer(i % 50, h.as_deref(), 0, T);
+            }
+            t.expire(0, T, &mut out);
+            let s = t.sizes();
+            assert!(s.deadlines <= s.open + s.open / 4 + 1_025, "{s:?}");
         }
-        t.expire(0, T, &mut out);
-        let s = t.sizes();
-        assert!(s.deadlines <= s.open + s.open / 4 + 1_025, "{s:?}");
+        assert!(out.is_empty());
     }
-    assert!(out.is_empty());
 }
 
 /// One step of a scripted exchange: `key` is opened (or answered) `dt` after the last step.
@@ -219,9 +224,9 @@ fn run(steps: &[Step], ticks: bool) -> Vec<String> {
         now += s.dt;
         t.expire(now, T, &mut out);
         if s.answer {
-            log.push(format!("{:?}", t.answer(s.key, now, T)));
+            log.push(format!("{:?}", t.answer(s.key, None, now, T)));
         } else {
-            t.open(s.key, open(now), &mut out);
+            t.open(s.key, open(now), None, &mut out);
         }
         log.extend(out.drain(..).map(|e| format!("{e:?}")));
     }
@@ -243,32 +248,46 @@ proptest! {
         prop_assert_eq!(run(&steps, false), run(&steps, true));
     }
 
+    /// With and without hints: `grouping` 0 keeps none (every request in the map), 1 one hint
+    /// for every key, 2 a hint for each pair of keys, 3 one for each key.
     #[test]
     fn table_does_what_the_model_does(
-        ops in prop::collection::vec((0u8..6, 0u8..6, 0u64..3_000), 0..120)
+        ops in prop::collection::vec((0u8..6, 0u8..6, 0u64..3_000), 0..120),
+        grouping in 0u8..4,
     ) {
         let mut t: Table<u8, u32> = Table::new(4, 3);
         let mut m = Model::new(4, 3);
+        let mut hints = [Hint::default(); 6];
+        let group = |key: u8| match grouping {
+            0 => None,
+            1 => Some(0),
+            2 => Some(usize::from(key / 2)),
+            _ => Some(usize::from(key)),
+        };
         let (mut got, mut want) = (Vec::new(), Vec::new());
         for (i, &(op, key, time)) in ops.iter().enumerate() {
             let payload = i as u32;
+            let g = group(key);
             match op {
                 0 | 1 => {
                     let o = Open::at(payload, time, true);
-                    t.open(key, o, &mut got);
+                    t.open(key, o, g.map(|g| &mut hints[g]), &mut got);
                     m.open(key, o, &mut want);
                 }
-                2 => prop_assert_eq!(t.answer(key, time, T), m.answer(key, time)),
+                2 => prop_assert_eq!(
+                    t.answer(key, g.map(|g| &hints[g]), time, T),
+                    m.answer(key, time)
+                ),
                 3 => {
                     t.expire(time, T, &mut got);
                     m.expire(time, &mut want);
                 }
                 4 => {
-                    t.forget(key, Reason::Dropped, time, &mut got);
+                    t.forget(key, g.map(|g| &hints[g]), Reason::Dropped, time, &mut got);
                     m.forget(key, time, &mut want);
                 }
                 _ => {
-                    if let Some(o) = t.get_mut(key) {
+                    if let Some(o) = t.get_mut(key, g.map(|g| &hints[g])) {
                         o.spoiled = true;
                     }
                     if let Some(o) = m.get_mut(key) {
@@ -277,8 +296,11 @@ proptest! {
                 }
             }
             prop_assert_eq!(&got, &want);
-            prop_assert_eq!(t.previous(key), m.previous(key));
+            prop_assert_eq!(t.previous(key, g.map(|g| &hints[g])), m.previous(key));
             prop_assert_eq!((t.sizes().open, t.given_up), (m.open.len(), m.given_up));
+            if grouping == 3 {
+                prop_assert!(t.map.is_empty(), "a hint for each key: nothing in the map");
+            }
         }
         prop_assert_eq!(t.finish(), m.finish());
     }

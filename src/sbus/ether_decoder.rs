@@ -397,7 +397,7 @@ impl EtherCore {
             let _ = write!(self.device, "{server}");
         }
         let (id, kind, class, sensor) = if !tele.crc_ok() {
-            self.bad_crc(&tele, conv.id, plc)
+            self.bad_crc(&tele, &conv, plc)
         } else {
             if shaped {
                 self.map.totals.valid += 1;
@@ -405,7 +405,7 @@ impl EtherCore {
             if tele.at == telegram::AT_REQUEST {
                 self.request(&tele, conv, plc, t, out)?
             } else {
-                self.answer(&tele, conv.id, plc, t)
+                self.answer(&tele, &conv, plc, t)
             }
         };
         let device = if plc < MAX_PLCS {
@@ -427,7 +427,7 @@ impl EtherCore {
     }
 
     /// A telegram with a bad CRC: (ID, kind, class, Sensor) of its row.
-    fn bad_crc(&mut self, tele: &ether::EtherTele<'_>, conv: u32, plc: usize) -> RowHead {
+    fn bad_crc(&mut self, tele: &ether::EtherTele<'_>, conv: &Conversation, plc: usize) -> RowHead {
         self.map.bad_crc(tele.crc_got, tele.crc_want, None);
         self.plcs[plc].stats.crc_errors += 1;
         if tele.at != telegram::AT_REQUEST {
@@ -502,7 +502,13 @@ impl EtherCore {
     }
 
     /// A response or ACK/NAK with a good CRC, paired by its sequence number.
-    fn answer(&mut self, tele: &ether::EtherTele<'_>, conv: u32, plc: usize, t: u64) -> RowHead {
+    fn answer(
+        &mut self,
+        tele: &ether::EtherTele<'_>,
+        conv: &Conversation,
+        plc: usize,
+        t: u64,
+    ) -> RowHead {
         let mut class = Class::Plain;
         let answer = self.pairing.answer(conv, tele.seq, t);
         let st = &mut self.plcs[plc].stats;

@@ -8,7 +8,7 @@
 
 use std::collections::VecDeque;
 
-use crate::pairing::{Open, Table};
+use crate::pairing::{Hint, Open, Table};
 
 pub use crate::pairing::{FastMap, Reason as TimeoutWhy};
 
@@ -250,6 +250,8 @@ struct Conv {
     queued: u64,
     /// The sequence of its last request (see [`EtherPairing::conversation`]).
     last_seq: Option<u16>,
+    /// Its place in [`EtherPairing::hints`].
+    hint: u32,
 }
 
 /// A conversation as [`EtherPairing::conversation`] finds it.
@@ -259,6 +261,8 @@ pub struct Conversation {
     pub tag: u32,
     /// The sequence of its last request before this packet (for [`EtherPairing::request`]).
     pub last_seq: Option<u16>,
+    /// Its place in [`EtherPairing::hints`].
+    hint: u32,
 }
 
 /// Ether-S-Bus pairing by (conversation, sequence). Conversations are keyed by `K` (the client
@@ -269,6 +273,10 @@ pub struct EtherPairing<K> {
     /// Waiting requests by (conversation, sequence).
     table: Table<(u32, u16), Request>,
     convs: FastMap<K, Conv>,
+    /// Each conversation's [`Hint`] to its latest request, so that the answer to it is found
+    /// without the table's map; `free_hints` lists the places of dropped conversations.
+    hints: Vec<Hint>,
+    free_hints: Vec<u32>,
     /// Every conversation once, in order of use when queued; an entry whose conversation was
     /// used since is queued again when it reaches the front (so the front is the least
     /// recently used one).
@@ -296,6 +304,8 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         EtherPairing {
             table: Table::new(MAX_OUTSTANDING, LATE_KEPT),
             convs: FastMap::default(),
+            hints: Vec::new(),
+            free_hints: Vec::new(),
             lru: VecDeque::new(),
             next_sweep: 0,
             next_conv: 0,
@@ -347,6 +357,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
                 id: c.id,
                 tag: c.tag,
                 last_seq,
+                hint: c.hint,
             };
         }
         while self.convs.len() >= MAX_CONVERSATIONS {
@@ -369,6 +380,13 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let id = self.next_conv;
         self.next_conv = self.next_conv.wrapping_add(1);
         self.forgotten.conversations += 1;
+        let hint = match self.free_hints.pop() {
+            Some(h) => h,
+            None => {
+                self.hints.push(Hint::default());
+                (self.hints.len() - 1) as u32
+            }
+        };
         let c = Conv {
             id,
             tag: tag(),
@@ -376,6 +394,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             time: now,
             queued: stamp,
             last_seq: request,
+            hint,
         };
         self.convs.insert(key, c);
         self.lru.push_back((key, stamp));
@@ -383,6 +402,7 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             id,
             tag: c.tag,
             last_seq: None,
+            hint,
         }
     }
 
@@ -398,8 +418,10 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         let Some(c) = self.convs.remove(&key) else {
             return;
         };
+        let hint = self.hints.get_mut(c.hint as usize).map(std::mem::take);
+        self.free_hints.push(c.hint);
         if let Some(seq) = c.last_seq {
-            self.table.forget((c.id, seq), why, now, out);
+            self.table.forget((c.id, seq), hint.as_ref(), why, now, out);
         }
     }
 
@@ -413,13 +435,16 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
         req: Outstanding,
         out: &mut Vec<Expired>,
     ) -> (RequestKind, Option<SeqGap>) {
-        let (last, conv) = (conv.last_seq, conv.id);
+        let (last, hint, conv) = (conv.last_seq, conv.hint, conv.id);
         if last == Some(seq)
-            && let Some(p) = self.table.previous((conv, seq)).copied()
+            && let Some(p) = self
+                .table
+                .previous((conv, seq), self.hints.get(hint as usize))
+                .copied()
         {
             let mut next = req;
             let kind = RequestKind::resend(&mut next, &p);
-            self.open((conv, seq), next, out);
+            self.open((conv, seq), hint, next, out);
             return (kind, None);
         }
         let gap = match last {
@@ -431,18 +456,20 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
             }
             _ => None,
         };
-        self.open((conv, seq), req, out);
+        self.open((conv, seq), hint, req, out);
         (RequestKind::New, gap)
     }
 
-    fn open(&mut self, key: (u32, u16), req: Outstanding, out: &mut Vec<Expired>) {
-        self.table.open(key, req, out);
+    fn open(&mut self, key: (u32, u16), hint: u32, req: Outstanding, out: &mut Vec<Expired>) {
+        let hint = self.hints.get_mut(hint as usize);
+        self.table.open(key, req, hint, out);
         self.forgotten.requests = self.table.given_up;
     }
 
     /// An answer on conversation `conv` with sequence `seq` at `time`.
-    pub fn answer(&mut self, conv: u32, seq: u16, time: u64) -> Answer {
-        match self.table.answer((conv, seq), time, self.timeout) {
+    pub fn answer(&mut self, conv: &Conversation, seq: u16, time: u64) -> Answer {
+        let hint = self.hints.get(conv.hint as usize);
+        match self.table.answer((conv.id, seq), hint, time, self.timeout) {
             Some((req, reply, late)) => Answer::Paired {
                 req,
                 elapsed: reply.elapsed,
@@ -453,8 +480,9 @@ impl<K: Copy + Eq + std::hash::Hash> EtherPairing<K> {
     }
 
     /// An answer with a bad CRC for (conversation, sequence): no Timeout row for that request.
-    pub fn bad_answer(&mut self, conv: u32, seq: u16) {
-        if let Some(r) = self.table.get_mut((conv, seq)) {
+    pub fn bad_answer(&mut self, conv: &Conversation, seq: u16) {
+        let hint = self.hints.get(conv.hint as usize);
+        if let Some(r) = self.table.get_mut((conv.id, seq), hint) {
             r.spoiled = true;
         }
     }
@@ -577,25 +605,26 @@ mod tests {
         // A request on conversation `key` at `t`: its conversation's id, how it relates.
         let req = |p: &mut EtherPairing<u8>, key, t, seq, out: &mut Vec<_>| {
             let c = p.conversation(key, t, Some(seq), || 0, out);
-            (c.id, p.request(c, seq, r(t), out))
+            (c, p.request(c, seq, r(t), out))
         };
         let (c0, k) = req(&mut p, 0, 0, 1, &mut out);
         assert_eq!(k, (RequestKind::New, None));
         let (c1, k) = req(&mut p, 1, 10, 1, &mut out);
         assert_eq!(k, (RequestKind::New, None));
         assert!(matches!(
-            p.answer(c1, 1, 50),
+            p.answer(&c1, 1, 50),
             Answer::Paired { elapsed: 40, .. }
         ));
+        let (c, k) = req(&mut p, 0, 500, 1, &mut out);
         assert_eq!(
-            req(&mut p, 0, 500, 1, &mut out),
-            (c0, (RequestKind::Retry { n: 1, since: 500 }, None))
+            (c.id, k),
+            (c0.id, (RequestKind::Retry { n: 1, since: 500 }, None))
         );
         assert!(matches!(
-            p.answer(c0, 1, 600),
+            p.answer(&c0, 1, 600),
             Answer::Paired { elapsed: 100, .. }
         ));
-        assert_eq!(p.answer(c0, 1, 700), Answer::NoRequest);
+        assert_eq!(p.answer(&c0, 1, 700), Answer::NoRequest);
         let (_, (k, gap)) = req(&mut p, 0, 800, 5, &mut out);
         assert_eq!(k, RequestKind::New);
         assert_eq!(gap, Some(SeqGap { missing: Some(3) }));
@@ -606,7 +635,7 @@ mod tests {
         assert_eq!((out[0].why, out[0].at), (TimeoutWhy::Deadline, 1_000_800));
         // late answer still pairs
         assert!(matches!(
-            p.answer(c0, 5, 2_000_000),
+            p.answer(&c0, 5, 2_000_000),
             Answer::Paired { late: true, .. }
         ));
         // idle conversations are forgotten, and start afresh
@@ -615,7 +644,7 @@ mod tests {
         assert_eq!(p.sizes().conversations, 0);
         assert_eq!(p.forgotten.expired, 2);
         let (c2, (_, gap)) = req(&mut p, 0, 70_000_001, 9, &mut out);
-        assert_ne!(c2, c0);
+        assert_ne!(c2.id, c0.id);
         assert_eq!(gap, None);
         assert!(out.is_empty());
     }
