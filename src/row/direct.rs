@@ -23,9 +23,11 @@
 //! [`Cells::end`] with [`Cells::str`], [`Cells::put_ascii`], [`Cells::dec`], [`Cells::fixed`]
 //! …, which take only UTF-8 (strings, ASCII, digits), so no cell is checked for UTF-8 (text a
 //! decoder builds from tables of digits and letters goes as ASCII bytes, without making a
-//! `&str` of it first). A member of `parts` named by a literal or a `static` table is best
-//! written with [`Cells::part_static`] (its key found by the name's address). A cell that
-//! turns out to need quoting or escaping (a comma in CSV, a quote in JSON, a control
+//! `&str` of it first); a cell known to hold a comma besides such pieces (a reading with its
+//! signed twin) is begun with [`Cells::begin_listed`], so that CSV opens its quote first
+//! instead of moving the cell at its end. A member of `parts` named by a literal or a `static`
+//! table is best written with [`Cells::part_static`] (its key found by the name's address). A
+//! cell that turns out to need quoting or escaping (a comma in CSV, a quote in JSON, a control
 //! character, a character that is not printable ASCII in pretty text) is written again from a
 //! copy, exactly as the table writes a [`Row`]'s cell. Tests compare both ways of every
 //! protocol that writes rows straight, over every fixture and fuzz corpus, byte for byte
@@ -43,6 +45,7 @@ use super::pretty::{CYAN, DIMMED, PrettyLine, RED, YELLOW};
 use super::text::{Format, Text};
 
 mod parts;
+mod pieces;
 
 /// The table's output buffer and its text state, lent for one row: `buf[..*len]` holds the
 /// rows not yet written out, the rest is room for the next line.
@@ -141,6 +144,8 @@ impl Direct<'_> {
                 text.widths.resize(n, 4);
             }
         }
+        // Pretty text's last column (not padded), the same for every cell of the row.
+        let last_col = 7 + text.extra.len() + usize::from(text.raw);
         *self.len += line::write_once(self.buf, *self.len, |w| {
             let mut c = Cells::<F> {
                 p: PrettyLine::start(w, style),
@@ -148,6 +153,8 @@ impl Direct<'_> {
                 col: 0,
                 cell: (0, 0, 0),
                 plain: false,
+                listed: false,
+                last_col,
                 span: (0, 0, 0),
                 rewritten: None,
                 parts: 0,
@@ -172,8 +179,14 @@ pub struct Cells<'b, 'l, F: Fmt> {
     /// line was before its blanks, and the blanks owed then.
     cell: (usize, usize, usize),
     /// The cell written in place has only pieces with nothing to quote or escape in any
-    /// format (numbers, hex, [`Cells::put_ascii`]) so far: TSV, CSV and JSON need not look.
+    /// format (numbers, hex, [`Cells::put_ascii`]) so far: no format needs to look at it
+    /// again (pretty text: it is printable ASCII, one column a byte).
     plain: bool,
+    /// The cell written in place was begun with [`Cells::begin_listed`]: it holds a comma, and
+    /// (in CSV) its opening quote is written.
+    listed: bool,
+    /// Pretty text's last column ([`Cells::last`]), worked out once a row rather than per cell.
+    last_col: usize,
     /// The cells ID to Sensor being written: where they start, the blanks owed before them,
     /// and the stamp (0: not kept).
     span: (usize, usize, u32),
@@ -229,7 +242,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
     /// Whether pretty column `i` is the line's last (not padded).
     #[inline(always)]
     fn last(&self, i: usize) -> bool {
-        i + 1 == 8 + self.t.extra.len() + usize::from(self.t.raw)
+        i == self.last_col
     }
 
     /// The cells ID to Sensor: copied from the last row with the same non-zero `stamp` when
@@ -440,6 +453,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
     pub fn begin(&mut self) {
         let i = self.col;
         self.plain = true;
+        self.listed = false;
         match F::FORMAT {
             Format::Tsv | Format::Csv => {
                 self.p.line.byte(Self::SEP);
@@ -466,11 +480,18 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.col += 1;
         let at = self.cell.0;
         let plain = self.plain;
-        if cfg!(debug_assertions) && plain && F::FORMAT != Format::Pretty {
+        if cfg!(debug_assertions) && plain {
             let cell = self.p.line.bytes().get(at..).unwrap_or_default();
+            let listed = self.listed;
             assert!(
-                cell.iter().all(|&b| is_plain(b)),
+                cell.iter().all(|&b| is_plain(b) || listed && b == b','),
                 "a plain cell to quote or escape: {:?}",
+                String::from_utf8_lossy(cell)
+            );
+            // A line that did not fit has dropped pieces (it is written again into more room).
+            assert!(
+                !listed || self.p.line.over() || cell.contains(&b','),
+                "a listed cell without a comma: {:?}",
                 String::from_utf8_lossy(cell)
             );
         }
@@ -481,7 +502,13 @@ impl<F: Fmt> Cells<'_, '_, F> {
                 }
                 None
             }
-            Format::Csv if plain => None,
+            Format::Csv if plain => {
+                if self.listed {
+                    // Its opening quote is written (`begin_listed`), and nothing in it is doubled.
+                    self.p.line.byte(b'"');
+                }
+                None
+            }
             Format::Csv => self.p.line.csv_fix(at, &mut self.t.scratch),
             Format::Jsonl => {
                 let numeric = json_key(self.t, i).1;
@@ -497,78 +524,13 @@ impl<F: Fmt> Cells<'_, '_, F> {
                 let last = self.last(i);
                 let t = &mut *self.t;
                 self.p
-                    .end_cell(&mut t.widths, i, last, self.cell, &mut t.scratch);
+                    .end_cell(&mut t.widths, i, last, self.cell, plain, &mut t.scratch);
                 None
             }
         };
         if i == 7 {
             self.rewritten = rewritten;
         }
-    }
-
-    /// Where the line is now (to mark a number: [`Mark::new`]).
-    #[inline(always)]
-    pub fn here(&self) -> u32 {
-        self.p.line.len() as u32
-    }
-
-    /// In place: a text.
-    #[inline(always)]
-    pub fn str(&mut self, s: &str) {
-        self.plain = false;
-        self.p.line.put(s.as_bytes());
-    }
-
-    /// In place: bytes known to be plain ASCII, printable (blanks included) and none of
-    /// `,` `"` `\` (a text built from tables of digits, letters, blanks, signs), as
-    /// [`Cells::str`] writes them, without the check for UTF-8 a `&str` made of them costs;
-    /// and a cell of such pieces and numbers is not looked at again for what TSV, CSV or JSON
-    /// quote or escape. Debug builds check that the bytes are plain.
-    #[inline(always)]
-    pub fn put_ascii(&mut self, b: &[u8]) {
-        debug_assert!(b.iter().all(|&c| is_plain(c)), "put_ascii: {b:?}");
-        self.p.line.put(b);
-    }
-
-    /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
-    #[inline(always)]
-    pub fn ascii(&mut self, b: u8) {
-        self.plain = false;
-        self.p.line.byte(if b < 0x80 { b } else { b'?' });
-    }
-
-    /// In place: an integer in decimal.
-    #[inline(always)]
-    pub fn dec(&mut self, n: u64) {
-        self.p.line.dec(n);
-    }
-
-    /// In place: a signed integer in decimal.
-    #[inline(always)]
-    pub fn dec_i(&mut self, n: i64) {
-        if n < 0 {
-            self.p.line.byte(b'-');
-        }
-        self.p.line.dec(n.unsigned_abs());
-    }
-
-    /// In place: `raw / 10^prec` as [`crate::fmt::push_fixed`] writes it (`6543, 2` →
-    /// `65.43`).
-    #[inline(always)]
-    pub fn fixed(&mut self, raw: i64, prec: u8) {
-        self.p.line.fixed(raw, prec);
-    }
-
-    /// In place: a byte as two upper-case hex digits.
-    #[inline(always)]
-    pub fn hex2(&mut self, b: u8) {
-        self.p.line.hex2(b);
-    }
-
-    /// In place: bytes as upper-case hex pairs with a blank between them (`7E 1A 10`).
-    #[inline(always)]
-    pub fn hex_bytes(&mut self, b: &[u8]) {
-        self.p.line.hex_bytes(b);
     }
 
     /// Where a mark's text is: in the line, or in the copy of a Data cell written again.

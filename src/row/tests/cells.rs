@@ -182,3 +182,81 @@ fn empty_to_end_writes_what_each_empty_cell_writes() {
         }
     }
 }
+
+/// A row whose Data cell and last extra column hold commas (`B5 (181, -75)`): begun with
+/// [`Cells::begin_listed`] (CSV's opening quote written first) or written as any text (quoted
+/// at its end, from a copy), a number marked in Data read back for Value and `parts`.
+struct Listed {
+    pieces: &'static [&'static [u8]],
+    listed: bool,
+}
+
+impl Listed {
+    fn cell<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) -> Mark {
+        if self.listed {
+            c.begin_listed();
+        } else {
+            c.begin();
+        }
+        let mut mark = Mark::default();
+        for (i, piece) in self.pieces.iter().enumerate() {
+            if i == 1 {
+                let a = c.here();
+                c.dec(181);
+                mark = Mark::new(a, c.here());
+            }
+            if !self.listed {
+                c.str(std::str::from_utf8(piece).unwrap());
+            } else if piece.contains(&b',') {
+                c.put_listed(piece);
+            } else {
+                c.put_ascii(piece);
+            }
+        }
+        c.end();
+        mark
+    }
+}
+
+impl WriteRow for Listed {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        if c.stamp(0) {
+            c.id(Some(7));
+            c.text("Dev");
+            c.text("ACK");
+            c.text("0x40");
+            c.empty();
+            c.stamp_end();
+        }
+        let m = self.cell(c);
+        c.value(Some(m));
+        c.text("us");
+        c.empty();
+        self.cell(c);
+        c.part("CH1", m);
+    }
+}
+
+#[test]
+fn listed_cells_write_what_any_text_writes() {
+    let pieces: [&[&[u8]]; 4] = [
+        &[b"B5 (", b", -75)"],
+        &[b"A2 DB (", b", -", b"9310)"],
+        &[b",", b","],
+        &[b"1, 2, 3 (", b")"],
+    ];
+    for format in FORMATS {
+        for raw in [false, true] {
+            for pieces in pieces {
+                for room in [16, 64, 4096] {
+                    let row = |listed| Listed { pieces, listed };
+                    assert_eq!(
+                        line(format, raw, room, &row(true)),
+                        line(format, raw, room, &row(false)),
+                        "{format:?} {raw} {pieces:?} {room}"
+                    );
+                }
+            }
+        }
+    }
+}

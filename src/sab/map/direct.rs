@@ -74,32 +74,39 @@ impl WriteRow for FrameRow<'_> {
         }
         let payload = self.payload;
         let mut mark = None;
+        let reading = int_reading(payload);
         if payload.is_empty() {
             c.empty();
         } else {
-            c.begin();
+            // A negative signed reading is written after the unsigned one (`B5 (181, -75)`):
+            // the cell then holds a comma (CSV quotes it), known before it is written.
+            let signed = matches!(reading, Some((_, s)) if s < 0);
+            if signed {
+                c.begin_listed();
+            } else {
+                c.begin();
+            }
             if let [b] = *payload {
                 // `XX (` and the number's digits
-                let text = DATA1[b as usize];
+                let text = DATA1[b as usize].as_bytes();
                 let a = c.here() + 4;
-                if b < 0x80 {
-                    // `XX (n)`: plain ASCII (`XX (n, -m)` has a comma, which CSV quotes)
-                    c.put_ascii(text.as_bytes());
+                if signed {
+                    c.put_listed(text);
                 } else {
-                    c.str(text);
+                    c.put_ascii(text);
                 }
                 let digits = 1 + u32::from(b >= 10) + u32::from(b >= 100);
                 mark = Some(Mark::new(a, a + digits));
             } else {
                 c.hex_bytes(payload);
-                if let Some((unsigned, signed)) = int_reading(payload) {
+                if let Some((unsigned, signed)) = reading {
                     c.put_ascii(b" (");
                     let a = c.here();
                     c.dec(u64::from(unsigned));
                     mark = Some(Mark::new(a, c.here()));
                     if signed < 0 {
-                        c.str(", ");
-                        c.dec_i(i64::from(signed));
+                        c.put_listed(b", -");
+                        c.dec(u64::from(signed.unsigned_abs()));
                     }
                     c.put_ascii(b")");
                 }
