@@ -30,12 +30,8 @@ pub(super) struct Scratch {
     /// The Seq cell, or `None` (empty).
     seq: Option<u16>,
     note: String,
-    /// The telegram re-read for a sink that re-wraps it (the serial front end): the attribute
-    /// and the telegram without framing, escaping and CRC; empty for rows that are no
-    /// telegram.
+    /// The bytes of the row's [`Content`], made only for a row handed on as a [`Row`].
     unframed: Vec<u8>,
-    /// The CRC as received, when it failed.
-    bad_check: Option<u16>,
     /// Where the numbers of `data` stand, when it was written as a media list.
     media: MediaSpans,
 }
@@ -48,19 +44,7 @@ impl Scratch {
         self.resp_ms = None;
         self.seq = None;
         self.note.clear();
-        self.unframed.clear();
-        self.bad_check = None;
         self.media.clear();
-    }
-
-    /// The row's telegram, re-read: attribute `at`, then `parts` (see [`Unframed`]).
-    pub(super) fn unframed(&mut self, at: u8, parts: &[&[u8]], bad_check: Option<u16>) {
-        self.unframed.clear();
-        self.unframed.push(at);
-        for p in parts {
-            self.unframed.extend_from_slice(p);
-        }
-        self.bad_check = bad_check;
     }
 
     pub(super) fn note(&mut self, text: &str) {
@@ -132,6 +116,19 @@ impl Scratch {
     }
 }
 
+/// A row's telegram re-read, for a sink that re-wraps it (the serial front end's rows of
+/// telegrams): the attribute, then the telegram without framing, escaping and CRC (`head`,
+/// then `body`), and the CRC as received when it failed (see [`Unframed`]). It borrows the
+/// telegram: its bytes are made only for a row handed on as a [`Row`], never for one
+/// written straight into the table (which has no use for them).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Content<'a> {
+    pub at: u8,
+    pub head: &'a [u8],
+    pub body: &'a [u8],
+    pub bad_check: Option<u16>,
+}
+
 /// One row, from the scratch buffers: straight into the table when it lends its output
 /// ([`crate::row::Direct`]), else as a [`Row`] (a deferred media list written as text first).
 #[allow(clippy::too_many_arguments)]
@@ -146,36 +143,61 @@ pub(super) fn put_row(
     sensor: &str,
     raw: &[u8],
 ) -> RowResult {
-    if let Some(list) = sc.media.lazy {
-        if let Some(d) = out.direct(super::COLUMNS) {
-            let row = LazyRow {
-                sc,
-                list,
-                id,
-                device,
-                kind,
-                sensor,
-                class,
-            };
-            d.row(Some(micros), class, raw, &row);
-            return Ok(());
+    put_content_row(out, sc, None, micros, id, device, kind, class, sensor, raw)
+}
+
+/// [`put_row`] for a row of a telegram whose content a sink may want ([`Content`]).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn put_content_row(
+    out: &mut dyn RowOut,
+    sc: &mut Scratch,
+    content: Option<&Content<'_>>,
+    micros: u64,
+    id: Option<u32>,
+    device: &str,
+    kind: &str,
+    class: Class,
+    sensor: &str,
+    raw: &[u8],
+) -> RowResult {
+    if let Some(d) = out.direct(super::COLUMNS) {
+        match sc.media.lazy {
+            Some(list) => {
+                let row = LazyRow {
+                    sc,
+                    list,
+                    id,
+                    device,
+                    kind,
+                    sensor,
+                    class,
+                };
+                d.row(Some(micros), class, raw, &row);
+            }
+            None => with_parts(sc, class, |parts| {
+                let row = ScratchRow {
+                    sc,
+                    id,
+                    device,
+                    kind,
+                    sensor,
+                    parts,
+                };
+                d.row(Some(micros), class, raw, &row);
+            }),
         }
-        sc.media.settle(&mut sc.sensor_no, &mut sc.data);
+        return Ok(());
     }
+    sc.media.settle(&mut sc.sensor_no, &mut sc.data);
+    sc.unframed.clear();
+    if let Some(c) = content {
+        sc.unframed.push(c.at);
+        sc.unframed.extend_from_slice(c.head);
+        sc.unframed.extend_from_slice(c.body);
+    }
+    let bad_check = content.and_then(|c| c.bad_check);
     let sc = &*sc;
     with_parts(sc, class, |parts| {
-        let row = ScratchRow {
-            sc,
-            id,
-            device,
-            kind,
-            sensor,
-            parts,
-        };
-        if let Some(d) = out.direct(super::COLUMNS) {
-            d.row(Some(micros), class, raw, &row);
-            return Ok(());
-        }
         let (mut rb, mut sb) = ([0; 16], [0; 16]);
         let extra = [
             sc.resp_text(&mut rb),
@@ -185,6 +207,7 @@ pub(super) fn put_row(
         put(
             out,
             sc,
+            bad_check,
             &Row {
                 stamp: 0,
                 micros: Some(micros),
@@ -251,16 +274,17 @@ impl WriteRow for LazyRow<'_> {
     #[inline]
     fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
         let sc = self.sc;
+        let name = self.list.first_name();
         if c.stamp(0) {
             c.id(self.id);
             c.text(self.device);
             c.text(self.kind);
-            self.list.sensor_cell(&sc.sensor_no, c);
+            self.list.sensor_cell(&name, &sc.sensor_no, c);
             c.text(self.sensor);
             c.stamp_end();
         }
         c.begin();
-        let (first, list) = sc.media.write_lazy(&self.list, c);
+        let (first, list) = sc.media.write_lazy(&self.list, &name, c);
         c.end();
         // No parts for an error, nor for more numbers than a row carries (see `with_parts`).
         let parts =
@@ -321,13 +345,13 @@ fn with_parts<R>(sc: &Scratch, class: Class, f: impl FnOnce(Parts<'_>) -> R) -> 
 }
 
 /// Hands the row on, with the telegram's content when the decoder kept it (the export).
-fn put(out: &mut dyn RowOut, sc: &Scratch, row: &Row<'_>) -> RowResult {
+fn put(out: &mut dyn RowOut, sc: &Scratch, bad_check: Option<u16>, row: &Row<'_>) -> RowResult {
     if sc.unframed.is_empty() {
         out.row(row)
     } else {
         let frame = Unframed {
             bytes: &sc.unframed,
-            bad_check: sc.bad_check,
+            bad_check,
         };
         out.row_unframed(row, &frame)
     }

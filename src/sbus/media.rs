@@ -270,15 +270,15 @@ fn write_recorded(
 ) -> usize {
     match media {
         Some(m) => {
-            let first = write_list(out, &mut m.block, letter, addr, values, &mut m.spans, text);
+            let names = Names::new(letter, addr);
+            let first = write_list(out, &mut m.block, names, values, &mut m.spans, text);
             m.len = Some(out.len());
             first
         }
         None => write_list(
             out,
             &mut Block::default(),
-            letter,
-            addr,
+            Names::new(letter, addr),
             values,
             Unrecorded,
             text,
@@ -325,15 +325,13 @@ impl Record for Unrecorded {
 fn write_list<R: Record, O: ListOut>(
     out: &mut O,
     block: &mut Block,
-    letter: u8,
-    addr: u32,
+    mut names: Names,
     values: impl Iterator<Item = u32>,
     mut rec: R,
     text: impl ValueText,
 ) -> usize {
     let mut list = ListText::new(out, block);
     let was = list.out.len();
-    let mut names = Names::new(letter, addr);
     let first = names.len - 2;
     for v in values {
         let (at, p, w) = list.room();
@@ -474,18 +472,18 @@ impl Record for &mut FirstMark {
 impl MediaSpans {
     /// Writes the list kept as `l` (see `lazy`) into the cell `c` is writing in place
     /// (between [`Cells::begin`] and [`Cells::end`]): the same text as
-    /// [`MediaSpans::settle`]. Returns the marks of its first number and of the whole list.
+    /// [`MediaSpans::settle`]; `name` is `l`'s [`LazyWords::first_name`]. Returns the marks of
+    /// its first number and of the whole list.
     #[inline]
     pub(super) fn write_lazy<F: Fmt>(
         &self,
         l: &LazyWords,
+        name: &FirstName,
         c: &mut Cells<'_, '_, F>,
     ) -> (Option<Mark>, Mark) {
         let start = c.here();
         if l.range {
-            let mut buf = RangeText([0; 32]);
-            let n = range_bytes(&mut buf, l.letter, l.addr, l.count).0;
-            c.put_ascii(&buf.0[..n]);
+            c.put_ascii(name.text());
             return (None, Mark::new(start, c.here()));
         }
         let words = self
@@ -496,29 +494,64 @@ impl MediaSpans {
         let text = Words {
             sign_bit: l.sign_bit,
         };
+        let names = Names::of_first(name, l.letter, l.addr);
         match self.lazy_block.try_borrow_mut() {
             Ok(mut block) => {
-                write_list(c, &mut block, l.letter, l.addr, words, &mut first, text);
+                write_list(c, &mut block, names, words, &mut first, text);
             }
             Err(_) => {
                 let mut block = Block::default();
-                write_list(c, &mut block, l.letter, l.addr, words, &mut first, text);
+                write_list(c, &mut block, names, words, &mut first, text);
             }
         }
         (first.0, Mark::new(start, c.here()))
     }
 }
 
+/// The first name of a deferred list (`R57`), or the whole range of a read (`R57..R63`),
+/// formatted once for both cells that show it (Sensor # and Data).
+pub(super) struct FirstName {
+    buf: RangeText,
+    /// The length of the range (of the name, for a list).
+    n: usize,
+    /// The length of the first name.
+    first: usize,
+}
+
+impl FirstName {
+    /// The range (the first name, for a list).
+    fn text(&self) -> &[u8] {
+        self.buf.0.get(..self.n).unwrap_or_default()
+    }
+
+    /// The first name.
+    fn first(&self) -> &[u8] {
+        self.buf.0.get(..self.first).unwrap_or_default()
+    }
+}
+
 impl LazyWords {
-    /// The Sensor # cell when it is the list's first name ([`LazyWords::name`]), written
-    /// straight into the table; else `sensor_no`.
+    /// The list's first name, or the range: see [`FirstName`].
     #[inline(always)]
-    pub(super) fn sensor_cell<F: Fmt>(&self, sensor_no: &str, c: &mut Cells<'_, '_, F>) {
+    pub(super) fn first_name(&self) -> FirstName {
+        let mut buf = RangeText([0; 32]);
+        let count = if self.range { self.count } else { 1 };
+        let (n, first) = range_bytes(&mut buf, self.letter, self.addr, count);
+        FirstName { buf, n, first }
+    }
+
+    /// The Sensor # cell when it is the list's first name ([`LazyWords::name`]; `name` is
+    /// [`LazyWords::first_name`]), written straight into the table; else `sensor_no`.
+    #[inline(always)]
+    pub(super) fn sensor_cell<F: Fmt>(
+        &self,
+        name: &FirstName,
+        sensor_no: &str,
+        c: &mut Cells<'_, '_, F>,
+    ) {
         if self.name {
-            let mut buf = RangeText([0; 32]);
-            let first = range_bytes(&mut buf, self.letter, self.addr, 1).1;
             c.begin();
-            c.put_ascii(&buf.0[..first]);
+            c.put_ascii(name.first());
             c.end();
         } else {
             c.text(sensor_no);
@@ -588,6 +621,26 @@ impl Names {
             text,
             len: 3 + n,
             addr,
+        }
+    }
+
+    /// [`Names::new`] from the first name already written (`R57`: `letter` and the decimal
+    /// digits of `addr`, see [`LazyWords::first_name`]), copied instead of formatted again
+    /// (the bytes after the `=` are not the blanks of [`Names::new`]: a list writes over them).
+    #[inline(always)]
+    fn of_first(name: &FirstName, letter: u8, addr: u32) -> Self {
+        let mut text = [b' '; NAME_ROOM];
+        text[1..].copy_from_slice(&name.buf.0[..NAME_ROOM - 1]);
+        match text.get_mut(1 + name.first) {
+            Some(eq) if name.first >= 2 && name.buf.0[0] == letter => {
+                *eq = b'=';
+                Names {
+                    text,
+                    len: 2 + name.first,
+                    addr,
+                }
+            }
+            _ => Names::new(letter, addr),
         }
     }
 

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::map::{Mapper, put_row};
+use super::map::{Content, Mapper, put_content_row, put_row};
 use super::pairing::{Outstanding, RequestKind, SerialPairing, TimeoutWhy};
 use super::serial::{BreakFramer, CrcCheck, DataFramer, Event, Frame, Tele};
 use super::stats::{self, StationStats, Totals};
@@ -369,18 +369,26 @@ impl SerialCore {
             _ => None,
         };
         let checked = f.crc != CrcCheck::None;
-        match f.tele {
+        let (head, code);
+        let content = match f.tele {
             Tele::Request { station, cmd, body } if checked => {
-                sc.unframed(telegram::AT_REQUEST, &[&[station, cmd], body], bad_check)
+                head = [station, cmd];
+                Some((telegram::AT_REQUEST, &head[..], body))
             }
-            Tele::Response { data } if checked => {
-                sc.unframed(telegram::AT_RESPONSE, &[data], bad_check)
+            Tele::Response { data } if checked => Some((telegram::AT_RESPONSE, &[][..], data)),
+            Tele::AckNak { code: c, .. } => {
+                code = c.to_be_bytes();
+                Some((telegram::AT_ACKNAK, &code[..], &[][..]))
             }
-            Tele::AckNak { code, .. } => {
-                sc.unframed(telegram::AT_ACKNAK, &[&code.to_be_bytes()], bad_check)
-            }
-            _ => {}
-        }
+            _ => None,
+        };
+        let content = content.map(|(at, head, body)| Content {
+            at,
+            head,
+            body,
+            bad_check,
+        });
+        let content = content.as_ref();
         let seq = f.secure.map(|s| s.seq as u16);
         if let Some(s) = seq {
             sc.seq(s);
@@ -417,21 +425,18 @@ impl SerialCore {
                     self.map.totals.valid += 1;
                 }
                 if f.wire.first() == Some(&telegram::FS) {
-                    let i = match basis {
-                        CrcBasis::Escaped => 0,
-                        CrcBasis::Unescaped => 1,
-                        CrcBasis::Both => 2,
+                    // The note in one piece (`CRC over the {basis.name()} bytes`).
+                    let (i, note) = match basis {
+                        CrcBasis::Escaped => (0, Some("CRC over the escaped bytes")),
+                        CrcBasis::Unescaped => (1, Some("CRC over the unescaped bytes")),
+                        CrcBasis::Both => (2, None),
                     };
                     self.map.totals.basis[i] += 1;
-                    if basis != CrcBasis::Both {
-                        self.map.sc.note_with(|n| {
-                            n.push_str("CRC over the ");
-                            n.push_str(basis.name());
-                            n.push_str(" bytes");
-                        });
+                    if let Some(note) = note {
+                        self.map.sc.note(note);
                     }
                 }
-                self.good_frame(f, t, timed, seq, class, out)
+                self.good_frame(f, content, t, timed, seq, class, out)
             }
             CrcCheck::Bad {
                 got,
@@ -440,19 +445,25 @@ impl SerialCore {
             } => {
                 let other = (unescaped != escaped).then_some(unescaped);
                 self.map.bad_crc(got, escaped, other);
-                self.bad_frame(f, t, out)
+                self.bad_frame(f, content, t, out)
             }
             CrcCheck::None => match f.tele {
                 Tele::AckNak { .. } => {
                     self.map.totals.valid += 1;
-                    self.good_frame(f, t, timed, seq, class, out)
+                    self.good_frame(f, content, t, timed, seq, class, out)
                 }
                 _ => self.truncated_row(f.wire, t, out),
             },
         }
     }
 
-    fn bad_frame(&mut self, f: &Frame<'_>, t: u64, out: &mut dyn RowOut) -> RowResult {
+    fn bad_frame(
+        &mut self,
+        f: &Frame<'_>,
+        content: Option<&Content<'_>>,
+        t: u64,
+        out: &mut dyn RowOut,
+    ) -> RowResult {
         let sc = &mut self.map.sc;
         let (id, sensor) = match f.tele {
             Tele::Request { station, cmd, body } => {
@@ -503,9 +514,10 @@ impl SerialCore {
             }
         };
         let device = device(&self.names, id);
-        put_row(
+        put_content_row(
             out,
             &mut self.map.sc,
+            content,
             t,
             id.map(u32::from),
             device,
@@ -516,9 +528,11 @@ impl SerialCore {
         )
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn good_frame(
         &mut self,
         f: &Frame<'_>,
+        content: Option<&Content<'_>>,
         t: u64,
         timed: bool,
         seq: Option<u16>,
@@ -575,9 +589,10 @@ impl SerialCore {
         };
         let device = device(&self.names, id);
         let id = id.map(u32::from);
-        put_row(
+        put_content_row(
             out,
             &mut self.map.sc,
+            content,
             t,
             id,
             device,

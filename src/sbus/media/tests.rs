@@ -315,3 +315,49 @@ fn lists_match_the_text_written_piece_by_piece() {
         }
     }
 }
+
+#[test]
+fn names_from_the_first_name_are_the_names_formatted() {
+    // The list's names copied from the first name written for the Sensor # cell, and counted
+    // up from there, as the names formatted anew.
+    let addrs = [
+        0,
+        1,
+        9,
+        10,
+        57,
+        99,
+        999,
+        65_535,
+        99_999_999,
+        100_000_000,
+        u32::MAX - 1,
+    ];
+    for letter in [b'R', b'T', b'C', b'F'] {
+        for addr in addrs.into_iter().chain([u32::MAX]) {
+            for (range, count) in [(false, 3), (true, 1), (true, 7)] {
+                let l = LazyWords {
+                    letter,
+                    addr,
+                    sign_bit: 0,
+                    count,
+                    name: true,
+                    range,
+                };
+                let mut copied = Names::of_first(&l.first_name(), letter, addr);
+                let mut formatted = Names::new(letter, addr);
+                for _ in 0..12 {
+                    assert_eq!(copied.len, formatted.len, "{letter} {addr}");
+                    assert_eq!(
+                        copied.text[..copied.len],
+                        formatted.text[..formatted.len],
+                        "{letter} {addr}"
+                    );
+                    assert_eq!(copied.addr, formatted.addr);
+                    copied.step();
+                    formatted.step();
+                }
+            }
+        }
+    }
+}

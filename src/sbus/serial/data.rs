@@ -52,6 +52,8 @@ pub struct DataFramer {
     tele_at: [usize; 2],
     /// Offset in `wire` of the standard telegram's FS (0, or after the secure header).
     tele_fs: usize,
+    /// The logical bytes (AT … CRC) of the telegram [`Self::whole_telegram`] reads.
+    logical: Box<[u8; MAX_WIRE]>,
     secure: Option<Secure>,
     problem: Option<&'static str>,
     /// A secure header was not followed by the inner telegram's B5.
@@ -77,6 +79,7 @@ impl DataFramer {
             tele: Vec::with_capacity(MAX_WIRE),
             tele_at: [0; 2],
             tele_fs: 0,
+            logical: Box::new([0; MAX_WIRE]),
             secure: None,
             problem: None,
             no_inner: false,
@@ -111,54 +114,92 @@ impl DataFramer {
             self.pos += 1;
             i += 1;
             if data[i - 1] == FS && self.phase == Phase::At {
-                // A telegram just started: take it whole if it is all in `data`, read in place
-                // when it holds no DLE pair.
-                let mut n = self.in_place(&data[i - 1..], emit);
-                if n == 0 {
-                    n = self.whole_telegram(&data[i..], emit);
-                }
+                // A telegram just started: take it whole if it is all in `data`.
+                let n = self.whole_telegram(&data[i - 1..], emit);
                 i += n;
                 self.pos += n as u64;
             }
         }
     }
 
-    /// The fastest path, for the usual telegram that [`Self::whole_telegram`] takes and that
-    /// holds no DLE pair (nor a raw B5) before its end: its logical bytes are then its wire
-    /// bytes, read in place from `framed` (its FS first) without a copy, and both readings of
-    /// the CRC are one. Returns how many bytes after the FS it took; 0 (nothing done) for
-    /// anything else, which [`Self::whole_telegram`] then reads as before.
-    fn in_place(&mut self, framed: &[u8], emit: &mut impl FnMut(&Event<'_>)) -> usize {
+    /// The fast path for the usual telegram: a standard one (no secure header) whose bytes
+    /// after the FS are all in `framed` (its FS first), with no raw B5, no invalid DLE pair, a
+    /// known length and a CRC that checks. Its logical bytes are unescaped into
+    /// [`Self::logical`] in one loop (eight wire bytes a step between DLE pairs), without the
+    /// byte-by-byte state machine, and it is emitted as [`Self::close_checked`] would emit it;
+    /// returns how many bytes after the FS it took. Anything else (the end of `framed` first,
+    /// a raw B5, an unknown length, a bad CRC, a secure header, [`MAX_WIRE`]) takes nothing
+    /// and leaves the telegram as [`Self::start`] opened it, for [`Self::byte`] to read again
+    /// from its first byte after the FS: so the events are those of the byte-by-byte path,
+    /// however the input is split (the gap rule cannot end the telegram either: every byte of
+    /// `framed` arrived at the same time).
+    fn whole_telegram(&mut self, framed: &[u8], emit: &mut impl FnMut(&Event<'_>)) -> usize {
         debug_assert!(self.wire.len() == 1 && self.tele.is_empty() && self.secure.is_none());
-        let data = &framed[1..];
+        let data = framed.get(1..).unwrap_or_default();
         let data = &data[..data.len().min(MAX_WIRE - 1)];
-        let plain = |b: u8| b != FS && b != DLE;
-        // The header, one byte more at a time until the length is known (as the byte-by-byte
-        // path works it out).
-        let mut m = 0;
+        let buf = &mut *self.logical;
+        // `n` logical bytes in `buf` from `j` wire bytes of `data`. The header, one logical
+        // byte at a time until the length `k` is known.
+        let (mut n, mut j) = (0, 0);
         let k = loop {
-            match data.get(m) {
-                Some(&b) if plain(b) => m += 1,
-                _ => return 0,
-            }
-            if m == 1 && (data[0] == AT_SECURE_REQUEST || data[0] == AT_SECURE_RESPONSE) {
+            let Some((v, w)) = logical_at(data, j) else {
+                return 0;
+            };
+            if n == 0 && (v == AT_SECURE_REQUEST || v == AT_SECURE_RESPONSE) {
                 return 0;
             }
-            match standard_len(&data[..m], self.expect) {
+            // n <= j < data.len() < MAX_WIRE
+            let Some(slot) = buf.get_mut(n) else {
+                return 0;
+            };
+            *slot = v;
+            n += 1;
+            j += w;
+            match standard_len(&buf[..n], self.expect) {
                 Known::NotYet => {}
-                Known::Len(k) if k >= m && k >= 3 && k <= data.len() => break k,
+                // (a telegram has at least as many wire bytes as logical ones)
+                Known::Len(k) if k >= n && k >= 3 && k <= data.len() => break k,
                 _ => return 0,
             }
         };
-        // No B5 or C5 in the rest.
-        if has_fs_or_dle(&data[m..k]) {
-            return 0;
+        // The rest: eight wire bytes a step copied whole, as many of them taken as come before
+        // a B5 or a C5 (and the telegram's end; the bytes after those in `buf` are written
+        // over or never read); a DLE pair, and the last bytes, one at a time.
+        while n < k {
+            if let (Some(src), Some(dst)) = (data.get(j..j + 8), buf.get_mut(n..n + 8)) {
+                let x = u64::from_le_bytes(src.try_into().unwrap_or([0; 8]));
+                dst.copy_from_slice(&x.to_le_bytes());
+                let p = plain_prefix(x).min(k - n);
+                if p > 0 {
+                    n += p;
+                    j += p;
+                    continue;
+                }
+            }
+            let (Some((v, w)), Some(slot)) = (logical_at(data, j), buf.get_mut(n)) else {
+                return 0;
+            };
+            *slot = v;
+            n += 1;
+            j += w;
         }
-        let tele = &data[..k];
+        let tele = &buf[..k];
         let got = u16::from_be_bytes([tele[k - 2], tele[k - 1]]);
-        if crc16_from(crc_step(0, FS), &tele[..k - 2]) != got {
-            return 0;
-        }
+        let unescaped = crc16_from(crc_step(0, FS), &tele[..k - 2]);
+        // The escaped reading: over the wire bytes before the CRC field (the same bytes when
+        // no DLE pair came before it).
+        let e = crc_field_at(data, j);
+        let escaped = if e == k - 2 {
+            unescaped
+        } else {
+            crc16_from(crc_step(0, FS), data.get(..e).unwrap_or_default())
+        };
+        let basis = match (got == escaped, got == unescaped) {
+            (true, true) => CrcBasis::Both,
+            (true, false) => CrcBasis::Escaped,
+            (false, true) => CrcBasis::Unescaped,
+            (false, false) => return 0,
+        };
         // What `close_checked` emits for it.
         let t = classify(tele[0], &tele[1..k - 2]);
         match t {
@@ -169,9 +210,9 @@ impl DataFramer {
         emit(&Event::Frame(Frame {
             time: self.time,
             offset: self.offset,
-            wire: &framed[..1 + k],
+            wire: &framed[..1 + j],
             tele: t,
-            crc: CrcCheck::Ok(CrcBasis::Both),
+            crc: CrcCheck::Ok(basis),
             secure: None,
             problem: None,
             break_before: false,
@@ -179,86 +220,7 @@ impl DataFramer {
         }));
         self.phase = Phase::Outside;
         self.dle = false;
-        k
-    }
-
-    /// The fast path for the usual telegram: a standard one (no secure header) whose bytes
-    /// after the FS are all in `data`, with no raw B5, no invalid DLE pair, a known length and
-    /// a CRC that checks. It is read in one loop, without the byte-by-byte state machine, and
-    /// emitted; returns how many bytes of `data` it took. Anything else (the end of `data`
-    /// first, a raw B5, an unknown length, a bad CRC, a secure header, [`MAX_WIRE`]) takes
-    /// nothing and leaves the telegram as [`Self::start`] opened it, for [`Self::byte`] to read
-    /// again from its first byte after the FS: so the events are those of the byte-by-byte
-    /// path, however the input is split (the gap rule cannot end the telegram either: every
-    /// byte of `data` arrived at the same time).
-    fn whole_telegram(&mut self, data: &[u8], emit: &mut impl FnMut(&Event<'_>)) -> usize {
-        debug_assert!(self.wire.len() == 1 && self.tele.is_empty() && self.secure.is_none());
-        let data = &data[..data.len().min(MAX_WIRE - 1)];
-        // `tele_at` as the byte-by-byte path keeps it: wire offsets (the FS is at 0, `data`
-        // starts at 1) of the last two logical bytes.
-        let mut tele_at = [0; 2];
-        let mut j = 0;
-        // The header, one logical byte at a time until the length is known.
-        let mut len = None;
-        while let Some((v, w)) = logical_at(data, j) {
-            if self.tele.is_empty() && (v == AT_SECURE_REQUEST || v == AT_SECURE_RESPONSE) {
-                break;
-            }
-            self.tele.push(v);
-            tele_at = [tele_at[1], 1 + j];
-            j += w;
-            match self.complete_len() {
-                Known::NotYet => {}
-                Known::Len(k) if k >= self.tele.len() => {
-                    len = Some(k);
-                    break;
-                }
-                _ => break,
-            }
-        }
-        if let Some(k) = len {
-            // The rest: runs without B5 or C5 copied whole, DLE pairs undone one by one.
-            while self.tele.len() < k {
-                let rest = &data[j..];
-                let run = &rest[..rest.len().min(k - self.tele.len())];
-                let p = run
-                    .iter()
-                    .position(|&b| b == FS || b == DLE)
-                    .unwrap_or(run.len());
-                if p > 0 {
-                    self.tele.extend_from_slice(&run[..p]);
-                    let end = 1 + j + p;
-                    tele_at = if p >= 2 {
-                        [end - 2, end - 1]
-                    } else {
-                        [tele_at[1], end - 1]
-                    };
-                    j += p;
-                    continue;
-                }
-                let Some((v, w)) = logical_at(data, j) else {
-                    break;
-                };
-                self.tele.push(v);
-                tele_at = [tele_at[1], 1 + j];
-                j += w;
-            }
-            if self.tele.len() == k {
-                self.wire.extend_from_slice(&data[..j]);
-                self.tele_at = tele_at;
-                let crc = self.crc_check();
-                if crc.ok() {
-                    self.phase = Phase::Body;
-                    self.known = Known::Len(k);
-                    self.close_checked(Some(crc), emit);
-                    return j;
-                }
-                self.wire.truncate(1);
-            }
-        }
-        self.tele.clear();
-        self.tele_at = [0; 2];
-        0
+        j
     }
 
     /// How many of the first bytes of `data` can be taken as one run of logical bytes: inside a
@@ -611,20 +573,33 @@ fn standard_len(t: &[u8], expect: Expect) -> Known {
     }
 }
 
-/// Whether `bytes` holds a B5 or a C5: eight bytes a step (a byte of `x ^ b` is 0 where `x`
-/// has `b`; `(y - 0x01…) & !y & 0x80…` is not 0 exactly when a byte of `y` is 0).
-fn has_fs_or_dle(bytes: &[u8]) -> bool {
+/// How many of the eight bytes of `x` (little-endian: its first byte lowest) come before the
+/// first B5 or C5 in it (8: none). A byte of `x ^ b` is 0 where `x` has `b`, and
+/// `(y - 0x01…) & !y & 0x80…` marks the lowest zero byte of `y` exactly (a borrow can mark
+/// a byte above it, never one below).
+fn plain_prefix(x: u64) -> usize {
     const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
     const HIGH: u64 = u64::from_ne_bytes([0x80; 8]);
     let zero = |y: u64| y.wrapping_sub(ONES) & !y & HIGH;
-    let mut steps = bytes.chunks_exact(8);
-    for c in &mut steps {
-        let x = u64::from_ne_bytes(c.try_into().expect("8 bytes"));
-        if zero(x ^ (ONES * u64::from(FS))) | zero(x ^ (ONES * u64::from(DLE))) != 0 {
-            return true;
-        }
+    let hit = zero(x ^ (ONES * u64::from(FS))) | zero(x ^ (ONES * u64::from(DLE)));
+    (hit.trailing_zeros() / 8) as usize
+}
+
+/// Where the CRC field (the last two logical bytes) of a telegram read from the first `end`
+/// bytes of `data` (after its FS) starts: a logical byte is one wire byte, or a DLE pair.
+/// A C5 in a telegram read whole always starts a pair (its second byte is 00 or 01), so a
+/// C5 two bytes before where a logical byte ends is that byte's pair.
+fn crc_field_at(data: &[u8], end: usize) -> usize {
+    let mut e = end;
+    for _ in 0..2 {
+        let w = if e >= 2 && data.get(e - 2) == Some(&DLE) {
+            2
+        } else {
+            1
+        };
+        e = e.saturating_sub(w);
     }
-    steps.remainder().iter().any(|&b| b == FS || b == DLE)
+    e
 }
 
 /// The logical byte at `data[j]` (after a standard telegram's FS) and how many wire bytes it

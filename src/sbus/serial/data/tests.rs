@@ -387,19 +387,36 @@ fn every_raw_b5_starts_a_new_telegram() {
 }
 
 #[test]
-fn the_eight_byte_scan_finds_b5_and_c5_anywhere() {
-    // every length up to 24, each byte value at each place, among bytes next to B5 and C5
-    for len in 0..24usize {
-        for at in 0..len {
-            for b in 0..=255u8 {
-                let mut v = vec![0xB4; len];
+fn the_eight_byte_scan_finds_the_first_b5_or_c5() {
+    // each byte value at each place, among bytes next to B5 and C5, one or two marked
+    for at in 0..8usize {
+        for b in 0..=255u8 {
+            for second in [None, Some((at + 3) % 8), Some((at + 1) % 8)] {
+                let mut v = [0xB4u8; 8];
                 v[at] = b;
-                if len > 1 {
-                    v[(at + 1) % len] = 0xC6;
+                v[(at + 1) % 8] = 0xC6;
+                if let Some(s) = second {
+                    v[s] = [FS, DLE][s % 2];
                 }
-                let want = v.iter().any(|&x| x == FS || x == DLE);
-                assert_eq!(has_fs_or_dle(&v), want, "{v:02X?}");
+                let want = v.iter().position(|&x| x == FS || x == DLE).unwrap_or(8);
+                assert_eq!(plain_prefix(u64::from_le_bytes(v)), want, "{v:02X?}");
             }
         }
+    }
+}
+
+#[test]
+fn the_crc_field_is_found_behind_dle_pairs() {
+    // wire bytes after the FS, and where the CRC field starts
+    let cases: [(&[u8], usize); 6] = [
+        (&[1, 2, 3, 4], 2),
+        (&[1, 2, DLE, 0, 4], 2),
+        (&[1, 2, 3, DLE, 1], 2),
+        (&[1, 2, DLE, 0, DLE, 1], 2),
+        (&[1, DLE, 1, DLE, 0, DLE, 1], 3),
+        (&[DLE, 0, 1, 2], 2),
+    ];
+    for (wire, want) in cases {
+        assert_eq!(crc_field_at(wire, wire.len()), want, "{wire:02X?}");
     }
 }
