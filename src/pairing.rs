@@ -343,8 +343,6 @@ pub struct Table<K, R> {
     /// The requests; `free` lists the slots not `live`.
     slots: Vec<Slot<K, R>>,
     free: Vec<u32>,
-    /// Open requests (live slots).
-    open: usize,
     deadlines: VecDeque<Place>,
     generation: u32,
     cap: usize,
@@ -360,7 +358,6 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
             map: FastMap::default(),
             slots: Vec::new(),
             free: Vec::new(),
-            open: 0,
             deadlines: VecDeque::new(),
             generation: 0,
             cap: cap.max(1),
@@ -371,10 +368,15 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
 
     pub fn sizes(&self) -> Sizes {
         Sizes {
-            open: self.open,
+            open: self.open_count(),
             deadlines: self.deadlines.len(),
             late: self.late.len(),
         }
+    }
+
+    /// Open requests: the slots that are not free.
+    fn open_count(&self) -> usize {
+        self.slots.len() - self.free.len()
     }
 
     /// The slot of the request at `p` when it is still the one open there.
@@ -423,7 +425,6 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
             self.map.remove(&key);
         }
         self.free.push(i);
-        self.open -= 1;
         Some((key, open))
     }
 
@@ -471,7 +472,7 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
             }
             i
         } else {
-            while self.open >= self.cap {
+            while self.open_count() >= self.cap {
                 let Some(d) = self.deadlines.pop_front() else {
                     break;
                 };
@@ -522,11 +523,11 @@ impl<K: Copy + Eq + Hash, R: Copy> Table<K, R> {
             if let Some(s) = self.slots.get_mut(i as usize) {
                 *s = entry;
             }
-            self.open += 1;
             i
         };
         self.deadlines.push_back(Place { slot, generation });
-        if self.deadlines.len() > self.open + self.open / 4 + 1_024 {
+        let open = self.open_count();
+        if self.deadlines.len() > open + open / 4 + 1_024 {
             let mut deadlines = std::mem::take(&mut self.deadlines);
             deadlines.retain(|&d| self.at(d).is_some());
             self.deadlines = deadlines;
