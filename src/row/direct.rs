@@ -480,6 +480,11 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.col += 1;
         let at = self.cell.0;
         let plain = self.plain;
+        // A listed cell's opening quote is written (CSV): only plain pieces may follow it.
+        debug_assert!(
+            plain || !self.listed,
+            "a listed cell with a piece that is not plain"
+        );
         if cfg!(debug_assertions) && plain {
             let cell = self.p.line.bytes().get(at..).unwrap_or_default();
             let listed = self.listed;
