@@ -191,7 +191,7 @@ pub struct Cells<'b, 'l, F: Fmt> {
     /// and the stamp (0: not kept).
     span: (usize, usize, u32),
     /// The Data cell was written again (quoted, escaped) from its first text, kept in
-    /// `t.scratch`: where that text started in the line and its length (marks in it point
+    /// `t.data_copy`: where that text started in the line and its length (marks in it point
     /// into the copy).
     rewritten: Option<(u32, u32)>,
     /// JSON members of `parts` written so far.
@@ -534,6 +534,10 @@ impl<F: Fmt> Cells<'_, '_, F> {
             }
         };
         if i == 7 {
+            if rewritten.is_some() {
+                // Kept apart from `scratch`, which a later cell written again reuses.
+                std::mem::swap(&mut self.t.scratch, &mut self.t.data_copy);
+            }
             self.rewritten = rewritten;
         }
     }
@@ -555,7 +559,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
         match self.marked(m) {
             (false, a, b) => self.p.line.copy_within(a, b),
             (true, a, b) => {
-                let s = self.t.scratch.get(a..b).unwrap_or_default();
+                let s = self.t.data_copy.get(a..b).unwrap_or_default();
                 self.p.line.put(s);
             }
         }

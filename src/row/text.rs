@@ -119,6 +119,10 @@ pub struct Text {
     pub(crate) spans: Spans,
     /// A cell written again (quoted, escaped) keeps its first text here.
     pub(crate) scratch: Vec<u8>,
+    /// A direct row's Data cell as first written, when it was written again (quoted,
+    /// escaped): the numbers marked in it are read from here. Its own buffer, as a later cell
+    /// written again reuses `scratch`.
+    pub(crate) data_copy: Vec<u8>,
     /// Debug builds: the copied cells of a stamp, to compare with the cells written again.
     pub(crate) check: Vec<u8>,
 }
@@ -148,6 +152,7 @@ impl Text {
             part_keys: super::part_keys::PartKeys::new(),
             spans: Spans::new(),
             scratch: Vec::new(),
+            data_copy: Vec::new(),
             check: Vec::new(),
         }
     }

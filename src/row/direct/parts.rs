@@ -158,7 +158,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
         let mut i = a;
         while i < b {
             let src: &[u8] = if in_scratch {
-                &self.t.scratch
+                &self.t.data_copy
             } else {
                 self.p.line.bytes()
             };
@@ -176,7 +176,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
             } else {
                 w.byte(b'"');
                 if in_scratch {
-                    w.put(&self.t.scratch[i..eq]);
+                    w.put(&self.t.data_copy[i..eq]);
                 } else {
                     w.copy_within(i, eq);
                 }
@@ -184,7 +184,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
             }
             w.byte(b':');
             if in_scratch {
-                w.put(&self.t.scratch[num..end]);
+                w.put(&self.t.data_copy[num..end]);
             } else {
                 w.copy_within(num, end);
             }

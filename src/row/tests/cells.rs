@@ -260,3 +260,74 @@ fn listed_cells_write_what_any_text_writes() {
         }
     }
 }
+
+/// A row whose Data cell is written again (a quote in it) and whose Note, written in place
+/// after it, is written again too: the numbers marked in Data must still be read from Data's
+/// copy, not from Note's.
+struct TwoRewrites {
+    /// Note's text, written in place.
+    note: &'static str,
+}
+
+impl WriteRow for TwoRewrites {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        if c.stamp(0) {
+            c.id(Some(7));
+            c.text("Dev");
+            c.text("Data");
+            c.text("0x01");
+            c.text("CH1");
+            c.stamp_end();
+        }
+        c.begin();
+        c.str("\"q\" ");
+        let a = c.here();
+        c.put_ascii(b"1234");
+        let first = Mark::new(a, c.here());
+        c.put_ascii(b" ");
+        let a = c.here();
+        c.put_ascii(b"-56.5");
+        let second = Mark::new(a, c.here());
+        c.end();
+        c.value(Some(first));
+        c.text("us");
+        c.empty();
+        c.begin();
+        c.str(self.note);
+        c.end();
+        c.parts_marked(&NAMES, &[first, second]);
+    }
+}
+
+#[test]
+fn marks_in_a_rewritten_data_cell_survive_a_later_rewritten_cell() {
+    for note in [
+        "plain note",
+        "a \"quoted\" note",
+        "back\\slash",
+        "tab\there",
+    ] {
+        for room in [16, 400, 4096] {
+            let out = line(Format::Jsonl, false, room, &TwoRewrites { note });
+            for l in out.lines() {
+                let v: serde_json::Value = serde_json::from_str(l)
+                    .unwrap_or_else(|e| panic!("{note:?} {room}: not JSON ({e}): {l}"));
+                assert_eq!(v["data"], "\"q\" 1234 -56.5", "{l}");
+                assert_eq!(v["note"], note, "{l}");
+                assert_eq!(v["value"], 1234, "{l}");
+                assert_eq!(v["parts"]["CH1"], 1234, "{note:?} {room}: {l}");
+                assert_eq!(v["parts"]["FrameLost"], -56.5, "{note:?} {room}: {l}");
+            }
+            // CSV and TSV read Value before Note: the same numbers.
+            for format in [Format::Csv, Format::Tsv] {
+                let out = line(format, false, room, &TwoRewrites { note });
+                let sep = if format == Format::Csv {
+                    ",1234,"
+                } else {
+                    "\t1234\t"
+                };
+                assert!(out.lines().all(|l| l.contains(sep)), "{format:?} {out}");
+            }
+        }
+    }
+}
