@@ -37,8 +37,8 @@ struct FportRow<'h> {
 
 /// The texts of the channels a control frame carries after the sticks (CH5 on: switches and
 /// knobs, which seldom change), kept from the control row before and made again when one
-/// changes: CH5-CH8 in whole µs after a blank and the ` …` (the Data cell's end), CH5-CH16
-/// raw after a blank (the Note's end).
+/// changes: CH5-CH8 in whole µs after a blank (the Data cell's end but for its ` …`),
+/// CH5-CH16 raw after a blank (the Note's end).
 #[derive(Default)]
 pub(super) struct Held {
     aux: Option<[u16; 12]>,
@@ -65,7 +65,6 @@ impl Held {
         for &r in &aux[..4] {
             self.whole.push_str(t.whole[usize::from(r)]);
         }
-        self.whole.push_str(" …");
         self.raw.clear();
         for &r in &aux {
             self.raw.push_str(t.raw[usize::from(r)]);
@@ -133,12 +132,14 @@ impl WriteRow for FportRow<'_> {
                     c.stamp_end();
                 }
                 let t = texts();
+                // Digits, blanks and the ellipsis: a plain cell, not looked at again.
                 c.begin();
-                c.str(&t.whole[usize::from(ch[0])][1..]);
+                c.put_ascii(&t.whole[usize::from(ch[0])].as_bytes()[1..]);
                 for &r in &ch[1..4] {
-                    c.str(t.whole[usize::from(r)]);
+                    c.put_ascii(t.whole[usize::from(r)].as_bytes());
                 }
-                c.str(&self.held.whole);
+                c.put_ascii(self.held.whole.as_bytes());
+                c.put_glyphs(" …");
                 c.end();
                 c.value_text(Some(t.exact[usize::from(ch[0])]));
                 c.text("µs");
@@ -164,11 +165,12 @@ impl WriteRow for FportRow<'_> {
                     }
                     c.str("; ");
                 }
-                c.str("raw");
+                // Digits and blanks: without flags the cell is plain, not looked at again.
+                c.put_ascii(b"raw");
                 for &r in &ch[..4] {
-                    c.str(t.raw[usize::from(r)]);
+                    c.put_ascii(t.raw[usize::from(r)].as_bytes());
                 }
-                c.str(&self.held.raw);
+                c.put_ascii(self.held.raw.as_bytes());
                 c.end();
                 static PARTS: PartNames<21> = PartNames::new([
                     "CH1",

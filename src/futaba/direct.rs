@@ -176,14 +176,20 @@ impl WriteRow for ChannelRow {
         };
         c.value(Some(mark(0)));
         c.text("us");
+        // Plain pieces (names, digits, blanks, `;`, parentheses): the cell is not looked at
+        // again in any format, but for the fast pace's text, which holds a comma.
         c.begin();
-        c.str(FLAGS[usize::from(flags & 0x0F)]);
+        c.put_ascii(FLAGS[usize::from(flags & 0x0F)].as_bytes());
         if flags & 0xF0 != 0 {
-            c.str("; unused flag bits set (flags ");
-            c.str(hex_0x(flags));
-            c.str(")");
+            c.put_ascii(b"; unused flag bits set (flags ");
+            c.put_ascii(hex_0x(flags).as_bytes());
+            c.put_ascii(b")");
         }
-        c.str(after_flags(end));
+        if end == wire::END_FAST {
+            c.str(after_flags(end));
+        } else {
+            c.put_ascii(after_flags(end).as_bytes());
+        }
         c.put_ascii(raw);
         c.end();
         static CH: PartNames<CHANNELS> = PartNames::new(CH_NAMES);
@@ -235,7 +241,7 @@ impl WriteRow for SlotRow {
             c.stamp_end();
         }
         c.begin();
-        c.str(hex_0x((self.value >> 8) as u8));
+        c.put_ascii(hex_0x((self.value >> 8) as u8).as_bytes());
         c.hex2(self.value as u8);
         c.end();
         let mut ib = itoa::Buffer::new();

@@ -154,6 +154,7 @@ impl Direct<'_> {
                 cell: (0, 0, 0),
                 plain: false,
                 listed: false,
+                wide: 0,
                 last_col,
                 span: (0, 0, 0),
                 rewritten: None,
@@ -185,6 +186,9 @@ pub struct Cells<'b, 'l, F: Fmt> {
     /// The cell written in place was begun with [`Cells::begin_listed`]: it holds a comma, and
     /// (in CSV) its opening quote is written.
     listed: bool,
+    /// Bytes of the cell written in place beyond its width in pretty text: the bytes after the
+    /// first of each character of [`Cells::put_glyphs`] pieces (0 in a cell of ASCII).
+    wide: usize,
     /// Pretty text's last column ([`Cells::last`]), worked out once a row rather than per cell.
     last_col: usize,
     /// The cells ID to Sensor being written: where they start, the blanks owed before them,
@@ -454,6 +458,7 @@ impl<F: Fmt> Cells<'_, '_, F> {
         let i = self.col;
         self.plain = true;
         self.listed = false;
+        self.wide = 0;
         match F::FORMAT {
             Format::Tsv | Format::Csv => {
                 self.p.line.byte(Self::SEP);
@@ -489,7 +494,8 @@ impl<F: Fmt> Cells<'_, '_, F> {
             let cell = self.p.line.bytes().get(at..).unwrap_or_default();
             let listed = self.listed;
             assert!(
-                cell.iter().all(|&b| is_plain(b) || listed && b == b','),
+                cell.iter()
+                    .all(|&b| is_plain(b) || listed && b == b',' || self.wide > 0 && b >= 0x80),
                 "a plain cell to quote or escape: {:?}",
                 String::from_utf8_lossy(cell)
             );
@@ -528,6 +534,8 @@ impl<F: Fmt> Cells<'_, '_, F> {
                 let i = if i > 8 { i - 1 } else { i };
                 let last = self.last(i);
                 let t = &mut *self.t;
+                // A plain cell's width: its bytes, less those of characters beyond their first.
+                let plain = plain.then_some(self.wide);
                 self.p
                     .end_cell(&mut t.widths, i, last, self.cell, plain, &mut t.scratch);
                 None

@@ -102,7 +102,9 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
     /// The cell `i` written in place since [`PrettyLine::begin_cell`] (UTF-8 only) ends, as
     /// [`PrettyLine::cell`] writes a text, with `grow`: an empty cell leaves the blanks owed,
     /// and a cell that is not printable ASCII is written again from a copy in `scratch`. A
-    /// `plain` cell (only pieces known to be printable ASCII) is not looked at.
+    /// `plain` cell (only pieces known to be printable, one column a character) is not looked
+    /// at: `Some(wide)`, its width is its length less `wide` (the bytes of its characters
+    /// beyond their first).
     #[inline(always)]
     pub(crate) fn end_cell(
         &mut self,
@@ -110,7 +112,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
         i: usize,
         last: bool,
         (at, before, owed): (usize, usize, usize),
-        plain: bool,
+        plain: Option<usize>,
         scratch: &mut Vec<u8>,
     ) {
         let cell = self.line.bytes().get(at..).unwrap_or_default();
@@ -118,7 +120,9 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             self.line.truncate(before);
             self.blanks = owed;
             0
-        } else if plain || line::scan(cell, line::not_printable) == 0 {
+        } else if let Some(wide) = plain {
+            cell.len() - wide
+        } else if line::scan(cell, line::not_printable) == 0 {
             cell.len()
         } else if let Some(width) = clean_width(cell) {
             width

@@ -57,6 +57,26 @@ impl<F: Fmt> Cells<'_, '_, F> {
         self.p.line.put(b);
     }
 
+    /// In place: a text of characters that are not controls, with none of the ASCII bytes
+    /// [`Cells::put_ascii`] refuses (`" …"`, `"µs"`): the cell stays plain, not looked at
+    /// again in any format (TSV, CSV and JSON write such characters as they are; pretty text
+    /// counts a cell's width in characters). For texts fixed in the program, not
+    /// for text from the wire or from the user. Debug builds check the text.
+    #[inline(always)]
+    pub fn put_glyphs(&mut self, s: &str) {
+        debug_assert!(
+            s.chars().all(|c| if c.is_ascii() {
+                is_plain(c as u8)
+            } else {
+                !c.is_control()
+            }),
+            "put_glyphs: {s:?}"
+        );
+        // Bytes beyond the first of each character: 0b10xx_xxxx continuation bytes.
+        self.wide += s.bytes().filter(|&b| b & 0xC0 == 0x80).count();
+        self.p.line.put(s.as_bytes());
+    }
+
     /// In place: an ASCII byte (a byte of 0x80 or more is written as `?`).
     #[inline(always)]
     pub fn ascii(&mut self, b: u8) {

@@ -331,3 +331,75 @@ fn marks_in_a_rewritten_data_cell_survive_a_later_rewritten_cell() {
         }
     }
 }
+
+/// A row whose Data cell and Note end in characters beyond ASCII (`1500 …`, `5 µs`): written
+/// with [`Cells::put_glyphs`] (the cell stays plain) or as any text (looked at again, its
+/// width counted in pretty text).
+struct Glyphs {
+    pieces: &'static [&'static str],
+    glyphs: bool,
+}
+
+impl Glyphs {
+    fn cell<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) -> Mark {
+        c.begin();
+        let a = c.here();
+        c.dec(1500);
+        let mark = Mark::new(a, c.here());
+        for piece in self.pieces {
+            if !self.glyphs {
+                c.str(piece);
+            } else if piece.is_ascii() {
+                c.put_ascii(piece.as_bytes());
+            } else {
+                c.put_glyphs(piece);
+            }
+        }
+        c.end();
+        mark
+    }
+}
+
+impl WriteRow for Glyphs {
+    fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
+        if c.stamp(0) {
+            c.id(Some(7));
+            c.text("Receiver");
+            c.text("Control");
+            c.empty();
+            c.text("Channels");
+            c.stamp_end();
+        }
+        let m = self.cell(c);
+        c.value(Some(m));
+        c.text("µs");
+        c.empty();
+        self.cell(c);
+        c.part("CH1", m);
+    }
+}
+
+#[test]
+fn glyph_pieces_write_what_any_text_writes() {
+    let pieces: [&[&str]; 5] = [
+        &[" 1490 1491", " …"],
+        &[" µs"],
+        &["…", "…", " 12 ", "°C"],
+        &[" \u{1F680}", " x"],
+        &[""],
+    ];
+    for format in FORMATS {
+        for raw in [false, true] {
+            for pieces in pieces {
+                for room in [16, 64, 4096] {
+                    let row = |glyphs| Glyphs { pieces, glyphs };
+                    assert_eq!(
+                        line(format, raw, room, &row(true)),
+                        line(format, raw, room, &row(false)),
+                        "{format:?} {raw} {pieces:?} {room}"
+                    );
+                }
+            }
+        }
+    }
+}
