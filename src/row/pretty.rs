@@ -121,7 +121,8 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
             self.blanks = owed;
             0
         } else if let Some(wide) = plain {
-            cell.len() - wide
+            // (A line over its room may have dropped pieces: it is written again.)
+            cell.len().saturating_sub(wide)
         } else if line::scan(cell, line::not_printable) == 0 {
             cell.len()
         } else if let Some(width) = clean_width(cell) {

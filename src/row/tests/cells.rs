@@ -381,17 +381,20 @@ impl WriteRow for Glyphs {
 
 #[test]
 fn glyph_pieces_write_what_any_text_writes() {
-    let pieces: [&[&str]; 5] = [
+    let pieces: [&[&str]; 6] = [
         &[" 1490 1491", " …"],
         &[" µs"],
         &["…", "…", " 12 ", "°C"],
         &[" \u{1F680}", " x"],
         &[""],
+        &["\u{2026}\u{2026}\u{2026}", "x"],
     ];
     for format in FORMATS {
         for raw in [false, true] {
             for pieces in pieces {
-                for room in [16, 64, 4096] {
+                // Every room up to a whole line: a glyph piece with no room left is dropped
+                // while a shorter piece after it may still fit (the line is written again).
+                for room in (8..=160).chain([4096]) {
                     let row = |glyphs| Glyphs { pieces, glyphs };
                     assert_eq!(
                         line(format, raw, room, &row(true)),
