@@ -220,21 +220,31 @@ impl Listed {
 
 impl WriteRow for Listed {
     fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
-        if c.stamp(0) {
-            c.id(Some(7));
-            c.text("Dev");
-            c.text("ACK");
-            c.text("0x40");
-            c.empty();
-            c.stamp_end();
-        }
-        let m = self.cell(c);
-        c.value(Some(m));
-        c.text("us");
-        c.empty();
-        self.cell(c);
-        c.part("CH1", m);
+        data_and_note(c, ["Dev", "ACK", "0x40", ""], "us", |c| self.cell(c));
     }
+}
+
+/// A row of device 7 with the cells Device to Sensor `stamped`, a Data cell written by `cell`
+/// (its mark read back for Value and `parts`), Unit `unit`, and a Note written by `cell` again.
+fn data_and_note<F: Fmt>(
+    c: &mut Cells<'_, '_, F>,
+    stamped: [&str; 4],
+    unit: &str,
+    cell: impl Fn(&mut Cells<'_, '_, F>) -> Mark,
+) {
+    if c.stamp(0) {
+        c.id(Some(7));
+        for t in stamped {
+            c.text(t);
+        }
+        c.stamp_end();
+    }
+    let m = cell(c);
+    c.value(Some(m));
+    c.text(unit);
+    c.empty();
+    cell(c);
+    c.part("CH1", m);
 }
 
 #[test]
@@ -362,20 +372,9 @@ impl Glyphs {
 
 impl WriteRow for Glyphs {
     fn write<F: Fmt>(&self, c: &mut Cells<'_, '_, F>) {
-        if c.stamp(0) {
-            c.id(Some(7));
-            c.text("Receiver");
-            c.text("Control");
-            c.empty();
-            c.text("Channels");
-            c.stamp_end();
-        }
-        let m = self.cell(c);
-        c.value(Some(m));
-        c.text("µs");
-        c.empty();
-        self.cell(c);
-        c.part("CH1", m);
+        data_and_note(c, ["Receiver", "Control", "", "Channels"], "µs", |c| {
+            self.cell(c)
+        });
     }
 }
 
