@@ -177,16 +177,22 @@ impl WriteRow for ChannelRow {
         c.value(Some(mark(0)));
         c.text("us");
         // Plain pieces (names, digits, blanks, `;`, parentheses): the cell is not looked at
-        // again in any format, but for the fast pace's text, which holds a comma.
-        c.begin();
+        // again in any format. The fast pace's text holds a comma: that cell is begun as
+        // listed (CSV opens its quote first).
+        let fast = end == wire::END_FAST;
+        if fast {
+            c.begin_listed();
+        } else {
+            c.begin();
+        }
         c.put_ascii(FLAGS[usize::from(flags & 0x0F)].as_bytes());
         if flags & 0xF0 != 0 {
             c.put_ascii(b"; unused flag bits set (flags ");
             c.put_ascii(hex_0x(flags).as_bytes());
             c.put_ascii(b")");
         }
-        if end == wire::END_FAST {
-            c.str(after_flags(end));
+        if fast {
+            c.put_listed(after_flags(end).as_bytes());
         } else {
             c.put_ascii(after_flags(end).as_bytes());
         }
