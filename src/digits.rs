@@ -42,7 +42,7 @@ static DEC2: [u8; 200] = {
 
 /// Writes `v` in decimal at the start of `w` (at least 10 bytes long; bytes after
 /// the number may be overwritten too); returns its length.
-#[inline]
+#[inline(always)]
 pub fn put_u32(w: &mut [u8], v: u32) -> usize {
     if v < 100_000_000 {
         // the eight digits without their leading zeros (in the low bytes, which come first)
@@ -70,12 +70,29 @@ pub fn put_u32(w: &mut [u8], v: u32) -> usize {
 }
 
 /// Writes `v` in decimal at the start of `w` (at least 24 bytes long; bytes after the number
-/// may be overwritten too); returns its length.
-#[inline]
+/// may be overwritten too); returns its length. The numbers of a row mostly fit 32 bits: that
+/// case is inline where it is called (the call cost about a fifth of a number's instructions),
+/// the longer ones are out of line. [`put_u64_call`] is the same through a call.
+#[inline(always)]
 pub fn put_u64(w: &mut [u8], v: u64) -> usize {
     if v <= u64::from(u32::MAX) {
-        return put_u32(w, v as u32);
+        put_u32(w, v as u32)
+    } else {
+        put_u64_wide(w, v)
     }
+}
+
+/// [`put_u64`] through a call, where the code around it is better off without the inlined
+/// digits (the table's writer of [`crate::row::Row`]s: inlined there, they cost 2 % more
+/// instructions in all).
+#[inline(never)]
+pub fn put_u64_call(w: &mut [u8], v: u64) -> usize {
+    put_u64(w, v)
+}
+
+/// [`put_u64`] of a number above `u32::MAX`.
+#[inline(never)]
+fn put_u64_wide(w: &mut [u8], v: u64) -> usize {
     let hi = v / 100_000_000;
     let k = if hi <= u64::from(u32::MAX) {
         put_u32(w, hi as u32)
@@ -94,7 +111,7 @@ pub fn put_u64(w: &mut [u8], v: u64) -> usize {
 /// [`crate::numbers::push_decimal`] writes it (`6543, 2` → `65.43`, `-150, 2` → `-1.50`,
 /// `5, 3` → `0.005`), for `prec` up to 7; `w` at least 32 bytes long (bytes after the number
 /// may be overwritten too). Returns its length, or `None` for a larger `prec`.
-#[inline]
+#[inline(always)]
 pub fn put_fixed(w: &mut [u8], raw: i64, prec: u8) -> Option<usize> {
     let m = raw.unsigned_abs();
     let sign = usize::from(raw < 0);

@@ -438,6 +438,17 @@ impl W<'_> {
             None => self.put(itoa::Buffer::new().format(n).as_bytes()),
         }
     }
+
+    /// [`W::dec`] with the digits written through a call ([`crate::digits::put_u64_call`]),
+    /// for the table's writer of [`super::Row`]s, whose loops lose more to the inlined digits
+    /// than the call costs.
+    #[inline(always)]
+    pub fn dec_called(&mut self, n: u64) {
+        match self.buf.get_mut(self.pos..self.pos + 24) {
+            Some(room) => self.pos += crate::digits::put_u64_call(room, n),
+            None => self.put(itoa::Buffer::new().format(n).as_bytes()),
+        }
+    }
 }
 
 /// Whether `s` holds a double quote (CSV then doubles it).

@@ -441,13 +441,13 @@ impl Table {
             w.put(digits.as_bytes());
             w.byte(sep);
             if let Some(us) = row.micros {
-                w.dec(us / 1000);
+                w.dec_called(us / 1000);
             }
             if STAMPED {
                 span(w, spans, row.stamp, |w| {
                     w.byte(sep);
                     if let Some(id) = row.id {
-                        w.dec(id.into());
+                        w.dec_called(id.into());
                     }
                     for field in [row.device, row.kind, row.sensor_no, row.sensor] {
                         w.byte(sep);
@@ -459,7 +459,7 @@ impl Table {
             } else {
                 w.byte(sep);
                 if let Some(id) = row.id {
-                    w.dec(id.into());
+                    w.dec_called(id.into());
                 }
                 for field in [row.device, row.kind, row.sensor_no, row.sensor, row.data] {
                     w.byte(sep);
@@ -509,13 +509,13 @@ impl Table {
             w.put(digits.as_bytes());
             w.put(b",\"millis\":");
             match row.micros {
-                Some(us) => w.dec(us / 1000),
+                Some(us) => w.dec_called(us / 1000),
                 None => w.put(b"null"),
             }
             span(w, spans, row.stamp, |w| {
                 w.put(b",\"id\":");
                 match row.id {
-                    Some(id) => w.dec(id.into()),
+                    Some(id) => w.dec_called(id.into()),
                     None => w.put(b"null"),
                 }
                 w.put(b",\"device\":");
@@ -726,6 +726,28 @@ fn spool_error(e: std::io::Error) -> OutputError {
     }
 }
 
+impl Table {
+    /// Whether the table lends its output to a decoder with these extra `columns` (see
+    /// [`RowOut::direct`]); remembers them when it does. Out of line: it runs once per decoder,
+    /// and kept inline it made every row's `direct` save and restore six registers.
+    #[cold]
+    #[inline(never)]
+    fn lend_to(&mut self, columns: &'static [&'static str]) -> bool {
+        if self.wide.is_some()
+            || self.plot.is_some()
+            || self.fit.is_some()
+            || self.opts.time_abs
+            || !self.header_written
+            || self.error.is_some()
+            || !self.direct_columns(columns)
+        {
+            return false;
+        }
+        self.lend = (columns.as_ptr() as usize, columns.len());
+        true
+    }
+}
+
 impl RowOut for Table {
     fn row(&mut self, row: &Row<'_>) -> RowResult {
         self.write(row)
@@ -741,18 +763,8 @@ impl RowOut for Table {
     #[inline]
     fn direct(&mut self, columns: &'static [&'static str]) -> Option<Direct<'_>> {
         let key = (columns.as_ptr() as usize, columns.len());
-        if key != self.lend || self.error.is_some() {
-            if self.wide.is_some()
-                || self.plot.is_some()
-                || self.fit.is_some()
-                || self.opts.time_abs
-                || !self.header_written
-                || self.error.is_some()
-                || !self.direct_columns(columns)
-            {
-                return None;
-            }
-            self.lend = key;
+        if (key != self.lend || self.error.is_some()) && !self.lend_to(columns) {
+            return None;
         }
         let (buf, len) = self.out.room()?;
         Some(Direct {
