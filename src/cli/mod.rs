@@ -600,12 +600,14 @@ pub fn run_capture(
             }
             None => &mut view,
         };
-        let result = drive(
-            decoder.as_mut(),
-            &rx,
-            &mut Limit::new(sink, stops, live),
-            ctx,
-        );
+        let mut limit;
+        let sink: &mut dyn crate::sink::Sink = if stops == Stops::default() {
+            sink
+        } else {
+            limit = Limit::new(sink, stops, live);
+            &mut limit
+        };
+        let result = drive(decoder.as_mut(), &rx, sink, ctx);
         if result.is_ok() {
             view.hold();
         }
@@ -637,12 +639,17 @@ pub fn run_capture(
             }
             None => sink,
         };
-        let result = drive(
-            decoder.as_mut(),
-            &rx,
-            &mut Limit::new(sink, stops, live),
-            ctx,
-        );
+        // Without a stop condition the limit passes everything on: it is left out, and the
+        // decoder's request for the table's output (every row) reaches the table one call
+        // sooner.
+        let mut limit;
+        let sink: &mut dyn crate::sink::Sink = if stops == Stops::default() {
+            sink
+        } else {
+            limit = Limit::new(sink, stops, live);
+            &mut limit
+        };
+        let result = drive(decoder.as_mut(), &rx, sink, ctx);
         (result, table.rows())
     };
     let stats = match (out.stats, out.stats_format) {
