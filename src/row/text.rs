@@ -60,8 +60,21 @@ impl Digits {
         }
     }
 
-    #[inline]
+    /// Adds one: nine rows in ten change only the last digit, inline; a carry goes through a
+    /// call.
+    #[inline(always)]
     pub(crate) fn increment(&mut self) {
+        let last = &mut self.buf[Self::END - 1];
+        if *last != b'9' {
+            *last += 1;
+            return;
+        }
+        self.carry();
+    }
+
+    /// [`Digits::increment`] of a number that ends in 9.
+    #[inline(never)]
+    fn carry(&mut self) {
         let mut i = Self::END;
         while i > 0 {
             i -= 1;
