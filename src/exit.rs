@@ -144,7 +144,7 @@ impl Failure {
     }
 
     /// Maps an error from creating an output (`what`: "cannot create recording FILE"): the
-    /// signal that ended the wait for a FIFO's reader ([`crate::files::create_file`]), or an
+    /// signal that ended the wait for a FIFO's reader (`files::create_file`), or an
     /// output error.
     pub fn from_create(what: &str, e: &std::io::Error) -> Failure {
         match crate::signal::Stop::received() {

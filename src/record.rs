@@ -201,7 +201,7 @@ pub fn format_for(path: Option<&Path>, content: Content) -> Result<RecordFormat,
 }
 
 impl Recorder {
-    /// Creates the recording of `content` (its format checked first, [`format_for`]).
+    /// Creates the recording of `content` (its format checked first, `format_for`).
     pub fn create(path: &Path, content: Content) -> Result<Recorder, Failure> {
         let format = format_for(Some(path), content)?;
         let what = format!("cannot create recording {}", path.display());
@@ -212,7 +212,7 @@ impl Recorder {
     }
 
     /// Records on standard output (`--record -`): a line's raw bytes, a capture's packets as
-    /// classic pcap ([`format_for`]).
+    /// classic pcap (`format_for`).
     pub fn stdout(content: Content) -> Recorder {
         Self::new(None, Output::stdout(), content.on_stdout(), content)
     }

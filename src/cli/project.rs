@@ -1,5 +1,5 @@
 //! The options that choose rows and name devices (shared by every protocol), the project file
-//! `busnoop.toml`, and how the two combine into a [`Spec`](crate::filter::Spec).
+//! `busnoop.toml`, and how the two combine into a [`Spec`].
 //!
 //! The project file holds one table per protocol (`[sport]`, `[sbus]`, …: its subcommand or an
 //! alias) with the keys every protocol has (`baud`, `format`, `stats`, `names` and a `filter`

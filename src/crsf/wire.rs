@@ -80,7 +80,7 @@ const SLICES: [[u8; 256]; 8] = {
 };
 
 /// CRC-8/DVB-S2 (polynomial 0xD5) of `bytes`: the frame CRC, over type and payload. Eight
-/// bytes a step ([`SLICES`]), then byte by byte.
+/// bytes a step (`SLICES`), then byte by byte.
 #[inline]
 pub fn crc8(bytes: &[u8]) -> u8 {
     let mut c = 0u8;

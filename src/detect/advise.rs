@@ -1,9 +1,9 @@
 //! After a run: keep the start of the input ([`Tee`]) and, when little decoded, tell the user
-//! which protocol fits better ([`advise`]).
+//! which protocol fits better ([`advise()`]).
 
 use super::*;
 
-/// Keeps the first [`ADVICE_BYTES`] of what a reader yields, for [`advise`] after the run.
+/// Keeps the first [`ADVICE_BYTES`] of what a reader yields, for [`advise()`] after the run.
 pub struct Tee {
     inner: Box<dyn ChunkReader>,
     kept: Arc<Mutex<Kept>>,

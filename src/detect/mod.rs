@@ -8,7 +8,7 @@
 //! truncated frames, garbage, the bytes frames start with) is printed with the verdict and the
 //! command to run.
 //!
-//! The same scoring tells a user who picked the wrong protocol ([`advise`], after a run).
+//! The same scoring tells a user who picked the wrong protocol ([`advise()`], after a run).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -24,7 +24,7 @@ use crate::source::{Batch, Chunk, ChunkReader, Input, Message};
 /// How much of a file is examined.
 pub const SCAN_BYTES: usize = 2 << 20;
 
-/// What a run keeps of its input for [`advise`]: enough frames of any protocol to tell them
+/// What a run keeps of its input for [`advise()`]: enough frames of any protocol to tell them
 /// apart, small enough that scoring it against every candidate after a run with problems costs
 /// well under a tenth of a second (S-Bus break mode, the slowest candidate, searches CRCs).
 pub const ADVICE_BYTES: usize = 16 << 10;

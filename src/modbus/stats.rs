@@ -58,7 +58,7 @@ pub struct Totals {
     /// CRC errors and cut frames of slave/function pairs never seen in a valid frame (noise
     /// reads as any header).
     pub unattributed: u64,
-    /// Pairs beyond [`MAX_ROWS`] counted in one row.
+    /// Pairs beyond `MAX_ROWS` counted in one row.
     pub merged: u64,
 }
 

@@ -5,7 +5,7 @@
 //! frames by silence. A frame is found by its content:
 //!
 //! * at each place, the frame's length is read twice: as a request and as a response
-//!   ([`function::frame_len`]: fixed lengths, byte counts, Read Device Identification's
+//!   ([`frame_len`]: fixed lengths, byte counts, Read Device Identification's
 //!   objects). Requests and responses of functions 1-4 cannot be told apart by their first
 //!   bytes, so both readings are tried;
 //! * a reading is a frame when its CRC-16/MODBUS checks. When the pairing waits for a response
@@ -275,7 +275,7 @@ fn is_retry(b: &[u8], n: usize, req: Len, waiting: &[u8]) -> bool {
 /// Judges the place where `b` starts. `waiting`: the response the exchange in progress waits
 /// for. `fin`: no more bytes will come. `clean`: the place follows a frame (or starts the
 /// input); within bytes that hold no frame, a reading must also be
-/// [`plausible`](super::function::plausible) to count, so that bytes that check by chance
+/// [`plausible`] to count, so that bytes that check by chance
 /// there (one place in 65,536) rarely take a good frame's first bytes.
 ///
 /// A frame followed by zero bytes checks as a longer frame too, and a frame whose CRC ends in
@@ -421,9 +421,9 @@ fn lengths(b: &[u8]) -> [Option<Option<usize>>; 2] {
 /// where the input ends, `at_end`) into pieces `(start, len, what)`, in order:
 ///
 /// * a run of bad frames that reaches the end exactly, each frame of a length its own
-///   readings give, with at most [`STRAY_MAX`] stray bytes after each: `BadCRC` (and the
+///   readings give, with at most `STRAY_MAX` stray bytes after each: `BadCRC` (and the
 ///   strays `Garbage`); bytes before the run are garbage or a cut frame (below);
-/// * else a frame that starts within the first [`STRAY_MAX`] bytes and is longer than what is
+/// * else a frame that starts within the first `STRAY_MAX` bytes and is longer than what is
 ///   left (at least 4 bytes left, 2 at the end of the input): `Truncated`;
 /// * everything else: `Garbage`.
 ///

@@ -1,6 +1,6 @@
 //! pcap and pcapng: the one place that knows the capture containers.
 //!
-//! * [`read`]: [`PcapStream`], the pure incremental reader: bytes in (any chunking), [`Packet`]s
+//! * `read`: [`PcapStream`], the pure incremental reader: bytes in (any chunking), [`Packet`]s
 //!   out, so a `tcpdump -U -w -` pipe yields each packet as soon as its record is complete. It
 //!   reads classic pcap (both byte orders, microsecond and nanosecond magics) and pcapng
 //!   (section header blocks in both byte orders, several sections, interface description blocks
@@ -8,8 +8,8 @@
 //!   packet blocks; other blocks are skipped). Memory stays bounded: a record or block longer
 //!   than its limit ([`MAX_RECORD`]) is an error, never an allocation.
 //! * `write`: classic pcap records (the recorder, tests, benchmarks and tools).
-//! * [`write_ng`]: pcapng blocks (recordings named `.pcapng`, the frame export).
-//! * [`rtac`]: the RTAC serial encapsulation busnoop records serial lines in.
+//! * `write_ng`: pcapng blocks (recordings named `.pcapng`, the frame export).
+//! * `rtac`: the RTAC serial encapsulation busnoop records serial lines in.
 //! * [`linktype`]: every link type busnoop names, and [`Packets`], packets with their bytes in one
 //!   buffer, as the capture source hands them on.
 //!

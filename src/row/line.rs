@@ -1,6 +1,6 @@
 //! One output line, assembled before it is appended to the output buffer.
 //!
-//! The row writers put a row's cells into a [`Line`]: a buffer that is kept at its full length
+//! The row writers put a row's cells into a line ([`W`]): a buffer that is kept at its full length
 //! (zeroed once, grown when a row needs more) with a write position, so that appending a cell
 //! costs no capacity check per byte and no call for a short copy. A row is then appended to
 //! the output in one copy. The checks for bytes that need escaping (control characters in TSV,

@@ -119,7 +119,7 @@ impl PartKeys {
 /// The names of a fixed list of `parts` members (a row's channels, a frame's fields), with
 /// their keys (`,"name":`) made by the compiler: what [`super::Cells::parts_marked`] and
 /// [`super::Cells::parts_text`] write a row's members from, without a look-up per member.
-/// Names of 1 to [`PartKeys::NAME`] bytes with nothing JSON escapes have keys; a list with
+/// Names of 1 to `PartKeys::NAME` bytes with nothing JSON escapes have keys; a list with
 /// another name is written member by member, as [`super::Cells::part`] writes it.
 pub struct PartNames<const N: usize> {
     pub(crate) names: [&'static str; N],

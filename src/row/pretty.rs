@@ -183,7 +183,7 @@ impl<'b, 'l> PrettyLine<'b, 'l> {
         }
     }
 
-    /// Writes cells kept from an earlier row ([`Spans`]): their text, after the blanks owed
+    /// Writes cells kept from an earlier row ([`Spans`](super::spans::Spans)): their text, after the blanks owed
     /// before it, and the blanks owed after it.
     #[inline(always)]
     pub(crate) fn copy(&mut self, bytes: &[u8], blanks: usize) {

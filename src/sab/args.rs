@@ -29,6 +29,8 @@ pub struct Args {
     /// `.req` or `.ack` for one direction only. Undeclared payloads of 1, 2 or 4 bytes are
     /// unsigned integers.
     #[arg(long, value_name = "CMD=TYPE")]
+    // The text above is `--help`'s, as written there: `[:UNIT]` is not a link.
+    #[allow(rustdoc::broken_intra_doc_links)]
     pub value: Vec<String>,
 
     /// Master timeout: a request without a response within this time gets a `Timeout` row

@@ -1,10 +1,10 @@
 //! modm SAB and SAB2 (Sensor Actuator Bus): both framings, auto-detection, request/response
 //! pairing, the log table mapping and statistics.
 //!
-//! * [`sync`]: SAB v1 framing `54 LEN HDR CMD DATA CRC8` (backtracking reassembler).
-//! * [`hdlc`]: SAB2 framing `7E HDR CMD DATA CRC16 7E` as modm's code sends it.
-//! * [`detect`]: which of the two is on the line.
-//! * [`header`]: flags, address, NACK codes; [`pairing`]: responses to requests, timeouts.
+//! * `sync`: SAB v1 framing `54 LEN HDR CMD DATA CRC8` (backtracking reassembler).
+//! * `hdlc`: SAB2 framing `7E HDR CMD DATA CRC16 7E` as modm's code sends it.
+//! * `detect`: which of the two is on the line.
+//! * [`header`]: flags, address, NACK codes; `pairing`: responses to requests, timeouts.
 //! * [`SabDecoder`]: detection, reassembly and the table mapping together (`decoder`, `map`,
 //!   `names`); the options and line defaults are in `config`.
 //!

@@ -1,9 +1,9 @@
 //! Saia S-Bus: serial modes (data, secure data, break, parity) and Ether-S-Bus over UDP.
 //!
-//! * [`serial`] (serial line) and [`crate::pcap`] + [`ether`] (captures): the pure
+//! * `serial` (serial line) and [`crate::pcap`] + [`ether`] (captures): the pure
 //!   reassemblers;
 //! * [`commands`]: the command table; [`telegram`]: the CRC, encoders and content decoding;
-//!   [`pairing`]: answers matched with requests;
+//!   `pairing`: answers matched with requests;
 //! * `map.rs`: the one mapping of telegrams onto the log table (documented in `docs/sbus.md`),
 //!   used by both front ends; `stats.rs`: the counters, the `--stats` report and the problems
 //!   line;

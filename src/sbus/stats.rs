@@ -94,7 +94,7 @@ pub struct Totals {
     /// Requests still waiting for an answer when the input ended.
     pub unanswered_at_end: u64,
     /// Ether-S-Bus conversations seen, forgotten after a minute without a packet, dropped at
-    /// the cap ([`MAX_CONVERSATIONS`]); requests given up at [`MAX_OUTSTANDING`]; PLCs beyond
+    /// the cap (`MAX_CONVERSATIONS`); requests given up at `MAX_OUTSTANDING`; PLCs beyond
     /// [`MAX_PLCS`] counted in one row.
     pub conversations: u64,
     pub conversations_expired: u64,

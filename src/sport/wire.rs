@@ -92,7 +92,7 @@ pub fn crc(body7: &[u8]) -> u8 {
 
 /// True when the 8 unstuffed bytes (type..crc) pass the check: their [`carry_sum`] is 0xFF.
 /// Every frame is checked, so the eight bytes are added as one word instead of one by one
-/// ([`word_sum`]).
+/// (`word_sum`).
 #[inline]
 pub fn crc_ok(body: &[u8; BODY_LEN]) -> bool {
     // At most 2040: two folds (no loop to mispredict) leave one byte, as `fold` would (a fold

@@ -108,7 +108,7 @@ impl W<'_> {
         self.json_member_slow(pre, name, a, b);
     }
 
-    /// A member of `parts` from its kept key ([`super::part_keys::PartKeys::get`], `k` bytes long: `,"name":`)
+    /// A member of `parts` from its kept key ([`PartKeys::get`](crate::row::part_keys::PartKeys::get), `k` bytes long: `,"name":`)
     /// and the line's own bytes `a..b` (a number written before in the line): after
     /// `,"parts":{` instead of the key's comma when `first`. As [`W::json_member_within`]
     /// writes it; usually one bounds check and fixed-size copies.

@@ -7,7 +7,7 @@ use crate::fmt::hex_0x;
 use crate::row::{Cells, Fmt, Mark, Parts, WriteRow};
 
 /// A row of the scratch buffers, written straight into the table ([`crate::row::direct`]):
-/// the cells of the [`Row`] [`Mapper::put`] builds otherwise.
+/// the cells of the [`Row`](crate::row::Row) [`Mapper::put`](super::Mapper::put) builds otherwise.
 pub(super) struct ScratchRow<'a> {
     pub(super) p: &'a RowParts<'a>,
     pub(super) sc: &'a Scratch,
@@ -43,8 +43,8 @@ impl WriteRow for ScratchRow<'_> {
 }
 
 /// A valid frame's row written straight into the table, its Data cell (the payload and its
-/// integer reading, [`push_data`]), Value and response time formatted in place: the cells
-/// [`Mapper::frame`] puts into a [`Row`] otherwise, for frames without a declared type.
+/// integer reading, [`push_data`](super::text::push_data)), Value and response time formatted in place: the cells
+/// [`Mapper::frame`](super::Mapper::frame) puts into a [`Row`](crate::row::Row) otherwise, for frames without a declared type.
 pub(super) struct FrameRow<'a> {
     pub(super) stamp: u32,
     pub(super) addr: u8,
@@ -142,7 +142,8 @@ impl WriteRow for FrameRow<'_> {
 }
 
 /// A `Timeout` row closed by the next request or the end of the capture, written straight
-/// into the table: the cells [`Mapper::timeout_row`] puts into a [`Row`] otherwise.
+/// into the table: the cells [`Mapper::timeout_row`](super::Mapper::timeout_row) puts into a
+/// [`Row`](crate::row::Row) otherwise.
 pub(super) struct TimeoutRow<'a> {
     pub(super) stamp: u32,
     pub(super) addr: u8,

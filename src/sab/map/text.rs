@@ -166,7 +166,7 @@ pub(super) static DOT_DECIMALS3: &str = {
     }
 };
 
-/// [`push_ms`] for a response time: µs as milliseconds with three decimals.
+/// [`push_ms`](crate::fmt::push_ms) for a response time: µs as milliseconds with three decimals.
 pub(super) fn push_ms3(out: &mut String, micros: u64) {
     let micros = micros.min(i64::MAX as u64);
     let ms = micros / 1000;
