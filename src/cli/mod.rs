@@ -600,13 +600,8 @@ pub fn run_capture(
             }
             None => &mut view,
         };
-        let mut limit;
-        let sink: &mut dyn crate::sink::Sink = if stops == Stops::default() {
-            sink
-        } else {
-            limit = Limit::new(sink, stops, live);
-            &mut limit
-        };
+        let mut limit = None;
+        let sink = Limit::around(&mut limit, sink, stops, live);
         let result = drive(decoder.as_mut(), &rx, sink, ctx);
         if result.is_ok() {
             view.hold();
@@ -639,16 +634,8 @@ pub fn run_capture(
             }
             None => sink,
         };
-        // Without a stop condition the limit passes everything on: it is left out, and the
-        // decoder's request for the table's output (every row) reaches the table one call
-        // sooner.
-        let mut limit;
-        let sink: &mut dyn crate::sink::Sink = if stops == Stops::default() {
-            sink
-        } else {
-            limit = Limit::new(sink, stops, live);
-            &mut limit
-        };
+        let mut limit = None;
+        let sink = Limit::around(&mut limit, sink, stops, live);
         let result = drive(decoder.as_mut(), &rx, sink, ctx);
         (result, table.rows())
     };

@@ -50,6 +50,21 @@ impl<'a> Limit<'a> {
         }
     }
 
+    /// `inner` behind a limit (kept in `slot`) when `stops` has a condition; else `inner`
+    /// itself: a limit without one passes everything on, and left out, the decoder's request
+    /// for the table's output (every row) reaches the table one call sooner.
+    pub fn around(
+        slot: &'a mut Option<Limit<'a>>,
+        inner: &'a mut dyn Sink,
+        stops: Stops,
+        live: bool,
+    ) -> &'a mut dyn Sink {
+        if stops == Stops::default() {
+            return inner;
+        }
+        slot.insert(Limit::new(inner, stops, live))
+    }
+
     /// Whether `row` may pass; false once a condition holds (and from then on).
     fn admit(&mut self, row: &Row<'_>) -> bool {
         if self.done {
@@ -236,5 +251,29 @@ mod tests {
         let mut l = Limit::new(&mut t, count, false);
         l.row(&frame(0)).unwrap();
         assert!(l.direct(&[]).is_none());
+    }
+
+    /// `Limit::around` leaves the limit out without a stop condition (the rows reach the table
+    /// itself) and puts it in front with one (it stops the rows after the count).
+    #[test]
+    fn around_puts_a_limit_in_front_only_for_a_stop_condition() {
+        let rows: Vec<Row> = [0, 10, 20, 30].map(frame).to_vec();
+        let count = Stops {
+            count: Some(2),
+            ..Stops::default()
+        };
+        for (stops, passed, limited) in [(Stops::default(), 4, false), (count, 2, true)] {
+            let mut t = table();
+            let at: *const Table = &t;
+            let mut slot = None;
+            let sink = Limit::around(&mut slot, &mut t, stops, false);
+            // Without a condition, the table itself.
+            assert_eq!(std::ptr::addr_eq(&*sink, at), !limited, "{stops:?}");
+            for r in &rows {
+                sink.row(r).unwrap();
+            }
+            assert_eq!(sink.quit(), limited, "{stops:?}");
+            assert_eq!(t.rows(), passed, "{stops:?}");
+        }
     }
 }
