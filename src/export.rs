@@ -44,8 +44,6 @@ pub struct Exporter {
     packet: Vec<u8>,
     anchor: Option<DateTime<Utc>>,
     started: bool,
-    /// The last packet's time and bytes: rows of one frame (several values) are one packet.
-    last: Option<(Option<u64>, Vec<u8>)>,
     scratch: Vec<u8>,
     packets: u64,
 }
@@ -73,7 +71,6 @@ impl Exporter {
             packet: Vec::new(),
             anchor: None,
             started: false,
-            last: None,
             scratch: Vec::new(),
             packets: 0,
         })
@@ -108,16 +105,12 @@ impl Exporter {
         self.out.record(&head).map_err(|e| e.error)
     }
 
-    /// The packet for `row`, when it carries bytes of a new frame; `unframed`: its content
-    /// re-read, when the decoder gives it.
+    /// The packet for `row`, when it carries a frame's bytes (every decoder writes one row per
+    /// frame); `unframed`: its content re-read, when the decoder gives it. Two rows with the
+    /// same bytes and time are two frames (one read of a live line holds several, and RC
+    /// buses repeat a frame while the sticks rest): each is a packet.
     fn frame(&mut self, row: &Row<'_>, unframed: Option<&Unframed<'_>>) -> io::Result<()> {
         if row.raw.is_empty() {
-            return Ok(());
-        }
-        if let Some((t, bytes)) = &self.last
-            && *t == row.micros
-            && bytes[..] == *row.raw
-        {
             return Ok(());
         }
         self.start()?;
@@ -146,10 +139,6 @@ impl Exporter {
         write_ng::packet(&mut self.scratch, 0, ts, data, comment.as_deref());
         self.out.record(&self.scratch).map_err(|e| e.error)?;
         self.packets += 1;
-        let last = self.last.get_or_insert_with(|| (None, Vec::new()));
-        last.0 = row.micros;
-        last.1.clear();
-        last.1.extend_from_slice(row.raw);
         Ok(())
     }
 
@@ -225,7 +214,7 @@ mod tests {
         let mut row = Row::empty(Some(96_000));
         row.raw = &raw;
         ex.frame(&row, None).unwrap();
-        ex.frame(&row, None).unwrap(); // a second value of the same frame
+        ex.frame(&row, None).unwrap(); // the same bytes at the same time: another frame
         ex.frame(&Row::empty(Some(97_000)), None).unwrap(); // a note: no bytes
         let mut bad = Row::empty(Some(98_000));
         bad.raw = &raw[..4];
@@ -233,7 +222,7 @@ mod tests {
         bad.kind = "BadCRC";
         ex.frame(&bad, None).unwrap();
         ex.flush().unwrap();
-        assert_eq!(ex.packets(), 2);
+        assert_eq!(ex.packets(), 3);
         let bytes = std::fs::read(&path).unwrap();
         assert!(String::from_utf8_lossy(&bytes).contains("busnoop: BadCRC"));
         let mut got = Vec::new();
@@ -245,6 +234,7 @@ mod tests {
         assert_eq!(
             got,
             [
+                (1_096_000, crate::pcap::linktype::USER0, raw.to_vec()),
                 (1_096_000, crate::pcap::linktype::USER0, raw.to_vec()),
                 (1_098_000, crate::pcap::linktype::USER0, raw[..4].to_vec()),
             ]

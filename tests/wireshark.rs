@@ -384,6 +384,65 @@ fn tshark_decodes_the_sab_export_like_the_table() {
     }
 }
 
+/// Two frames with the same bytes that arrive in one read (so with one time) are two frames:
+/// the table shows both, and the export had only one packet for them. A live adapter hands
+/// over several frames per read, and RC buses repeat the same frame while the sticks rest.
+#[test]
+fn identical_frames_with_one_time_are_two_packets() {
+    let dir = tempfile::tempdir().unwrap();
+    // EdgeTX debug log lines: the second holds two polls of ID 1, read at one time.
+    let log = dir.path().join("two.log");
+    std::fs::write(
+        &log,
+        "2014-07-11,22:41:01.340: 7E 00\n\
+         2014-07-11,22:41:01.350: 7E A1 7E A1\n\
+         2014-07-11,22:41:01.360: 7E 22\n",
+    )
+    .unwrap();
+    let table = rows("sport", &log);
+    let polls: Vec<&str> = table.lines().skip(1).collect();
+    assert_eq!(polls.len(), 4, "{table}");
+    let export = dir.path().join("e.pcapng");
+    ok(&busnoop()
+        .args(["sport", "--no-config", "-q", "--export"])
+        .arg(&export)
+        .arg(&log)
+        .output()
+        .unwrap());
+    let packets = packets_of(&std::fs::read(&export).unwrap());
+    let frames: Vec<&[u8]> = packets.iter().map(|(_, b)| &b[..]).collect();
+    assert_eq!(
+        frames,
+        [
+            &[0x7E, 0x00][..],
+            &[0x7E, 0xA1],
+            &[0x7E, 0xA1],
+            &[0x7E, 0x22]
+        ]
+    );
+    // A real capture: Modbus echoes a write request in its response, and in this pcap both
+    // have one time; eleven responses were missing from the export.
+    let pcap = fixture("modbus-gen.pcap");
+    let table = ok(&busnoop()
+        .args(["modbus", "--no-config", "--raw", "-f", "tsv"])
+        .arg(&pcap)
+        .output()
+        .unwrap());
+    let framed = table
+        .lines()
+        .skip(1)
+        .filter(|l| !l.rsplit('\t').next().unwrap_or("").is_empty())
+        .count();
+    ok(&busnoop()
+        .args(["modbus", "--no-config", "-q", "--export"])
+        .arg(&export)
+        .arg(&pcap)
+        .output()
+        .unwrap());
+    let packets = packets_of(&std::fs::read(&export).unwrap());
+    assert_eq!((packets.len(), framed), (158, 158));
+}
+
 /// The packets (link type, bytes) of a pcapng file.
 fn packets_of(bytes: &[u8]) -> Vec<(u32, Vec<u8>)> {
     let mut got = Vec::new();
