@@ -8,8 +8,8 @@
 //!   framing), decoded by `contrib/wireshark/busnoop-sab.lua`.
 //!
 //! * Serial Saia S-Bus: link type `RAW` (101, raw IP), each telegram re-wrapped as the
-//!   Ether-S-Bus datagram a PCD would have sent over UDP (see `sbus::export::SbusWrap`), decoded by
-//!   Wireshark's own `sbus` dissector.
+//!   Ether-S-Bus datagram a PCD would have sent over UDP (see `sbus::export::SbusWrap`),
+//!   decoded by Wireshark's own `sbus` dissector.
 //!
 //! The packets are the rows' `raw` bytes (S-Bus: the telegram the row's decoder re-read,
 //! [`Unframed`]), so the export holds exactly the frames the table shows (filters apply); rows

@@ -390,6 +390,24 @@ fn tshark_decodes_the_sab_export_like_the_table() {
 #[test]
 fn identical_frames_with_one_time_are_two_packets() {
     let dir = tempfile::tempdir().unwrap();
+    let export = dir.path().join("e.pcapng");
+    // The table's rows with bytes (the last column, `--raw`) and the export's packets, of one
+    // run.
+    let framed_and_packets = |protocol: &str, input: &Path| {
+        let table = ok(&busnoop()
+            .args([protocol, "--no-config", "--raw", "-f", "tsv", "--export"])
+            .arg(&export)
+            .arg(input)
+            .output()
+            .unwrap());
+        let framed: Vec<String> = table
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.rsplit('\t').next().filter(|raw| !raw.is_empty()))
+            .map(String::from)
+            .collect();
+        (framed, packets_of(&std::fs::read(&export).unwrap()))
+    };
     // EdgeTX debug log lines: the second holds two polls of ID 1, read at one time.
     let log = dir.path().join("two.log");
     std::fs::write(
@@ -399,17 +417,8 @@ fn identical_frames_with_one_time_are_two_packets() {
          2014-07-11,22:41:01.360: 7E 22\n",
     )
     .unwrap();
-    let table = rows("sport", &log);
-    let polls: Vec<&str> = table.lines().skip(1).collect();
-    assert_eq!(polls.len(), 4, "{table}");
-    let export = dir.path().join("e.pcapng");
-    ok(&busnoop()
-        .args(["sport", "--no-config", "-q", "--export"])
-        .arg(&export)
-        .arg(&log)
-        .output()
-        .unwrap());
-    let packets = packets_of(&std::fs::read(&export).unwrap());
+    let (framed, packets) = framed_and_packets("sport", &log);
+    assert_eq!(framed, ["7E 00", "7E A1", "7E A1", "7E 22"]);
     let frames: Vec<&[u8]> = packets.iter().map(|(_, b)| &b[..]).collect();
     assert_eq!(
         frames,
@@ -422,25 +431,8 @@ fn identical_frames_with_one_time_are_two_packets() {
     );
     // A real capture: Modbus echoes a write request in its response, and in this pcap both
     // have one time; eleven responses were missing from the export.
-    let pcap = fixture("modbus-gen.pcap");
-    let table = ok(&busnoop()
-        .args(["modbus", "--no-config", "--raw", "-f", "tsv"])
-        .arg(&pcap)
-        .output()
-        .unwrap());
-    let framed = table
-        .lines()
-        .skip(1)
-        .filter(|l| !l.rsplit('\t').next().unwrap_or("").is_empty())
-        .count();
-    ok(&busnoop()
-        .args(["modbus", "--no-config", "-q", "--export"])
-        .arg(&export)
-        .arg(&pcap)
-        .output()
-        .unwrap());
-    let packets = packets_of(&std::fs::read(&export).unwrap());
-    assert_eq!((packets.len(), framed), (158, 158));
+    let (framed, packets) = framed_and_packets("modbus", &fixture("modbus-gen.pcap"));
+    assert_eq!((packets.len(), framed.len()), (158, 158));
 }
 
 /// The packets (link type, bytes) of a pcapng file.
