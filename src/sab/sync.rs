@@ -31,8 +31,6 @@
 //! candidate waits for the candidates inside it to complete, or a valid one for the frames
 //! after it and after the later frame inside it.
 
-use crc::{CRC_8_MAXIM_DOW, Crc};
-
 use super::frame::{Event, EventKind, Framing, find};
 
 /// The first byte of every frame.
@@ -47,11 +45,52 @@ pub const MAX_FRAME: usize = MAX_PAYLOAD + OVERHEAD;
 pub const CAPACITY: usize = 3 * MAX_FRAME;
 use crate::row::GARBAGE_ROW_MAX;
 
-const CRC8: Crc<u8> = Crc::<u8>::new(&CRC_8_MAXIM_DOW);
+/// CRC-8/MAXIM-DOW (reflected polynomial 0x8C, init 0) tables: `CRC8[0]` by byte,
+/// `CRC8[k][i]` the CRC of byte `i` followed by `k` zero bytes. A step of four bytes looks up
+/// each in its own table, side by side: one dependent lookup for four bytes.
+static CRC8: [[u8; 256]; 4] = {
+    let mut t = [[0u8; 256]; 4];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u8;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 { (c >> 1) ^ 0x8C } else { c >> 1 };
+            k += 1;
+        }
+        t[0][i] = c;
+        i += 1;
+    }
+    let mut s = 1;
+    while s < 4 {
+        let mut i = 0;
+        while i < 256 {
+            t[s][i] = t[0][t[s - 1][i] as usize];
+            i += 1;
+        }
+        s += 1;
+    }
+    t
+};
 
-/// CRC-8/MAXIM-DOW of `bytes` (LENGTH … DATA of a frame).
+/// CRC-8/MAXIM-DOW of `bytes` (LENGTH … DATA of a frame), four bytes a step (a frame's CRC
+/// is checked up to three times: the candidate, then with and without its SYNC).
+#[inline]
 pub fn crc8(bytes: &[u8]) -> u8 {
-    CRC8.checksum(bytes)
+    let t = &CRC8;
+    let mut c = 0u8;
+    let mut rest = bytes;
+    while let [b0, b1, b2, b3, tail @ ..] = rest {
+        c = t[3][usize::from(c ^ b0)]
+            ^ t[2][usize::from(*b1)]
+            ^ t[1][usize::from(*b2)]
+            ^ t[0][usize::from(*b3)];
+        rest = tail;
+    }
+    for &b in rest {
+        c = t[0][usize::from(c ^ b)];
+    }
+    c
 }
 
 /// Appends a frame with a correct LENGTH and CRC.

@@ -21,6 +21,20 @@ fn crc_catalogue_check_value() {
     assert_eq!(crc8(b"123456789"), 0xA1);
 }
 
+/// Four bytes a step gives the `crc` crate's CRC-8/MAXIM-DOW at every length, for bytes of
+/// every value.
+#[test]
+fn crc_steps_equal_the_crate() {
+    let crate_crc = crc::Crc::<u8>::new(&crc::CRC_8_MAXIM_DOW);
+    let bytes: Vec<u8> = (0..40u32).map(|i| (i * 37 + 11) as u8).collect();
+    for len in 0..=bytes.len() {
+        for flip in [0u8, 0x55, 0xFF] {
+            let b: Vec<u8> = bytes[..len].iter().map(|x| x ^ flip).collect();
+            assert_eq!(crc8(&b), crate_crc.checksum(&b), "{len} {flip:#x}");
+        }
+    }
+}
+
 #[test]
 fn modm_unit_test_frames() {
     // sab.md §2: modm test/modm/communication/sab/interface_test.cpp.
