@@ -150,23 +150,6 @@ fn check_bytes(bytes: &[u8]) -> Check {
     }
 }
 
-/// CRC-8/MAXIM-DOW a byte at a time ([`CRC8`]'s table), for [`valid_frame`]'s fused loop.
-static CRC8_TABLE: [u8; 256] = {
-    let mut t = [0u8; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u8;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 1 != 0 { (c >> 1) ^ 0x8C } else { c >> 1 };
-            k += 1;
-        }
-        t[i] = c;
-        i += 1;
-    }
-    t
-};
-
 /// The end of the frame at the start of `bytes` when it is complete there and valid, and
 /// whether a 0x54 stands in it after its SYNC (only then can a frame start inside it, which
 /// [`overlap`] weighs): one pass computes both.
@@ -184,7 +167,7 @@ fn valid_frame(bytes: &[u8]) -> Option<(usize, bool)> {
     let (covered, crc) = (&frame[1..end - 1], frame[end - 1]);
     let (mut c, mut sync) = (0u8, crc == SYNC);
     for &b in covered {
-        c = CRC8_TABLE[(c ^ b) as usize];
+        c = CRC8[0][usize::from(c ^ b)];
         sync |= b == SYNC;
     }
     (c == crc).then_some((end, sync))
