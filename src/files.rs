@@ -68,10 +68,31 @@ pub(crate) fn create_file(path: &Path) -> io::Result<File> {
     }
 }
 
-/// Whether standard output was closed when busnoop started (`>&-`): the Rust runtime then puts
-/// /dev/null there, opened for reading and writing, where a shell's `>/dev/null` opens it for
-/// writing only. Whatever went there would vanish with exit 0.
+/// What [`note_stdout_at_start`] saw of descriptor 1 before the Rust runtime started: 0 not
+/// looked (busnoop's functions called from a test, not from the binary), 1 open, 2 closed.
+static STDOUT_AT_START: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+/// Looks whether descriptor 1 is open. Called by the binary's start-up hook (`src/main.rs`)
+/// before the Rust runtime's start-up, which puts /dev/null on a closed standard output: only
+/// then does a closed one still show as closed.
+pub(crate) fn note_stdout_at_start() {
+    // SAFETY: F_GETFD on descriptor 1 only reads its flags; it fails with EBADF when closed.
+    let closed = unsafe { libc::fcntl(1, libc::F_GETFD) } < 0;
+    STDOUT_AT_START.store(1 + u8::from(closed), std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether standard output was closed when busnoop started (`>&-`). The binary looks before the
+/// Rust runtime puts /dev/null there ([`note_stdout_at_start`]); an open /dev/null, whatever
+/// its mode (Python's `subprocess.DEVNULL` opens it for reading and writing), is an open
+/// standard output. Where nothing looked (no start-up hook on this platform), the runtime's
+/// /dev/null is told by its mode: opened for reading and writing, where a shell's `>/dev/null`
+/// opens it for writing only.
 pub(crate) fn stdout_was_closed() -> bool {
+    match STDOUT_AT_START.load(std::sync::atomic::Ordering::Relaxed) {
+        1 => return false,
+        2 => return true,
+        _ => {}
+    }
     use std::os::unix::fs::MetadataExt;
     // SAFETY: F_GETFL on descriptor 1 only reads its flags.
     let flags = unsafe { libc::fcntl(1, libc::F_GETFL) };

@@ -91,6 +91,13 @@ pub mod time;
 mod top;
 
 pub use cli::main;
+
+/// For the binary's start-up hook only (`src/main.rs`): notes whether standard output was open
+/// before the Rust runtime's start-up.
+#[doc(hidden)]
+pub fn note_stdout_at_start() {
+    files::note_stdout_at_start();
+}
 pub use exit::Failure;
 pub use record::{Content as RecordContent, Recorder};
 pub use source::{READ_SIZE, edgetx};

@@ -578,4 +578,18 @@ fn l12_a_closed_standard_output_is_refused() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
+    // /dev/null opened for reading and writing, as Python's `subprocess.DEVNULL`, systemd's
+    // `StandardOutput=null` and nohup-like wrappers give it: an open standard output, not a
+    // closed one (busnoop took it for `>&-` by its open mode and refused with exit 8).
+    let null = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open("/dev/null")
+        .unwrap();
+    let out = busnoop()
+        .args(["sport", sample])
+        .stdout(null)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
 }
