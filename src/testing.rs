@@ -140,12 +140,18 @@ impl crate::protocol::Decoder for Boxed {
     }
 }
 
+/// How many decoders [`assert_direct_rows_match`] takes from `make`: one for the columns, one
+/// for the rows as `Row`s, one for each of the ten tables written straight.
+pub(crate) const DECODERS_PER_MATCH: usize = 12;
+
 /// Decodes `chunks` (bytes with their times) with a decoder from `make` into a table of every
 /// format, with and without `--raw`, twice: once as the driver does (the decoder writes the
 /// rows it can straight into the table, [`crate::row::Direct`]), once through a stage that
 /// lends no `Direct` (every row a [`crate::row::Row`], as behind a filter), and asserts that
 /// both tables are byte for byte the same, and so are the decoders' statistics. Returns how
-/// many rows went straight into a table (over all of them).
+/// many rows went straight into a table (over all of them). The rows as `Row`s are decoded
+/// once for all the tables (the decoder's rows do not depend on the table behind a stage that
+/// lends no `Direct`); the rows written straight once per table.
 pub(crate) fn assert_direct_rows_match(
     make: &dyn Fn() -> Box<dyn crate::protocol::Decoder>,
     chunks: &[(&[u8], Option<u64>)],
@@ -154,11 +160,14 @@ pub(crate) fn assert_direct_rows_match(
     use crate::row::{Direct, Row, RowOut, RowResult};
     use crate::sink::{Format, Table};
 
-    /// Every row as a `Row`.
-    struct RowsOnly<'a>(&'a mut Table);
+    /// Every row as a `Row`, into every table.
+    struct RowsOnly<'a>(&'a mut [Table]);
     impl RowOut for RowsOnly<'_> {
         fn row(&mut self, row: &Row<'_>) -> RowResult {
-            self.0.write(row)
+            for t in self.0.iter_mut() {
+                t.write(row)?;
+            }
+            Ok(())
         }
     }
     /// The table itself, counting the rows that come as `Row`s.
@@ -180,53 +189,59 @@ pub(crate) fn assert_direct_rows_match(
         d.finish(out).unwrap();
         (d.stats().to_string(), d.problems().line())
     };
-    let mut direct_rows = 0;
+    let columns = make().columns();
+    let mut configs = Vec::new();
     for format in [Format::Tsv, Format::Csv, Format::Jsonl, Format::Pretty] {
         for color in [false, true] {
             if color && format != Format::Pretty {
                 continue;
             }
             for raw in [false, true] {
-                let columns = make().columns();
-                let table = || {
-                    let opts = crate::sink::TableOptions {
-                        format,
-                        color,
-                        raw,
-                        time_abs: false,
-                        utc: false,
-                    };
-                    let mut t = Table::new(crate::sink::Output::memory(), opts, columns);
-                    t.header().unwrap();
-                    t
-                };
-                let (mut a, mut b) = (table(), table());
-                let stats_a = decode(&mut RowsOnly(&mut a));
-                let mut counting = Counting(&mut b, 0);
-                let stats_b = decode(&mut counting);
-                let as_rows = counting.1;
-                a.flush().unwrap();
-                b.flush().unwrap();
-                let (ta, tb) = (a.output().memory_contents(), b.output().memory_contents());
-                if ta != tb {
-                    let (la, lb) = (ta.split(|&c| c == b'\n'), tb.split(|&c| c == b'\n'));
-                    for (n, (x, y)) in la.zip(lb).enumerate() {
-                        assert_eq!(
-                            String::from_utf8_lossy(x),
-                            String::from_utf8_lossy(y),
-                            "{what}: {format:?} colour {color} raw {raw}: line {} differs \
-                             (left: every row as a Row, right: rows written straight)",
-                            n + 1
-                        );
-                    }
-                    assert_eq!(ta.len(), tb.len(), "{what}: {format:?}: lengths differ");
-                }
-                assert_eq!(stats_a, stats_b, "{what}: the statistics differ");
-                assert_eq!(a.rows(), b.rows(), "{what}: row counts");
-                assert_eq!(a.frames(), b.frames(), "{what}: frame counts");
-                direct_rows += b.rows() - as_rows;
+                configs.push(crate::sink::TableOptions {
+                    format,
+                    color,
+                    raw,
+                    time_abs: false,
+                    utc: false,
+                });
             }
         }
+    }
+    let table = |opts: &crate::sink::TableOptions| {
+        let mut t = Table::new(crate::sink::Output::memory(), opts.clone(), columns);
+        t.header().unwrap();
+        t
+    };
+    let mut as_rows: Vec<Table> = configs.iter().map(table).collect();
+    let stats_a = decode(&mut RowsOnly(&mut as_rows));
+    debug_assert_eq!(DECODERS_PER_MATCH, 2 + configs.len());
+    let mut direct_rows = 0;
+    for (opts, a) in configs.iter().zip(&mut as_rows) {
+        let (format, color, raw) = (opts.format, opts.color, opts.raw);
+        let mut b = table(opts);
+        let mut counting = Counting(&mut b, 0);
+        let stats_b = decode(&mut counting);
+        let rows_as_rows = counting.1;
+        a.flush().unwrap();
+        b.flush().unwrap();
+        let (ta, tb) = (a.output().memory_contents(), b.output().memory_contents());
+        if ta != tb {
+            let (la, lb) = (ta.split(|&c| c == b'\n'), tb.split(|&c| c == b'\n'));
+            for (n, (x, y)) in la.zip(lb).enumerate() {
+                assert_eq!(
+                    String::from_utf8_lossy(x),
+                    String::from_utf8_lossy(y),
+                    "{what}: {format:?} colour {color} raw {raw}: line {} differs \
+                     (left: every row as a Row, right: rows written straight)",
+                    n + 1
+                );
+            }
+            assert_eq!(ta.len(), tb.len(), "{what}: {format:?}: lengths differ");
+        }
+        assert_eq!(stats_a, stats_b, "{what}: the statistics differ");
+        assert_eq!(a.rows(), b.rows(), "{what}: row counts");
+        assert_eq!(a.frames(), b.frames(), "{what}: frame counts");
+        direct_rows += b.rows() - rows_as_rows;
     }
     direct_rows
 }
