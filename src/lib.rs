@@ -91,6 +91,10 @@ pub mod time;
 mod top;
 
 pub use cli::main;
+pub use exit::Failure;
+pub use record::{Content as RecordContent, Recorder};
+pub use source::{READ_SIZE, edgetx};
+pub use stats::{Problems, Report};
 
 /// For the binary's start-up hook only (`src/main.rs`): notes whether standard output was open
 /// before the Rust runtime's start-up.
@@ -98,7 +102,3 @@ pub use cli::main;
 pub fn note_stdout_at_start() {
     files::note_stdout_at_start();
 }
-pub use exit::Failure;
-pub use record::{Content as RecordContent, Recorder};
-pub use source::{READ_SIZE, edgetx};
-pub use stats::{Problems, Report};

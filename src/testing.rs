@@ -140,9 +140,26 @@ impl crate::protocol::Decoder for Boxed {
     }
 }
 
+/// The tables [`assert_direct_rows_match`] compares: (format, colour, `--raw`).
+const TABLES: [(crate::sink::Format, bool, bool); 10] = {
+    use crate::sink::Format::{Csv, Jsonl, Pretty, Tsv};
+    [
+        (Tsv, false, false),
+        (Tsv, false, true),
+        (Csv, false, false),
+        (Csv, false, true),
+        (Jsonl, false, false),
+        (Jsonl, false, true),
+        (Pretty, false, false),
+        (Pretty, false, true),
+        (Pretty, true, false),
+        (Pretty, true, true),
+    ]
+};
+
 /// How many decoders [`assert_direct_rows_match`] takes from `make`: one for the columns, one
-/// for the rows as `Row`s, one for each of the ten tables written straight.
-pub(crate) const DECODERS_PER_MATCH: usize = 12;
+/// for the rows as `Row`s, one for each table written straight.
+pub(crate) const DECODERS_PER_MATCH: usize = 2 + TABLES.len();
 
 /// Decodes `chunks` (bytes with their times) with a decoder from `make` into a table of every
 /// format, with and without `--raw`, twice: once as the driver does (the decoder writes the
@@ -190,35 +207,24 @@ pub(crate) fn assert_direct_rows_match(
         (d.stats().to_string(), d.problems().line())
     };
     let columns = make().columns();
-    let mut configs = Vec::new();
-    for format in [Format::Tsv, Format::Csv, Format::Jsonl, Format::Pretty] {
-        for color in [false, true] {
-            if color && format != Format::Pretty {
-                continue;
-            }
-            for raw in [false, true] {
-                configs.push(crate::sink::TableOptions {
-                    format,
-                    color,
-                    raw,
-                    time_abs: false,
-                    utc: false,
-                });
-            }
-        }
-    }
-    let table = |opts: &crate::sink::TableOptions| {
-        let mut t = Table::new(crate::sink::Output::memory(), opts.clone(), columns);
+    let table = |&(format, color, raw): &(Format, bool, bool)| {
+        let opts = crate::sink::TableOptions {
+            format,
+            color,
+            raw,
+            time_abs: false,
+            utc: false,
+        };
+        let mut t = Table::new(crate::sink::Output::memory(), opts, columns);
         t.header().unwrap();
         t
     };
-    let mut as_rows: Vec<Table> = configs.iter().map(table).collect();
+    let mut as_rows: Vec<Table> = TABLES.iter().map(table).collect();
     let stats_a = decode(&mut RowsOnly(&mut as_rows));
-    debug_assert_eq!(DECODERS_PER_MATCH, 2 + configs.len());
     let mut direct_rows = 0;
-    for (opts, a) in configs.iter().zip(&mut as_rows) {
-        let (format, color, raw) = (opts.format, opts.color, opts.raw);
-        let mut b = table(opts);
+    for (config, a) in TABLES.iter().zip(&mut as_rows) {
+        let &(format, color, raw) = config;
+        let mut b = table(config);
         let mut counting = Counting(&mut b, 0);
         let stats_b = decode(&mut counting);
         let rows_as_rows = counting.1;
